@@ -1,0 +1,85 @@
+#include "common/core/graph.hpp"
+
+#include <numeric>
+#include <stdexcept>
+
+namespace qswarm {
+
+Eigen::MatrixXd laplacian(int n, const std::vector<Edge>& edges) {
+  Eigen::MatrixXd L = Eigen::MatrixXd::Zero(n, n);
+  for (const Edge& e : edges) {
+    if (e.i < 0 || e.j < 0 || e.i >= n || e.j >= n || e.i == e.j) {
+      throw std::invalid_argument("laplacian: edge with a vertex out of range or a self-loop");
+    }
+    L(e.i, e.j) -= e.weight;
+    L(e.j, e.i) -= e.weight;
+    L(e.i, e.i) += e.weight;
+    L(e.j, e.j) += e.weight;
+  }
+  return L;
+}
+
+std::vector<int> connected_components(int n, const std::vector<Edge>& edges, int* count) {
+  std::vector<int> parent(n);
+  std::iota(parent.begin(), parent.end(), 0);
+  const auto find = [&](int x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  };
+  for (const Edge& e : edges) {
+    if (e.weight > 0.0) parent[find(e.i)] = find(e.j);
+  }
+  std::vector<int> label(n, -1), out(n);
+  int next = 0;
+  for (int v = 0; v < n; ++v) {
+    const int r = find(v);
+    if (label[r] < 0) label[r] = next++;
+    out[v] = label[r];
+  }
+  if (count) *count = next;
+  return out;
+}
+
+Spectrum analyze(const Eigen::MatrixXd& L) {
+  const int n = static_cast<int>(L.rows());
+  Spectrum s;
+  if (n == 0) return s;
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> solver(L);
+  s.eigenvalues = solver.eigenvalues();
+  s.eigenvectors = solver.eigenvectors();
+  std::vector<Edge> edges;
+  for (int i = 0; i < n; ++i)
+    for (int j = i + 1; j < n; ++j)
+      if (L(i, j) < 0.0) edges.push_back({i, j, -L(i, j)});
+  s.component_of = connected_components(n, edges, &s.components);
+  s.lambda2 = (n > 1 && s.components == 1) ? s.eigenvalues[1] : 0.0;
+  return s;
+}
+
+Positions agreement_solution(const Eigen::MatrixXd& L, const Positions& q0, double t) {
+  const int n = static_cast<int>(q0.size());
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> solver(L);
+  const Eigen::MatrixXd& U = solver.eigenvectors();
+  const Eigen::VectorXd decay = (-solver.eigenvalues().array() * t).exp();
+  Eigen::MatrixXd Q0(n, 3);
+  for (int i = 0; i < n; ++i) Q0.row(i) = q0[i].transpose();
+  const Eigen::MatrixXd Q = U * decay.asDiagonal() * U.transpose() * Q0;
+  Positions out(n);
+  for (int i = 0; i < n; ++i) out[i] = Q.row(i).transpose();
+  return out;
+}
+
+Vec3 average(const Positions& q) {
+  Vec3 sum = Vec3::Zero();
+  for (const Vec3& x : q) sum += x;
+  return q.empty() ? sum : Vec3(sum / static_cast<double>(q.size()));
+}
+
+double disagreement(const Positions& q) {
+  const Vec3 mean = average(q);
+  double worst = 0.0;
+  for (const Vec3& x : q) worst = std::max(worst, (x - mean).norm());
+  return worst;
+}
+
+}  // namespace qswarm

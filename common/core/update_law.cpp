@@ -1,0 +1,168 @@
+#include "common/core/update_law.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+namespace qswarm {
+
+std::string check_view(const NeighborView& v, double max_abs) {
+  const auto bad_vec = [&](const Vec3& x) { return !x.allFinite() || x.cwiseAbs().maxCoeff() > max_abs; };
+  if (bad_vec(v.q)) return "consensus state not finite or beyond +-" + std::to_string(max_abs) + " m";
+  if (!std::isfinite(v.total_weight) || v.total_weight < 0.0 || v.total_weight > 1e9) {
+    return "total weight not finite, negative or absurd";
+  }
+  for (const FlowEntry& f : v.flows) {
+    if (bad_vec(f.flow)) return "flow not finite or absurd";
+    if (!std::isfinite(f.weight) || f.weight < 0.0 || f.weight > 1e9) return "flow weight invalid";
+    if (f.peer == v.id) return "flow to itself";
+  }
+  return {};
+}
+
+std::string to_string(LawKind k) { return k == LawKind::kLaplacian ? "laplacian" : "edge-flow"; }
+
+LawKind parse_law_kind(const std::string& s) {
+  if (s == "laplacian") return LawKind::kLaplacian;
+  if (s == "edge-flow" || s == "edge_flow") return LawKind::kEdgeFlow;
+  throw std::invalid_argument("update law '" + s + "': expected laplacian or edge-flow");
+}
+
+void LawConfig::validate() const {
+  if (!std::isfinite(gain) || gain <= 0.0) {
+    throw std::invalid_argument("law.gain = " + std::to_string(gain) + ": expected a finite value > 0");
+  }
+  if (!std::isfinite(weight.scale) || weight.scale <= 0.0) {
+    throw std::invalid_argument("weight.scale: expected a finite value > 0");
+  }
+}
+
+UpdateLaw::UpdateLaw(AgentId self, const Vec3& q0, LawConfig cfg)
+    : self_(self), q0_(q0), cfg_(std::move(cfg)), tracker_(self, cfg_.topology) {
+  cfg_.validate();
+  if (!q0.allFinite()) throw std::invalid_argument("initial state: expected finite coordinates");
+}
+
+std::vector<double> UpdateLaw::update_links(const std::vector<NeighborView>& neighbors) {
+  const Vec3 q = state();
+  std::map<AgentId, double> next;
+  std::vector<double> weights(neighbors.size(), 0.0);
+  for (size_t k = 0; k < neighbors.size(); ++k) {
+    const NeighborView& n = neighbors[k];
+    if (n.id == self_) continue;
+    const double d = (q - n.q).norm();
+    if (!tracker_.update(n.id, d)) continue;
+    double w = weight_for_distance(cfg_.weight, d);
+    if (cfg_.weight.policy == WeightPolicy::kInitialDistance) {
+      w = frozen_weight_.try_emplace(n.id, w).first->second;
+    }
+    next[n.id] = w;
+    weights[k] = w;
+  }
+  for (const auto& [peer, w] : links_) {
+    if (!next.count(peer)) tracker_.forget(peer);
+  }
+  links_ = std::move(next);
+  return weights;
+}
+
+void UpdateLaw::observe(const std::vector<NeighborView>& neighbors) {
+  update_links(neighbors);
+  ++ticks_;
+  published_total_weight_ = 0.0;
+  for (const auto& [peer, w] : links_) published_total_weight_ += w;
+  observed_ = true;
+}
+
+void UpdateLaw::step(double dt, const std::vector<NeighborView>& neighbors) {
+  if (!std::isfinite(dt) || dt <= 0.0) throw std::invalid_argument("step: dt must be > 0");
+  const std::vector<double> w = update_links(neighbors);
+  double w_now = 0.0;
+  for (double x : w) w_now += x;
+  // Before the first publication the own total is unknown to peers; use the current one.
+  const double w_self = observed_ ? published_total_weight_ : w_now;
+  std::vector<double> coef(neighbors.size(), 0.0);
+  for (size_t k = 0; k < neighbors.size(); ++k) {
+    if (w[k] <= 0.0) continue;
+    const double W = std::max({w_self, neighbors[k].total_weight, w[k]});
+    coef[k] = w[k] * (-std::expm1(-cfg_.gain * W * dt)) / W;
+  }
+  integrate(neighbors, coef);
+  ++ticks_;
+  published_total_weight_ = w_now;
+  observed_ = true;
+}
+
+NeighborView UpdateLaw::message() const {
+  NeighborView v;
+  v.id = self_;
+  v.q = state();
+  v.total_weight = published_total_weight_;
+  v.flows = owned_flows();
+  v.seq = ticks_;
+  return v;
+}
+
+std::unique_ptr<UpdateLaw> make_law(AgentId self, const Vec3& q0, const LawConfig& cfg) {
+  if (cfg.kind == LawKind::kLaplacian) return std::make_unique<LaplacianLaw>(self, q0, cfg);
+  return std::make_unique<EdgeFlowLaw>(self, q0, cfg);
+}
+
+void LaplacianLaw::integrate(const std::vector<NeighborView>& neighbors,
+                             const std::vector<double>& coef) {
+  Vec3 dq = Vec3::Zero();
+  for (size_t k = 0; k < neighbors.size(); ++k) dq -= coef[k] * (q_ - neighbors[k].q);
+  q_ += dq;
+}
+
+Vec3 EdgeFlowLaw::state() const {
+  Vec3 q = q0_;
+  for (const auto& [peer, f] : owned_) q -= f.flow;
+  for (const auto& [peer, c] : copies_) q += c.flow + c.predicted;
+  return q;
+}
+
+std::vector<FlowEntry> EdgeFlowLaw::owned_flows() const {
+  std::vector<FlowEntry> out;
+  out.reserve(owned_.size());
+  for (const auto& [peer, f] : owned_) out.push_back(f);
+  return out;
+}
+
+void EdgeFlowLaw::integrate(const std::vector<NeighborView>& neighbors,
+                            const std::vector<double>& coef) {
+  const Vec3 q = state();  // every edge moves from the same snapshot of q_i (Jacobi)
+  for (auto& [peer, f] : owned_) f.active = false;
+  std::map<AgentId, bool> heard;
+  for (size_t k = 0; k < neighbors.size(); ++k) {
+    const NeighborView& n = neighbors[k];
+    if (owns(n.id)) {
+      if (coef[k] <= 0.0) continue;
+      FlowEntry& f = owned_[n.id];
+      f.peer = n.id;
+      f.flow += coef[k] * (q - n.q);
+      f.weight = links_.count(n.id) ? links_.at(n.id) : 0.0;
+      f.active = true;
+    } else {
+      heard[n.id] = true;
+      // The neighbour owns the edge: a newer message replaces copy and prediction.
+      Copy& c = copies_[n.id];
+      if (!c.seen || n.seq > c.seq) {
+        for (const FlowEntry& e : n.flows) {
+          if (e.peer == self_) c.flow = e.flow;
+        }
+        c.predicted.setZero();
+        c.seq = n.seq;
+        c.seen = true;
+      }
+      if (coef[k] > 0.0) c.predicted += coef[k] * (n.q - q);
+    }
+  }
+  // A silent owner's increments can no longer be confirmed: keep only its last copy.
+  for (auto& [peer, c] : copies_) {
+    if (!heard.count(peer)) c.predicted.setZero();
+  }
+}
+
+}  // namespace qswarm

@@ -1,0 +1,131 @@
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "common/core/math.hpp"
+#include "common/core/topology.hpp"
+
+namespace qswarm {
+
+// A cumulative flow the sender owns on edge (sender, peer): what the edge-flow law exchanges.
+struct FlowEntry {
+  AgentId peer = 0;
+  Vec3 flow = Vec3::Zero();  // f_{sender,peer}: taken from the sender, given to the peer [m]
+  double weight = 0.0;       // the edge's weight as the owner last computed it
+  bool active = false;       // the owner currently holds this edge (flows persist after it drops)
+};
+
+// What an agent publishes and what its neighbours' laws read. Transport-independent.
+struct NeighborView {
+  AgentId id = 0;
+  Vec3 q = Vec3::Zero();      // consensus state
+  double total_weight = 0.0;  // sum of the sender's link weights, as of its last tick
+  std::vector<FlowEntry> flows;
+  std::uint64_t seq = 0;  // sender's tick count: a new message has a larger one
+};
+
+// Returns an empty string if a received view is usable, else why not (NaN, absurd magnitude, ...).
+// A law never sees a view that fails this: the runtime drops and counts it.
+std::string check_view(const NeighborView& v, double max_abs_coordinate_m = 1e6);
+
+enum class LawKind {
+  kLaplacian,  // dq_i/dt = -k sum_j w_ij (q_i - q_j), as the paper writes it
+  kEdgeFlow,   // DESIGN.md: each edge's exchange is integrated by its lower-id endpoint only
+};
+std::string to_string(LawKind k);
+LawKind parse_law_kind(const std::string& s);
+
+struct LawConfig {
+  LawKind kind = LawKind::kEdgeFlow;
+  WeightConfig weight;
+  TopologyConfig topology;
+  double gain = 1.0;  // k: time scale of the agreement [1/s per unit weight]
+  void validate() const;
+};
+
+// The per-agent agreement law: the same object runs in the in-process swarm and in each agent
+// process. Discretisation: one tick of length dt moves along each edge by
+//   c_ij = w_ij (1 - exp(-k W dt)) / W,   W = max(W_i, W_j, w_ij)
+// where W_i, W_j are the endpoints' published total weights. The row sums of c are then < 1 for
+// any weights and dt, so a tick is a convex combination (stable for the paper's large distance
+// weights), c_ij = c_ji when both ends see the same snapshot, and c_ij -> k w_ij dt as dt -> 0 (the
+// paper's ODE).
+class UpdateLaw {
+ public:
+  UpdateLaw(AgentId self, const Vec3& q0, LawConfig cfg);
+  virtual ~UpdateLaw() = default;
+
+  // Update links and weights from the neighbours' latest views without moving (start of a run).
+  void observe(const std::vector<NeighborView>& neighbors);
+  // One tick of dt seconds given the latest (already checked) view of each live neighbour. A
+  // neighbour absent from the list is treated as silent: its link is dropped (flows stay).
+  void step(double dt_s, const std::vector<NeighborView>& neighbors);
+
+  AgentId id() const { return self_; }
+  const Vec3& initial_state() const { return q0_; }
+  virtual Vec3 state() const = 0;
+  // The message to publish after a tick.
+  NeighborView message() const;
+  // Current links and their weights, as this agent sees them.
+  const std::map<AgentId, double>& links() const { return links_; }
+  double total_weight() const { return published_total_weight_; }
+  const LawConfig& config() const { return cfg_; }
+  virtual std::vector<FlowEntry> owned_flows() const { return {}; }
+
+ protected:
+  // Move the state: `coef[k]` is c for neighbours[k] (0 when not linked).
+  virtual void integrate(const std::vector<NeighborView>& neighbors, const std::vector<double>& coef) = 0;
+  std::vector<double> update_links(const std::vector<NeighborView>& neighbors);
+
+  AgentId self_;
+  Vec3 q0_;
+  LawConfig cfg_;
+  LinkTracker tracker_;
+  std::map<AgentId, double> links_;
+  std::map<AgentId, double> frozen_weight_;  // kInitialDistance: weight when the edge formed
+  double published_total_weight_ = 0.0;
+  bool observed_ = false;
+  std::uint64_t ticks_ = 0;
+};
+
+std::unique_ptr<UpdateLaw> make_law(AgentId self, const Vec3& q0, const LawConfig& cfg);
+
+class LaplacianLaw final : public UpdateLaw {
+ public:
+  LaplacianLaw(AgentId self, const Vec3& q0, LawConfig cfg) : UpdateLaw(self, q0, std::move(cfg)), q_(q0) {}
+  Vec3 state() const override { return q_; }
+
+ private:
+  void integrate(const std::vector<NeighborView>& neighbors, const std::vector<double>& coef) override;
+  Vec3 q_;
+};
+
+// q_i = q_i(0) - sum_{owned} f_ij + sum_{copies} f_ki. The owner integrates f_ij; the other end
+// applies the newest copy it received, so the sum over agents is exact whenever copies are current.
+// Between copies the non-owner predicts the owner's increments with the same formula (what the
+// Laplacian law would do) and drops the prediction when a newer copy arrives: the prediction removes
+// the one-message lag, the copy keeps the total exact. In lockstep the two laws then coincide.
+class EdgeFlowLaw final : public UpdateLaw {
+ public:
+  EdgeFlowLaw(AgentId self, const Vec3& q0, LawConfig cfg) : UpdateLaw(self, q0, std::move(cfg)) {}
+  Vec3 state() const override;
+  std::vector<FlowEntry> owned_flows() const override;
+  bool owns(AgentId peer) const { return self_ < peer; }
+
+ private:
+  void integrate(const std::vector<NeighborView>& neighbors, const std::vector<double>& coef) override;
+  struct Copy {
+    Vec3 flow = Vec3::Zero();       // newest f_{owner,self} received
+    Vec3 predicted = Vec3::Zero();  // our estimate of the owner's increments since that copy
+    std::uint64_t seq = 0;          // message it came in
+    bool seen = false;
+  };
+  std::map<AgentId, FlowEntry> owned_;  // edges this agent owns (peer id > self)
+  std::map<AgentId, Copy> copies_;      // flows neighbours own toward us
+};
+
+}  // namespace qswarm

@@ -1,0 +1,100 @@
+#include "common/sim/in_process_swarm.hpp"
+
+#include <map>
+#include <random>
+#include <set>
+#include <stdexcept>
+
+namespace qswarm {
+namespace {
+
+std::vector<NeighborView> views(const std::vector<StateMessage>& msgs) {
+  std::vector<NeighborView> out;
+  out.reserve(msgs.size());
+  for (const StateMessage& m : msgs) out.push_back(m.view);
+  return out;
+}
+
+StateMessage to_message(const UpdateLaw& law, double t) {
+  StateMessage m;
+  m.view = law.message();
+  m.stamp_s = t;
+  m.p_W = m.view.q;
+  for (const auto& [peer, w] : law.links()) m.links.emplace_back(peer, w);
+  return m;
+}
+
+}  // namespace
+
+InProcessSwarm::InProcessSwarm(InProcessSwarmConfig cfg) : cfg_(std::move(cfg)) {
+  if (!(cfg_.consensus_rate_hz > 0.0)) throw std::invalid_argument("consensus_rate_hz must be > 0");
+  std::set<AgentId> ids;
+  for (const SwarmAgentSpec& a : cfg_.agents) {
+    if (!ids.insert(a.id).second) throw std::invalid_argument("duplicate agent id");
+    laws_.push_back(make_law(a.id, a.q0, cfg_.law));
+  }
+  for (const auto& law : laws_) bus_.publish(to_message(*law, 0.0));
+  // Links are found from the first messages before anyone moves, so every published total weight
+  // is known at the first tick.
+  for (auto& law : laws_) law->observe(views(bus_.latest(law->id())));
+  for (const auto& law : laws_) bus_.publish(to_message(*law, 0.0));
+}
+
+void InProcessSwarm::step() {
+  std::vector<std::vector<NeighborView>> inbox;
+  inbox.reserve(laws_.size());
+  for (const auto& law : laws_) inbox.push_back(views(bus_.latest(law->id())));
+  for (size_t i = 0; i < laws_.size(); ++i) laws_[i]->step(dt_s(), inbox[i]);
+  time_s_ += dt_s();
+  for (const auto& law : laws_) bus_.publish(to_message(*law, time_s_));
+}
+
+bool InProcessSwarm::run_until_converged(double tol_m, double max_time_s) {
+  while (time_s_ < max_time_s) {
+    if (disagreement(states()) < tol_m) return true;
+    step();
+  }
+  return disagreement(states()) < tol_m;
+}
+
+Positions InProcessSwarm::states() const {
+  Positions q;
+  for (const auto& law : laws_) q.push_back(law->state());
+  return q;
+}
+
+Positions InProcessSwarm::initial_states() const {
+  Positions q;
+  for (const auto& law : laws_) q.push_back(law->initial_state());
+  return q;
+}
+
+std::vector<Edge> InProcessSwarm::edges() const {
+  std::map<AgentId, int> index;
+  for (int i = 0; i < size(); ++i) index[laws_[i]->id()] = i;
+  std::map<std::pair<int, int>, double> found;
+  for (int i = 0; i < size(); ++i) {
+    for (const auto& [peer, w] : laws_[i]->links()) {
+      const int j = index.at(peer);
+      const auto key = std::minmax(i, j);
+      // The owner's (lower id's) weight wins; otherwise the first seen.
+      if (laws_[i]->id() < peer || !found.count(key)) found[key] = w;
+    }
+  }
+  std::vector<Edge> out;
+  for (const auto& [key, w] : found) out.push_back({key.first, key.second, w});
+  return out;
+}
+
+std::vector<SwarmAgentSpec> InProcessSwarm::random_agents(int n, std::uint64_t seed, double box_m) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, box_m);
+  std::vector<SwarmAgentSpec> out;
+  for (int i = 0; i < n; ++i) {
+    const double x = u(rng), y = u(rng), z = u(rng);
+    out.push_back({static_cast<AgentId>(i + 1), Vec3(x, y, z)});
+  }
+  return out;
+}
+
+}  // namespace qswarm
