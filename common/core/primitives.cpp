@@ -8,17 +8,21 @@
 namespace qswarm {
 namespace {
 
-constexpr double kTwoPi = 2.0 * std::numbers::pi;
 
-// A rest-to-rest profile with sinusoidal acceleration: total change `total` over `duration`.
+// A rest-to-rest profile: total change `total` over `duration` along the septic smoothstep
+// s(x) = 35x^4 - 84x^5 + 70x^6 - 20x^7, whose velocity, acceleration and jerk vanish at both ends, so
+// a pitch that follows the acceleration (theta = atan(a/g)) also starts and ends with zero rate.
 struct Profile {
   double pos, vel, acc;
 };
+constexpr double kPeakAccelFactor = 7.5132;  // max s''(x) on [0, 1]
 Profile rest_to_rest(double total, double duration, double tau) {
-  tau = std::clamp(tau, 0.0, duration);
-  const double x = kTwoPi * tau / duration;
-  return {total * (tau / duration - std::sin(x) / kTwoPi), total / duration * (1.0 - std::cos(x)),
-          kTwoPi * total / (duration * duration) * std::sin(x)};
+  const double x = std::clamp(tau, 0.0, duration) / duration;
+  const double x2 = x * x, x3 = x2 * x, x4 = x3 * x;
+  const double s = x4 * (35.0 - 84.0 * x + 70.0 * x2 - 20.0 * x3);
+  const double ds = x3 * (140.0 - 420.0 * x + 420.0 * x2 - 140.0 * x3);
+  const double dds = x2 * (420.0 - 1680.0 * x + 2100.0 * x2 - 840.0 * x3);
+  return {total * s, total * ds / duration, total * dds / (duration * duration)};
 }
 
 // Light feedback gains on the one profiled quantity of each primitive.
@@ -113,10 +117,10 @@ OpenLoopManeuver OpenLoopManeuver::yaw_then_fly(const Airframe& af, const QuadSt
   const double distance = std::hypot(d.x(), d.y());
   const double yaw0 = tait_bryan_from_rotation(start.R_WB).yaw_rad;
   const double dyaw = wrap_angle(std::atan2(d.y(), d.x()) - yaw0);
-  // Peak acceleration 2 pi D / T^2 = g tan(max pitch) fixes the flight time; times differ per drone
+  // Peak acceleration 7.51 D / T^2 = g tan(max pitch) fixes the flight time; times differ per drone
   // as in the paper's figure.
-  const double fly_s =
-      std::max(1.0, std::sqrt(kTwoPi * distance / (af.gravity_mps2 * std::tan(max_pitch_rad))));
+  const double fly_s = std::max(
+      1.0, std::sqrt(kPeakAccelFactor * distance / (af.gravity_mps2 * std::tan(max_pitch_rad))));
   return OpenLoopManeuver(af, {{Kind::kYaw, yaw_duration_s, dyaw},
                                {Kind::kBodyX, fly_s, distance},
                                {Kind::kHover, 2.0, 0.0}});

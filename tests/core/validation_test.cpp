@@ -1,0 +1,123 @@
+// Bad parameters are refused with a message naming the field; bad network input is recognised.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <functional>
+#include <limits>
+
+#include "common/core/airframe.hpp"
+#include "common/core/primitives.hpp"
+#include "common/core/topology.hpp"
+#include "common/core/tracking_controller.hpp"
+#include "common/core/update_law.hpp"
+
+namespace qswarm {
+namespace {
+
+template <typename F>
+std::string error_of(F&& f) {
+  try {
+    f();
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(Validation, AirframeRefusesBadParametersNamingTheField) {
+  EXPECT_EQ(error_of([] { Airframe::paper().validate(); }), "");
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  struct Case {
+    std::function<void(Airframe&)> edit;
+    std::string field;
+  };
+  const std::vector<Case> cases = {
+      {[](Airframe& a) { a.mass_kg = -0.468; }, "mass_kg"},
+      {[](Airframe& a) { a.inertia_kgm2.y() = 0.0; }, "inertia_kgm2[1]"},
+      {[nan](Airframe& a) { a.K_r = nan; }, "K_r"},
+      {[](Airframe& a) { a.arm_m = 0.0; }, "arm_m"},
+      {[](Airframe& a) { a.C_D.z() = -1.0; }, "C_D[2]"},
+      {[](Airframe& a) { a.gravity_mps2 = std::numeric_limits<double>::infinity(); }, "gravity_mps2"},
+      {[](Airframe& a) { a.rotor_max_radps = 100.0; }, "rotor_max_radps"},  // cannot lift itself
+      {[](Airframe& a) { a.rotor_min_radps = 400.0; }, "rotor_max_radps"},
+  };
+  for (const Case& c : cases) {
+    Airframe a = Airframe::paper();
+    c.edit(a);
+    const std::string msg = error_of([&] { a.validate(); });
+    EXPECT_NE(msg.find("airframe." + c.field), std::string::npos) << msg;
+    EXPECT_NE(msg.find("expected"), std::string::npos) << msg;
+  }
+  Airframe bad = Airframe::paper();
+  bad.mass_kg = -1.0;
+  EXPECT_THROW(OpenLoopManeuver(bad, {}), std::invalid_argument);
+}
+
+TEST(Validation, LawAndTopologyRefuseBadConfiguration) {
+  LawConfig cfg;
+  cfg.gain = 0.0;
+  EXPECT_NE(error_of([&] { make_law(1, Vec3::Zero(), cfg); }).find("gain"), std::string::npos);
+  cfg = LawConfig{};
+  cfg.topology.threshold_m = -1.0;
+  EXPECT_NE(error_of([&] { make_law(1, Vec3::Zero(), cfg); }).find("threshold_m"), std::string::npos);
+  cfg = LawConfig{};
+  EXPECT_NE(error_of([&] { make_law(1, Vec3(std::nan(""), 0, 0), cfg); }).find("initial state"),
+            std::string::npos);
+  EXPECT_NE(error_of([] { parse_weight_policy("strong"); }).find("expected unweighted"), std::string::npos);
+  EXPECT_NE(error_of([] { parse_law_kind("gossip"); }).find("laplacian or edge-flow"), std::string::npos);
+  TrackingGains g;
+  g.max_tilt_rad = 2.0;
+  EXPECT_NE(error_of([&] { g.validate(); }).find("max_tilt_rad"), std::string::npos);
+}
+
+TEST(Validation, CheckViewRejectsNanAndAbsurdSamples) {
+  NeighborView ok;
+  ok.id = 3;
+  ok.q = Vec3(1, 2, 3);
+  EXPECT_EQ(check_view(ok), "");
+  NeighborView v = ok;
+  v.q.x() = std::nan("");
+  EXPECT_NE(check_view(v), "");
+  v = ok;
+  v.q.z() = 1e12;
+  EXPECT_NE(check_view(v), "");
+  v = ok;
+  v.total_weight = -1.0;
+  EXPECT_NE(check_view(v), "");
+  v = ok;
+  v.flows.push_back({4, Vec3(0, std::numeric_limits<double>::infinity(), 0), 1.0, true});
+  EXPECT_NE(check_view(v), "");
+  v = ok;
+  v.flows.push_back({3, Vec3::Zero(), 1.0, true});
+  EXPECT_NE(check_view(v), "");
+}
+
+TEST(Topology, ProximityWithHysteresisAndStickyLinks) {
+  TopologyConfig cfg;
+  cfg.policy = TopologyPolicy::kProximity;
+  cfg.threshold_m = 10.0;
+  cfg.hysteresis_m = 1.0;
+  LinkTracker prox(1, cfg);
+  EXPECT_FALSE(prox.update(2, 10.5));
+  EXPECT_TRUE(prox.update(2, 9.9));
+  EXPECT_TRUE(prox.update(2, 10.8));   // inside the hysteresis band: stays
+  EXPECT_FALSE(prox.update(2, 11.2));  // beyond it: drops
+  EXPECT_FALSE(prox.update(2, 10.5));  // and needs the threshold again
+  cfg.policy = TopologyPolicy::kStickyProximity;
+  LinkTracker sticky(1, cfg);
+  EXPECT_FALSE(sticky.update(2, 50.0));
+  EXPECT_TRUE(sticky.update(2, 9.0));
+  EXPECT_TRUE(sticky.update(2, 500.0));  // added by proximity, kept
+  cfg.policy = TopologyPolicy::kFixed;
+  cfg.edges = {{1, 3}};
+  LinkTracker fixed(1, cfg);
+  EXPECT_TRUE(fixed.update(3, 1e4));
+  EXPECT_FALSE(fixed.update(2, 0.1));  // the explicit graph restricts whom it listens to
+  // Listed edges persist under proximity policies too.
+  cfg.policy = TopologyPolicy::kProximity;
+  LinkTracker listed(1, cfg);
+  EXPECT_TRUE(listed.update(3, 1e4));
+}
+
+}  // namespace
+}  // namespace qswarm
