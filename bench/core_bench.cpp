@@ -1,0 +1,95 @@
+// Core benchmarks: what one agent spends per physics step, per control step and per consensus
+// tick, and what the supervisor spends analysing an N-agent graph.
+#include <benchmark/benchmark.h>
+
+#include <random>
+
+#include "common/core/dynamics.hpp"
+#include "common/core/graph.hpp"
+#include "common/core/tracking_controller.hpp"
+#include "common/core/update_law.hpp"
+
+namespace qswarm {
+namespace {
+
+void BM_Rk4Step(benchmark::State& state) {
+  const Airframe af = Airframe::paper();
+  QuadState s;
+  s.omega_B = Vec3(0.1, -0.2, 0.3);
+  const RotorSpeeds w(200, 195, 198, 201);
+  for (auto _ : state) {
+    s = rk4_step(af, s, w, 0.002);
+    benchmark::DoNotOptimize(s);
+  }
+}
+BENCHMARK(BM_Rk4Step);
+
+void BM_ControllerStep(benchmark::State& state) {
+  const Airframe af = Airframe::paper();
+  const TrackingGains gains;
+  QuadState s;
+  s.R_WB = rotation_from_tait_bryan({0.1, -0.1, 0.5});
+  TrackingReference ref;
+  ref.p_W = Vec3(3, 4, 1);
+  for (auto _ : state) {
+    TrackingOutput out = track(af, gains, s, ref);
+    benchmark::DoNotOptimize(out);
+  }
+}
+BENCHMARK(BM_ControllerStep);
+
+std::vector<NeighborView> neighbours(int k, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(-10, 10);
+  std::vector<NeighborView> out;
+  for (int i = 0; i < k; ++i) {
+    NeighborView v;
+    v.id = static_cast<AgentId>(i + 2);  // self is 1: it owns every edge
+    v.q = Vec3(u(rng), u(rng), u(rng));
+    v.total_weight = 10.0;
+    v.seq = 1;
+    out.push_back(v);
+  }
+  return out;
+}
+
+void BM_ConsensusUpdate(benchmark::State& state, LawKind kind) {
+  const int k = static_cast<int>(state.range(0));
+  LawConfig cfg;
+  cfg.kind = kind;
+  cfg.weight.policy = WeightPolicy::kDistance;
+  cfg.topology.policy = TopologyPolicy::kProximity;
+  cfg.topology.threshold_m = 1e3;  // every neighbour linked
+  const auto law = make_law(1, Vec3::Zero(), cfg);
+  const std::vector<NeighborView> nbrs = neighbours(k, 11);
+  for (auto _ : state) {
+    law->step(0.02, nbrs);
+    benchmark::DoNotOptimize(law->state());
+  }
+  state.SetComplexityN(k);
+}
+BENCHMARK_CAPTURE(BM_ConsensusUpdate, edge_flow, LawKind::kEdgeFlow)->RangeMultiplier(2)->Range(1, 64);
+BENCHMARK_CAPTURE(BM_ConsensusUpdate, laplacian, LawKind::kLaplacian)->RangeMultiplier(2)->Range(1, 64);
+
+void BM_SpectralAnalysis(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> u(0, 50);
+  std::vector<Vec3> p(n);
+  for (auto& x : p) x = Vec3(u(rng), u(rng), u(rng));
+  std::vector<Edge> edges;
+  for (int i = 0; i < n; ++i)
+    for (int j = i + 1; j < n; ++j)
+      if ((p[i] - p[j]).norm() < 25.0) edges.push_back({i, j, (p[i] - p[j]).norm()});
+  for (auto _ : state) {
+    const Spectrum s = analyze(laplacian(n, edges));
+    benchmark::DoNotOptimize(s.lambda2);
+  }
+  state.SetComplexityN(n);
+}
+BENCHMARK(BM_SpectralAnalysis)->RangeMultiplier(2)->Range(4, 256)->Complexity();
+
+}  // namespace
+}  // namespace qswarm
+
+BENCHMARK_MAIN();

@@ -1,0 +1,27 @@
+#!/usr/bin/env bash
+# Installs what the project needs from Debian 12's archive and configures + builds it.
+# Usage: tools/setup.sh [build-dir]     (idempotent; skips apt when everything is present)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+BUILD_DIR="${1:-build}"
+
+PACKAGES=(cmake g++ ninja-build pkg-config
+  libeigen3-dev libgtest-dev libgmock-dev libbenchmark-dev
+  libfastrtps-dev libfastcdr-dev fastddsgen fastdds-tools
+  libprotobuf-dev protobuf-compiler libspdlog-dev libcli11-dev
+  iproute2 iptables procps)
+
+missing=()
+for p in "${PACKAGES[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if ((${#missing[@]})); then
+  echo "setup: installing ${missing[*]}"
+  SUDO=""
+  if [[ $(id -u) -ne 0 ]]; then SUDO="sudo"; fi
+  $SUDO apt-get update -q
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -q --no-install-recommends "${missing[@]}"
+fi
+
+cmake -S . -B "$BUILD_DIR" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo
+cmake --build "$BUILD_DIR" --parallel "$(nproc)"
