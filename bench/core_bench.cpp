@@ -68,8 +68,12 @@ void BM_ConsensusUpdate(benchmark::State& state, LawKind kind) {
   }
   state.SetComplexityN(k);
 }
-BENCHMARK_CAPTURE(BM_ConsensusUpdate, edge_flow, LawKind::kEdgeFlow)->RangeMultiplier(2)->Range(1, 64);
-BENCHMARK_CAPTURE(BM_ConsensusUpdate, laplacian, LawKind::kLaplacian)->RangeMultiplier(2)->Range(1, 64);
+BENCHMARK_CAPTURE(BM_ConsensusUpdate, edge_flow, LawKind::kEdgeFlow)
+    ->RangeMultiplier(2)
+    ->Range(1, 64);
+BENCHMARK_CAPTURE(BM_ConsensusUpdate, laplacian, LawKind::kLaplacian)
+    ->RangeMultiplier(2)
+    ->Range(1, 64);
 
 void BM_SpectralAnalysis(benchmark::State& state) {
   const int n = static_cast<int>(state.range(0));

@@ -42,8 +42,9 @@ int main(int argc, char** argv) {
   InProcessSwarm swarm(cfg);
 
   const Vec3 paper(15.25, 10.25, 31.0);
-  std::printf("paper's time-varying rendezvous, %s law, %.0f Hz, sticky proximity 12.5 m, w = distance\n",
-              to_string(kind).c_str(), rate_hz);
+  std::printf(
+      "paper's time-varying rendezvous, %s law, %.0f Hz, sticky proximity 12.5 m, w = distance\n",
+      to_string(kind).c_str(), rate_hz);
   std::printf("%8s %6s %10s %14s\n", "t [s]", "edges", "lambda2", "disagree [m]");
   double next_print = 0.0;
   std::size_t edges_before = swarm.edges().size();
@@ -59,7 +60,8 @@ int main(int argc, char** argv) {
     swarm.step();
   }
   const Vec3 met = average(swarm.states());
-  std::printf("\nmet after %.2f s (disagreement %.2e m)\n", swarm.time_s(), disagreement(swarm.states()));
+  std::printf("\nmet after %.2f s (disagreement %.2e m)\n", swarm.time_s(),
+              disagreement(swarm.states()));
   for (int i = 0; i < swarm.size(); ++i) {
     const Vec3 q = swarm.states()[i];
     std::printf("  agent %d at (%.4f, %.4f, %.4f)\n", i + 1, q.x(), q.y(), q.z());

@@ -8,8 +8,8 @@ namespace {
 
 // u = omega^2 for a wrench, exact inverse of wrench_from_rotors.
 Vec4 inverse(const Airframe& af, double thrust, const Vec3& tau) {
-  const double sum = thrust / af.K_r;              // u1 + u2 + u3 + u4
-  const double alt = tau.z() / af.K_d;             // u1 - u2 + u3 - u4
+  const double sum = thrust / af.K_r;                // u1 + u2 + u3 + u4
+  const double alt = tau.z() / af.K_d;               // u1 - u2 + u3 - u4
   const double d13 = tau.x() / (af.K_r * af.arm_m);  // u3 - u1
   const double d24 = tau.y() / (af.K_r * af.arm_m);  // u4 - u2
   const double s13 = 0.5 * (sum + alt);
@@ -44,8 +44,8 @@ Allocation allocate(const Airframe& af, const Wrench& desired) {
   Vec4 u = inverse(af, desired.thrust_N, desired.torque_B_Nm);
   if (!inside(u, lo, hi)) {
     out.saturated = true;
-    const double thrust =
-        std::clamp(desired.thrust_N, 4.0 * af.K_r * lo, 4.0 * af.K_r * hi);  // thrust alone always fits
+    const double thrust = std::clamp(desired.thrust_N, 4.0 * af.K_r * lo,
+                                     4.0 * af.K_r * hi);  // thrust alone always fits
     const Vec4 u_thrust = inverse(af, thrust, Vec3::Zero());
     const Vec3 tau_rp(desired.torque_B_Nm.x(), desired.torque_B_Nm.y(), 0.0);
     const Vec4 du_rp = inverse(af, 0.0, tau_rp);

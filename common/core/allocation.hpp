@@ -21,9 +21,9 @@ struct Allocation {
 };
 
 // Inverse of the allocation, then rotor limits. When the exact inverse needs a rotor speed outside
-// [rotor_min, rotor_max], authority is given up in this order: yaw torque first, then roll/pitch torque
-// (scaled together, keeping the tilt direction), then thrust is clamped. Always returns speeds within
-// the airframe's limits.
+// [rotor_min, rotor_max], authority is given up in this order: yaw torque first, then roll/pitch
+// torque (scaled together, keeping the tilt direction), then thrust is clamped. Always returns
+// speeds within the airframe's limits.
 Allocation allocate(const Airframe& af, const Wrench& desired);
 
 }  // namespace qswarm

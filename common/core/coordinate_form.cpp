@@ -17,7 +17,7 @@ CoordinateState coordinate_derivatives(const Airframe& af, const CoordinateState
   const double Jr = af.rotor_inertia_kgm2;
   double sum_t = 0.0;
   for (int i = 0; i < 4; ++i) sum_t += af.K_r * w[i] * w[i];
-  const double alt_w = w[0] - w[1] + w[2] - w[3];                                // sum (-1)^(i+1) w_i
+  const double alt_w = w[0] - w[1] + w[2] - w[3];  // sum (-1)^(i+1) w_i
   const double alt_w2 = w[0] * w[0] - w[1] * w[1] + w[2] * w[2] - w[3] * w[3];  // ... w_i^2
 
   CoordinateState d;
@@ -30,11 +30,11 @@ CoordinateState coordinate_derivatives(const Airframe& af, const CoordinateState
   d[6] = v2 * O3 - v3 * O2 - v1 * std::abs(v1) * af.C_D[0] / m + g * St;
   d[7] = v3 * O1 - v1 * O3 - v2 * std::abs(v2) * af.C_D[1] / m - g * Ct * Sf;
   d[8] = v1 * O2 - v2 * O1 + (sum_t - v3 * std::abs(v3) * af.C_D[2]) / m - g * Ct * Cf;
-  d[9] = ((J2 - J3) * O2 * O3 + Jr * alt_w * O2 +
-          af.K_r * af.arm_m * (w[2] * w[2] - w[0] * w[0]) - O1 * std::abs(O1) * af.C_tau[0]) /
+  d[9] = ((J2 - J3) * O2 * O3 + Jr * alt_w * O2 + af.K_r * af.arm_m * (w[2] * w[2] - w[0] * w[0]) -
+          O1 * std::abs(O1) * af.C_tau[0]) /
          J1;
-  d[10] = ((J3 - J1) * O1 * O3 - Jr * alt_w * O1 +
-           af.K_r * af.arm_m * (w[3] * w[3] - w[1] * w[1]) - O2 * std::abs(O2) * af.C_tau[1]) /
+  d[10] = ((J3 - J1) * O1 * O3 - Jr * alt_w * O1 + af.K_r * af.arm_m * (w[3] * w[3] - w[1] * w[1]) -
+           O2 * std::abs(O2) * af.C_tau[1]) /
           J2;
   d[11] = ((J1 - J2) * O1 * O2 + af.K_d * alt_w2 - O3 * std::abs(O3) * af.C_tau[2]) / J3;
   return d;

@@ -25,9 +25,7 @@ bool QuadState::finite() const {
   return p_W.allFinite() && R_WB.allFinite() && v_B.allFinite() && omega_B.allFinite();
 }
 
-double total_thrust(const Airframe& af, const RotorSpeeds& w) {
-  return af.K_r * w.squaredNorm();
-}
+double total_thrust(const Airframe& af, const RotorSpeeds& w) { return af.K_r * w.squaredNorm(); }
 
 Vec3 rotor_torque(const Airframe& af, const RotorSpeeds& w) {
   const Vec4 u = w.cwiseProduct(w);
@@ -71,8 +69,8 @@ QuadState rk4_step(const Airframe& af, const QuadState& s, const RotorSpeeds& w,
   out.p_W = s.p_W + h6 * (k1.p_dot_W + 2.0 * k2.p_dot_W + 2.0 * k3.p_dot_W + k4.p_dot_W);
   out.R_WB = orthonormalize(s.R_WB + h6 * (k1.R_dot + 2.0 * k2.R_dot + 2.0 * k3.R_dot + k4.R_dot));
   out.v_B = s.v_B + h6 * (k1.v_dot_B + 2.0 * k2.v_dot_B + 2.0 * k3.v_dot_B + k4.v_dot_B);
-  out.omega_B =
-      s.omega_B + h6 * (k1.omega_dot_B + 2.0 * k2.omega_dot_B + 2.0 * k3.omega_dot_B + k4.omega_dot_B);
+  out.omega_B = s.omega_B + h6 * (k1.omega_dot_B + 2.0 * k2.omega_dot_B + 2.0 * k3.omega_dot_B +
+                                  k4.omega_dot_B);
   return out;
 }
 

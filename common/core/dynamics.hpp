@@ -6,16 +6,17 @@
 namespace qswarm {
 
 // Rotor angular speeds omega_1..omega_4 [rad/s], numbered as in the paper: rotors 1 and 3 on the
-// body x axis (-x and +x side by tau_f's sign), 2 and 4 on the body y axis; odd rotors spin one way,
-// even the other (the (-1)^(i+1) factors).
+// body x axis (-x and +x side by tau_f's sign), 2 and 4 on the body y axis; odd rotors spin one
+// way, even the other (the (-1)^(i+1) factors).
 using RotorSpeeds = Vec4;
 
-// State on SE(3) x R^6, the paper's (b, R, v, Omega). The integrator works on this, never on angles.
+// State on SE(3) x R^6, the paper's (b, R, v, Omega). The integrator works on this, never on
+// angles.
 struct QuadState {
-  Vec3 p_W = Vec3::Zero();          // b: centre of mass, inertial frame [m]
-  Mat3 R_WB = Mat3::Identity();     // R: body-to-inertial rotation
-  Vec3 v_B = Vec3::Zero();          // v: translational velocity, body frame [m/s]
-  Vec3 omega_B = Vec3::Zero();      // Omega: angular velocity, body frame [rad/s]
+  Vec3 p_W = Vec3::Zero();       // b: centre of mass, inertial frame [m]
+  Mat3 R_WB = Mat3::Identity();  // R: body-to-inertial rotation
+  Vec3 v_B = Vec3::Zero();       // v: translational velocity, body frame [m/s]
+  Vec3 omega_B = Vec3::Zero();   // Omega: angular velocity, body frame [rad/s]
 
   Vec3 velocity_W() const { return R_WB * v_B; }
   bool finite() const;
@@ -30,12 +31,12 @@ struct QuadStateDot {
 
 // The individual terms of the paper's equations (3.x "External forces and torques"), body frame.
 struct ForcesAndTorques {
-  Vec3 drag_B;         // f_1 = -diag(v|v|) C_D                 [N]
-  Vec3 gravity_B;      // f_2 = -m g R^T e3                     [N]
-  Vec3 thrust_B;       // f_3 = sum_i K_r omega_i^2 e3          [N]
-  Vec3 rotor_torque_B; // tau_f                                 [N m]
-  Vec3 rot_drag_B;     // tau_1 = -diag(Omega|Omega|) C_tau     [N m]
-  Vec3 gyro_B;         // tau_2 = sum_i Omega x (-1)^(i+1) J_r (0,0,omega_i) [N m]
+  Vec3 drag_B;          // f_1 = -diag(v|v|) C_D                 [N]
+  Vec3 gravity_B;       // f_2 = -m g R^T e3                     [N]
+  Vec3 thrust_B;        // f_3 = sum_i K_r omega_i^2 e3          [N]
+  Vec3 rotor_torque_B;  // tau_f                                 [N m]
+  Vec3 rot_drag_B;      // tau_1 = -diag(Omega|Omega|) C_tau     [N m]
+  Vec3 gyro_B;          // tau_2 = sum_i Omega x (-1)^(i+1) J_r (0,0,omega_i) [N m]
 };
 
 ForcesAndTorques forces_and_torques(const Airframe& af, const QuadState& s, const RotorSpeeds& w);

@@ -22,11 +22,11 @@ using Positions = std::vector<Vec3>;
 Eigen::MatrixXd laplacian(int n, const std::vector<Edge>& edges);
 
 struct Spectrum {
-  Eigen::VectorXd eigenvalues;   // ascending
-  Eigen::MatrixXd eigenvectors;  // orthonormal columns, same order
-  double lambda2 = 0.0;          // algebraic connectivity (0 if disconnected)
-  int components = 0;            // connected components of the graph
-  std::vector<int> component_of; // component index per vertex
+  Eigen::VectorXd eigenvalues;    // ascending
+  Eigen::MatrixXd eigenvectors;   // orthonormal columns, same order
+  double lambda2 = 0.0;           // algebraic connectivity (0 if disconnected)
+  int components = 0;             // connected components of the graph
+  std::vector<int> component_of;  // component index per vertex
 };
 
 // Eigen-decomposition (self-adjoint solver) plus connected components from the edge structure.

@@ -15,7 +15,8 @@ Mat3 orthonormalize(const Mat3& r) {
 }
 
 Mat3 rotation_from_tait_bryan(const TaitBryan& a) {
-  return (Eigen::AngleAxisd(a.yaw_rad, Vec3::UnitZ()) * Eigen::AngleAxisd(a.pitch_rad, Vec3::UnitY()) *
+  return (Eigen::AngleAxisd(a.yaw_rad, Vec3::UnitZ()) *
+          Eigen::AngleAxisd(a.pitch_rad, Vec3::UnitY()) *
           Eigen::AngleAxisd(a.roll_rad, Vec3::UnitX()))
       .toRotationMatrix();
 }

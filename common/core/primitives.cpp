@@ -8,10 +8,9 @@
 namespace qswarm {
 namespace {
 
-
 // A rest-to-rest profile: total change `total` over `duration` along the septic smoothstep
-// s(x) = 35x^4 - 84x^5 + 70x^6 - 20x^7, whose velocity, acceleration and jerk vanish at both ends, so
-// a pitch that follows the acceleration (theta = atan(a/g)) also starts and ends with zero rate.
+// s(x) = 35x^4 - 84x^5 + 70x^6 - 20x^7, whose velocity, acceleration and jerk vanish at both ends,
+// so a pitch that follows the acceleration (theta = atan(a/g)) also starts and ends with zero rate.
 struct Profile {
   double pos, vel, acc;
 };
@@ -26,12 +25,12 @@ Profile rest_to_rest(double total, double duration, double tau) {
 }
 
 // Light feedback gains on the one profiled quantity of each primitive.
-constexpr double kAngleKp = 36.0;     // [1/s^2]
-constexpr double kAngleKd = 12.0;     // [1/s]
-constexpr double kClimbKp = 4.0;      // [1/s^2]
-constexpr double kClimbKd = 4.0;      // [1/s]
-constexpr double kAlongKp = 1.0;      // [1/s^2]
-constexpr double kAlongKd = 1.6;      // [1/s]
+constexpr double kAngleKp = 36.0;  // [1/s^2]
+constexpr double kAngleKd = 12.0;  // [1/s]
+constexpr double kClimbKp = 4.0;   // [1/s^2]
+constexpr double kClimbKd = 4.0;   // [1/s]
+constexpr double kAlongKp = 1.0;   // [1/s^2]
+constexpr double kAlongKd = 1.6;   // [1/s]
 
 double pitch_feedforward(double total, double duration, double tau, double g) {
   return std::atan(rest_to_rest(total, duration, tau).acc / g);
@@ -163,10 +162,10 @@ RotorSpeeds OpenLoopManeuver::command(double t, const QuadState& s) {
     case Kind::kClimb: {
       // Equal rotors (no torque, no gyroscopic term): thrust = m (g + z'') + drag.
       const Profile p = rest_to_rest(seg.amount, seg.duration_s, tau);
-      const double z_acc = p.acc + kClimbKp * (p_at_start_W_.z() + p.pos - s.p_W.z()) +
-                           kClimbKd * (p.vel - v_W.z());
-      const double thrust = af.mass_kg * (af.gravity_mps2 + z_acc) +
-                            s.v_B.z() * std::abs(s.v_B.z()) * af.C_D[2];
+      const double z_acc =
+          p.acc + kClimbKp * (p_at_start_W_.z() + p.pos - s.p_W.z()) + kClimbKd * (p.vel - v_W.z());
+      const double thrust =
+          af.mass_kg * (af.gravity_mps2 + z_acc) + s.v_B.z() * std::abs(s.v_B.z()) * af.C_D[2];
       return RotorSpeeds::Constant(std::sqrt(std::max(0.0, thrust) / (4.0 * af.K_r)));
     }
     case Kind::kYaw: {
@@ -188,16 +187,19 @@ RotorSpeeds OpenLoopManeuver::command(double t, const QuadState& s) {
       const double correction = kAlongKp * (p.pos - along) + kAlongKd * (p.vel - along_v);
       constexpr double h = 1e-3;
       const double th_ff = pitch_feedforward(seg.amount, seg.duration_s, tau, af.gravity_mps2);
-      const double th_ff_dot = (pitch_feedforward(seg.amount, seg.duration_s, tau + h, af.gravity_mps2) -
-                                pitch_feedforward(seg.amount, seg.duration_s, tau - h, af.gravity_mps2)) /
-                               (2.0 * h);
-      const double th_ff_ddot = (pitch_feedforward(seg.amount, seg.duration_s, tau + h, af.gravity_mps2) - 2.0 * th_ff +
-                                 pitch_feedforward(seg.amount, seg.duration_s, tau - h, af.gravity_mps2)) /
-                                (h * h);
+      const double th_ff_dot =
+          (pitch_feedforward(seg.amount, seg.duration_s, tau + h, af.gravity_mps2) -
+           pitch_feedforward(seg.amount, seg.duration_s, tau - h, af.gravity_mps2)) /
+          (2.0 * h);
+      const double th_ff_ddot =
+          (pitch_feedforward(seg.amount, seg.duration_s, tau + h, af.gravity_mps2) - 2.0 * th_ff +
+           pitch_feedforward(seg.amount, seg.duration_s, tau - h, af.gravity_mps2)) /
+          (h * h);
       const double th_cmd = th_ff + std::atan(correction / af.gravity_mps2);
       const double pitch = tait_bryan_from_rotation(s.R_WB).pitch_rad;
       const double O2 = s.omega_B.y();
-      const double pitch_acc = th_ff_ddot + kAngleKp * (th_cmd - pitch) + kAngleKd * (th_ff_dot - O2);
+      const double pitch_acc =
+          th_ff_ddot + kAngleKp * (th_cmd - pitch) + kAngleKd * (th_ff_dot - O2);
       const double tau_y = af.inertia_kgm2.y() * pitch_acc + O2 * std::abs(O2) * af.C_tau.y();
       const double a = x_axis_lemma_thrust(af, s);
       return x_axis_lemma_rotors(af, a, x_axis_lemma_omega4_for_torque(af, a, tau_y));

@@ -49,9 +49,11 @@ class OpenLoopManeuver {
   // The paper's single-agent figure: rise for 12 s, yaw +pi/2 over 4 s, fly along body x for 4 s.
   static OpenLoopManeuver paper_single_agent(const Airframe& af, double climb_m = 10.0,
                                              double forward_m = 4.0);
-  // One drone of the paper's 3-drone rendezvous: yaw to face the target, then fly to it along body x.
-  static OpenLoopManeuver yaw_then_fly(const Airframe& af, const QuadState& start, const Vec3& target,
-                                       double yaw_duration_s = 4.0, double max_pitch_rad = 0.15);
+  // One drone of the paper's 3-drone rendezvous: yaw to face the target, then fly to it along body
+  // x.
+  static OpenLoopManeuver yaw_then_fly(const Airframe& af, const QuadState& start,
+                                       const Vec3& target, double yaw_duration_s = 4.0,
+                                       double max_pitch_rad = 0.15);
 
   // Rotor speeds at time t for the current state (the state enters only where the Lemma's formulas
   // use it, and through the feedback on the profiled angle).

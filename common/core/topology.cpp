@@ -21,19 +21,26 @@ double weight_for_distance(const WeightConfig& cfg, double d) {
 
 std::string to_string(WeightPolicy p) {
   switch (p) {
-    case WeightPolicy::kUnweighted: return "unweighted";
-    case WeightPolicy::kDistance: return "distance";
-    case WeightPolicy::kInitialDistance: return "initial_distance";
-    case WeightPolicy::kInverseDistance: return "inverse_distance";
+    case WeightPolicy::kUnweighted:
+      return "unweighted";
+    case WeightPolicy::kDistance:
+      return "distance";
+    case WeightPolicy::kInitialDistance:
+      return "initial_distance";
+    case WeightPolicy::kInverseDistance:
+      return "inverse_distance";
   }
   return "?";
 }
 
 std::string to_string(TopologyPolicy p) {
   switch (p) {
-    case TopologyPolicy::kFixed: return "fixed";
-    case TopologyPolicy::kProximity: return "proximity";
-    case TopologyPolicy::kStickyProximity: return "sticky_proximity";
+    case TopologyPolicy::kFixed:
+      return "fixed";
+    case TopologyPolicy::kProximity:
+      return "proximity";
+    case TopologyPolicy::kStickyProximity:
+      return "sticky_proximity";
   }
   return "?";
 }
@@ -43,8 +50,9 @@ WeightPolicy parse_weight_policy(const std::string& s) {
                          WeightPolicy::kInitialDistance, WeightPolicy::kInverseDistance}) {
     if (s == to_string(p)) return p;
   }
-  throw std::invalid_argument("weight policy '" + s +
-                              "': expected unweighted, distance, initial_distance or inverse_distance");
+  throw std::invalid_argument(
+      "weight policy '" + s +
+      "': expected unweighted, distance, initial_distance or inverse_distance");
 }
 
 TopologyPolicy parse_topology_policy(const std::string& s) {
@@ -81,8 +89,8 @@ bool LinkTracker::update(AgentId peer, double d) {
         link = false;
         break;
       case TopologyPolicy::kProximity:
-        link = linked_.count(peer) ? d <= cfg_.threshold_m + cfg_.hysteresis_m
-                                   : d <= cfg_.threshold_m;
+        link =
+            linked_.count(peer) ? d <= cfg_.threshold_m + cfg_.hysteresis_m : d <= cfg_.threshold_m;
         break;
       case TopologyPolicy::kStickyProximity:
         link = ever_linked_.count(peer) > 0 || d <= cfg_.threshold_m;

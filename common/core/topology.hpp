@@ -15,7 +15,8 @@ using AgentId = std::uint32_t;
 enum class WeightPolicy {
   kUnweighted,       // w = 1 (paper, unweighted networks)
   kDistance,         // w = |q_i - q_j| now (paper's time-varying weighted example)
-  kInitialDistance,  // w = |q_i - q_j| when the edge formed, then fixed (paper's fixed weighted example)
+  kInitialDistance,  // w = |q_i - q_j| when the edge formed, then fixed (paper's fixed weighted
+                     // example)
   kInverseDistance,  // w = scale / max(|q_i - q_j|, 1 cm): strong when close, like a radio link
 };
 
@@ -31,8 +32,8 @@ enum class TopologyPolicy {
   kFixed,            // exactly the listed edges (the paper's fixed networks)
   kProximity,        // listed edges, plus an edge while distance <= threshold (drops past
                      // threshold + hysteresis)
-  kStickyProximity,  // listed edges, plus any edge once distance <= threshold; added edges stay (the
-                     // paper's time-varying example)
+  kStickyProximity,  // listed edges, plus any edge once distance <= threshold; added edges stay
+                     // (the paper's time-varying example)
 };
 
 struct TopologyConfig {
@@ -54,7 +55,8 @@ class LinkTracker {
  public:
   LinkTracker(AgentId self, TopologyConfig cfg);
 
-  // Returns whether self is linked to `peer` at this distance, updating the sticky/hysteresis state.
+  // Returns whether self is linked to `peer` at this distance, updating the sticky/hysteresis
+  // state.
   bool update(AgentId peer, double distance_m);
   // The peer went silent: its link is gone until it is heard again (sticky links come back then).
   void forget(AgentId peer);

@@ -55,7 +55,8 @@ TrackingOutput track(const Airframe& af, const TrackingGains& k, const QuadState
   out.R_desired.col(1) = b2_d;
   out.R_desired.col(2) = b3_d;
 
-  const Vec3 e_R = 0.5 * vee(out.R_desired.transpose() * s.R_WB - s.R_WB.transpose() * out.R_desired);
+  const Vec3 e_R =
+      0.5 * vee(out.R_desired.transpose() * s.R_WB - s.R_WB.transpose() * out.R_desired);
   const Vec3 J = af.inertia_kgm2;
   const double wa = k.att_natural_freq_radps;
   const Vec3 k_R = wa * wa * J;
@@ -65,8 +66,8 @@ TrackingOutput track(const Airframe& af, const TrackingGains& k, const QuadState
   const Vec3 rot_drag(-s.omega_B.x() * std::abs(s.omega_B.x()) * af.C_tau.x(),
                       -s.omega_B.y() * std::abs(s.omega_B.y()) * af.C_tau.y(),
                       -s.omega_B.z() * std::abs(s.omega_B.z()) * af.C_tau.z());
-  out.wrench.torque_B_Nm = -k_R.cwiseProduct(e_R) - k_W.cwiseProduct(s.omega_B) +
-                           s.omega_B.cross(J_omega) - rot_drag;
+  out.wrench.torque_B_Nm =
+      -k_R.cwiseProduct(e_R) - k_W.cwiseProduct(s.omega_B) + s.omega_B.cross(J_omega) - rot_drag;
   out.wrench.thrust_N = std::max(0.0, F_W.dot(s.R_WB.col(2)));
   out.allocation = allocate(af, out.wrench);
   return out;

@@ -26,16 +26,16 @@ struct TrackingGains {
 };
 
 struct TrackingOutput {
-  Wrench wrench;               // what the controller asked for
-  Allocation allocation;       // rotor speeds after the inverse allocation and rotor limits
+  Wrench wrench;          // what the controller asked for
+  Allocation allocation;  // rotor speeds after the inverse allocation and rotor limits
   Mat3 R_desired = Mat3::Identity();
 };
 
 // Geometric tracking on SE(3) after Lee, Leok and McClamroch (2010), in the paper's body frame
 // (thrust along +z_B, z up): F = m (a_cmd + g e3), f = F . R e3, b3_d = F/|F|; attitude error
-// e_R = vee(R_d^T R - R^T R_d)/2, M = -k_R e_R - k_W Omega + Omega x J Omega (cancelling the paper's
-// J Omega x Omega). Position error and tilt are saturated so a distant reference is approached at
-// bounded speed. Pure: a function of its inputs.
+// e_R = vee(R_d^T R - R^T R_d)/2, M = -k_R e_R - k_W Omega + Omega x J Omega (cancelling the
+// paper's J Omega x Omega). Position error and tilt are saturated so a distant reference is
+// approached at bounded speed. Pure: a function of its inputs.
 TrackingOutput track(const Airframe& af, const TrackingGains& gains, const QuadState& s,
                      const TrackingReference& ref);
 

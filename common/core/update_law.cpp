@@ -8,8 +8,11 @@
 namespace qswarm {
 
 std::string check_view(const NeighborView& v, double max_abs) {
-  const auto bad_vec = [&](const Vec3& x) { return !x.allFinite() || x.cwiseAbs().maxCoeff() > max_abs; };
-  if (bad_vec(v.q)) return "consensus state not finite or beyond +-" + std::to_string(max_abs) + " m";
+  const auto bad_vec = [&](const Vec3& x) {
+    return !x.allFinite() || x.cwiseAbs().maxCoeff() > max_abs;
+  };
+  if (bad_vec(v.q))
+    return "consensus state not finite or beyond +-" + std::to_string(max_abs) + " m";
   if (!std::isfinite(v.total_weight) || v.total_weight < 0.0 || v.total_weight > 1e9) {
     return "total weight not finite, negative or absurd";
   }
@@ -31,7 +34,8 @@ LawKind parse_law_kind(const std::string& s) {
 
 void LawConfig::validate() const {
   if (!std::isfinite(gain) || gain <= 0.0) {
-    throw std::invalid_argument("law.gain = " + std::to_string(gain) + ": expected a finite value > 0");
+    throw std::invalid_argument("law.gain = " + std::to_string(gain) +
+                                ": expected a finite value > 0");
   }
   if (!std::isfinite(weight.scale) || weight.scale <= 0.0) {
     throw std::invalid_argument("weight.scale: expected a finite value > 0");

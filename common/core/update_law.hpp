@@ -78,7 +78,8 @@ class UpdateLaw {
 
  protected:
   // Move the state: `coef[k]` is c for neighbours[k] (0 when not linked).
-  virtual void integrate(const std::vector<NeighborView>& neighbors, const std::vector<double>& coef) = 0;
+  virtual void integrate(const std::vector<NeighborView>& neighbors,
+                         const std::vector<double>& coef) = 0;
   std::vector<double> update_links(const std::vector<NeighborView>& neighbors);
 
   AgentId self_;
@@ -96,19 +97,22 @@ std::unique_ptr<UpdateLaw> make_law(AgentId self, const Vec3& q0, const LawConfi
 
 class LaplacianLaw final : public UpdateLaw {
  public:
-  LaplacianLaw(AgentId self, const Vec3& q0, LawConfig cfg) : UpdateLaw(self, q0, std::move(cfg)), q_(q0) {}
+  LaplacianLaw(AgentId self, const Vec3& q0, LawConfig cfg)
+      : UpdateLaw(self, q0, std::move(cfg)), q_(q0) {}
   Vec3 state() const override { return q_; }
 
  private:
-  void integrate(const std::vector<NeighborView>& neighbors, const std::vector<double>& coef) override;
+  void integrate(const std::vector<NeighborView>& neighbors,
+                 const std::vector<double>& coef) override;
   Vec3 q_;
 };
 
 // q_i = q_i(0) - sum_{owned} f_ij + sum_{copies} f_ki. The owner integrates f_ij; the other end
 // applies the newest copy it received, so the sum over agents is exact whenever copies are current.
 // Between copies the non-owner predicts the owner's increments with the same formula (what the
-// Laplacian law would do) and drops the prediction when a newer copy arrives: the prediction removes
-// the one-message lag, the copy keeps the total exact. In lockstep the two laws then coincide.
+// Laplacian law would do) and drops the prediction when a newer copy arrives: the prediction
+// removes the one-message lag, the copy keeps the total exact. In lockstep the two laws then
+// coincide.
 class EdgeFlowLaw final : public UpdateLaw {
  public:
   EdgeFlowLaw(AgentId self, const Vec3& q0, LawConfig cfg) : UpdateLaw(self, q0, std::move(cfg)) {}
@@ -117,7 +121,8 @@ class EdgeFlowLaw final : public UpdateLaw {
   bool owns(AgentId peer) const { return self_ < peer; }
 
  private:
-  void integrate(const std::vector<NeighborView>& neighbors, const std::vector<double>& coef) override;
+  void integrate(const std::vector<NeighborView>& neighbors,
+                 const std::vector<double>& coef) override;
   struct Copy {
     Vec3 flow = Vec3::Zero();       // newest f_{owner,self} received
     Vec3 predicted = Vec3::Zero();  // our estimate of the owner's increments since that copy

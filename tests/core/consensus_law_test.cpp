@@ -12,7 +12,8 @@ namespace qswarm {
 namespace {
 
 InProcessSwarmConfig fixed_graph(const Positions& q0, LawKind kind, WeightPolicy w,
-                                 std::vector<std::pair<AgentId, AgentId>> edges, double rate_hz = 50.0) {
+                                 std::vector<std::pair<AgentId, AgentId>> edges,
+                                 double rate_hz = 50.0) {
   InProcessSwarmConfig cfg;
   for (size_t i = 0; i < q0.size(); ++i) cfg.agents.push_back({static_cast<AgentId>(i + 1), q0[i]});
   cfg.law.kind = kind;
@@ -30,7 +31,8 @@ std::string law_name(const ::testing::TestParamInfo<LawKind>& p) {
 class BothLaws : public ::testing::TestWithParam<LawKind> {};
 
 // Max over a 10 s run of max_i |q_i(t) - [exp(-L t) q0]_i|.
-double max_deviation_from_exact(InProcessSwarm& swarm, const Eigen::MatrixXd& L, const Positions& q0) {
+double max_deviation_from_exact(InProcessSwarm& swarm, const Eigen::MatrixXd& L,
+                                const Positions& q0) {
   double worst = 0.0;
   while (swarm.time_s() < 10.0) {
     swarm.step();
@@ -44,8 +46,8 @@ double max_deviation_from_exact(InProcessSwarm& swarm, const Eigen::MatrixXd& L,
 TEST_P(BothLaws, FullyConnectedVertexMovesOnAStraightLine) {
   // Paper, Theorem (fully connected vertex): in scenario 1 agent 2 is linked to all others, so
   // q^2(t) - alpha = (q^2(0) - alpha) e^{-n t}: a straight segment toward the agreement point.
-  InProcessSwarm swarm(fixed_graph(paper::kUnweightedQ0, GetParam(), WeightPolicy::kUnweighted,
-                                   paper::kGraph1));
+  InProcessSwarm swarm(
+      fixed_graph(paper::kUnweightedQ0, GetParam(), WeightPolicy::kUnweighted, paper::kGraph1));
   const Vec3 start = paper::kUnweightedQ0[1];
   const Vec3 dir = (paper::kUnweightedAgreement - start).normalized();
   double off_line = 0.0;
@@ -59,8 +61,8 @@ TEST_P(BothLaws, FullyConnectedVertexMovesOnAStraightLine) {
   }
   EXPECT_LT(off_line, 1e-9);
   // Agent 1 (degree 1) does not move on a straight line: the test can tell the difference.
-  InProcessSwarm other(fixed_graph(paper::kUnweightedQ0, GetParam(), WeightPolicy::kUnweighted,
-                                   paper::kGraph1));
+  InProcessSwarm other(
+      fixed_graph(paper::kUnweightedQ0, GetParam(), WeightPolicy::kUnweighted, paper::kGraph1));
   const Vec3 s1 = paper::kUnweightedQ0[0];
   const Vec3 d1 = (paper::kUnweightedAgreement - s1).normalized();
   double off1 = 0.0;
@@ -132,7 +134,8 @@ TEST_P(BothLaws, FixedGraphsTrackTheExactSolution) {
   };
   for (const Case& c : cases) {
     const bool weighted = c.w != WeightPolicy::kUnweighted;
-    const Eigen::MatrixXd L = laplacian(4, paper::to_index_edges(c.edges, weighted ? &c.q0 : nullptr));
+    const Eigen::MatrixXd L =
+        laplacian(4, paper::to_index_edges(c.edges, weighted ? &c.q0 : nullptr));
     const double spread = disagreement(c.q0);
     InProcessSwarm at50(fixed_graph(c.q0, GetParam(), c.w, c.edges, 50.0));
     InProcessSwarm at500(fixed_graph(c.q0, GetParam(), c.w, c.edges, 500.0));
@@ -219,7 +222,7 @@ TEST(LaplacianLaw, LostMessagesShiftTheAgreedValue) {
     if (tick % 3 == 0) last_a = ma;
     b.step(0.02, {last_a});
   }
-  EXPECT_LT(std::abs(a.state().x() - b.state().x()), 1e-3);  // they still agree...
+  EXPECT_LT(std::abs(a.state().x() - b.state().x()), 1e-3);         // they still agree...
   EXPECT_GT(std::abs(a.state().x() + b.state().x() - 10.0), 1e-2);  // ...but not on the average
 }
 

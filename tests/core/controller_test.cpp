@@ -39,8 +39,9 @@ TEST(TrackingController, FliesFromRestToAPointTenMetresAwayAndSettles) {
   }
   // then it settles within 5 cm and stays, with overshoot under 5% of the distance, a straight
   // path, little altitude loss, and the commanded heading.
-  std::printf("10 m step: overshoot %.3f m, cross-track %.3f m, altitude error %.3f m, settled at %.2f s\n",
-              max_along - 10.0, max_cross, max_alt_err, settle_time);
+  std::printf(
+      "10 m step: overshoot %.3f m, cross-track %.3f m, altitude error %.3f m, settled at %.2f s\n",
+      max_along - 10.0, max_cross, max_alt_err, settle_time);
   EXPECT_GE(settle_time, 0.0);
   EXPECT_LT(settle_time, 15.0);
   EXPECT_LT(max_along - 10.0, 0.5);

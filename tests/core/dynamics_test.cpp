@@ -62,7 +62,7 @@ TEST(Dynamics, XAxisLemmaRotorsKeepAltitudeAndLeaveAYawTorque) {
   const double a = kPaper.weight_N();
   for (const double w4 : {190.0, 196.0, 200.0}) {
     const RotorSpeeds w = x_axis_lemma_rotors(kPaper, a, w4);
-    EXPECT_NEAR(total_thrust(kPaper, w), a, 1e-12);  // sum t_i = a
+    EXPECT_NEAR(total_thrust(kPaper, w), a, 1e-12);        // sum t_i = a
     EXPECT_NEAR(rotor_torque(kPaper, w).x(), 0.0, 1e-15);  // omega1 = omega3: no roll torque
     // The yaw torque K_d (w1^2 - w2^2 + w3^2 - w4^2) equals -K_d (w2 - w4)^2 / 2.
     const double yaw = rotor_torque(kPaper, w).z();
@@ -101,8 +101,8 @@ TEST(Dynamics, GeometricAndCoordinateFormsAgreeAwayFromTheSingularity) {
     EXPECT_LT((geo.omega_dot_B - coord.segment<3>(9)).norm(), 1e-6) << trial;
     // Euler rates: R(eta + h eta_dot) must equal R + h R_dot to first order.
     const double h = 1e-7;
-    const Mat3 R_next = rotation_from_tait_bryan(
-        {x[3] + h * coord[3], x[4] + h * coord[4], x[5] + h * coord[5]});
+    const Mat3 R_next =
+        rotation_from_tait_bryan({x[3] + h * coord[3], x[4] + h * coord[4], x[5] + h * coord[5]});
     EXPECT_LT(((R_next - s.R_WB) / h - geo.R_dot).norm(), 1e-5) << trial;
   }
 }
@@ -161,7 +161,8 @@ TEST(Allocation, InverseOfThePapersAllocationAndRotorLimits) {
   std::mt19937_64 rng(3);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   for (int i = 0; i < 500; ++i) {
-    Wrench req{kPaper.weight_N() * (1.0 + 2.0 * u(rng)), Vec3(0.5 * u(rng), 0.5 * u(rng), 0.05 * u(rng))};
+    Wrench req{kPaper.weight_N() * (1.0 + 2.0 * u(rng)),
+               Vec3(0.5 * u(rng), 0.5 * u(rng), 0.05 * u(rng))};
     const Allocation a = allocate(kPaper, req);
     EXPECT_TRUE((a.omega_radps.array() >= kPaper.rotor_min_radps - 1e-9).all());
     EXPECT_TRUE((a.omega_radps.array() <= kPaper.rotor_max_radps + 1e-9).all());
@@ -170,7 +171,7 @@ TEST(Allocation, InverseOfThePapersAllocationAndRotorLimits) {
   const Allocation g = allocate(kPaper, greedy);
   EXPECT_TRUE(g.saturated);
   const Wrench got = wrench_from_rotors(kPaper, g.omega_radps);
-  EXPECT_NEAR(got.torque_B_Nm.x(), 0.05, 1e-9);  // roll torque kept...
+  EXPECT_NEAR(got.torque_B_Nm.x(), 0.05, 1e-9);    // roll torque kept...
   EXPECT_LT(std::abs(got.torque_B_Nm.z()), 0.05);  // ...yaw torque given up
 }
 
@@ -196,13 +197,13 @@ TEST(Maneuver, PapersSingleAgentFlight) {
     }
   }
   const TaitBryan a = tait_bryan_from_rotation(s.R_WB);
-  EXPECT_LT(max_xy_during_climb, 1e-9);            // straight up
+  EXPECT_LT(max_xy_during_climb, 1e-9);  // straight up
   EXPECT_NEAR(after_yaw.z(), 10.0, 0.01);
-  EXPECT_LT(after_yaw.head<2>().norm(), 1e-6);     // yaw in place
-  EXPECT_NEAR(yaw_after_yaw, kPi / 2.0, 1e-3);     // the yaw Lemma segment
+  EXPECT_LT(after_yaw.head<2>().norm(), 1e-6);  // yaw in place
+  EXPECT_NEAR(yaw_after_yaw, kPi / 2.0, 1e-3);  // the yaw Lemma segment
   EXPECT_NEAR(a.yaw_rad, kPi / 2.0, 1e-3);
-  EXPECT_LT(max_roll, 1e-3);                       // roll stays zero (as in the paper's figure)
-  EXPECT_GT(max_pitch, 0.05);                      // pitch moves it
+  EXPECT_LT(max_roll, 1e-3);   // roll stays zero (as in the paper's figure)
+  EXPECT_GT(max_pitch, 0.05);  // pitch moves it
   // Body x after the yaw is inertial +y: it ends about 4 m along +y at the same height.
   EXPECT_NEAR(s.p_W.y(), 4.0, 0.05);
   EXPECT_NEAR(s.p_W.x(), 0.0, 0.05);

@@ -1,7 +1,8 @@
 #pragma once
 
 // Numbers from "Multi-agent Systems for Quadcopters" (Carney, Chyba, Gray, Shanbrom, Wilkens),
-// section 2, with the paper's precision. Agent ids are 1..4 as in the paper; edges use 0-based indices.
+// section 2, with the paper's precision. Agent ids are 1..4 as in the paper; edges use 0-based
+// indices.
 #include <vector>
 
 #include "common/core/graph.hpp"

@@ -37,7 +37,8 @@ TEST(Validation, AirframeRefusesBadParametersNamingTheField) {
       {[nan](Airframe& a) { a.K_r = nan; }, "K_r"},
       {[](Airframe& a) { a.arm_m = 0.0; }, "arm_m"},
       {[](Airframe& a) { a.C_D.z() = -1.0; }, "C_D[2]"},
-      {[](Airframe& a) { a.gravity_mps2 = std::numeric_limits<double>::infinity(); }, "gravity_mps2"},
+      {[](Airframe& a) { a.gravity_mps2 = std::numeric_limits<double>::infinity(); },
+       "gravity_mps2"},
       {[](Airframe& a) { a.rotor_max_radps = 100.0; }, "rotor_max_radps"},  // cannot lift itself
       {[](Airframe& a) { a.rotor_min_radps = 400.0; }, "rotor_max_radps"},
   };
@@ -59,12 +60,15 @@ TEST(Validation, LawAndTopologyRefuseBadConfiguration) {
   EXPECT_NE(error_of([&] { make_law(1, Vec3::Zero(), cfg); }).find("gain"), std::string::npos);
   cfg = LawConfig{};
   cfg.topology.threshold_m = -1.0;
-  EXPECT_NE(error_of([&] { make_law(1, Vec3::Zero(), cfg); }).find("threshold_m"), std::string::npos);
+  EXPECT_NE(error_of([&] { make_law(1, Vec3::Zero(), cfg); }).find("threshold_m"),
+            std::string::npos);
   cfg = LawConfig{};
   EXPECT_NE(error_of([&] { make_law(1, Vec3(std::nan(""), 0, 0), cfg); }).find("initial state"),
             std::string::npos);
-  EXPECT_NE(error_of([] { parse_weight_policy("strong"); }).find("expected unweighted"), std::string::npos);
-  EXPECT_NE(error_of([] { parse_law_kind("gossip"); }).find("laplacian or edge-flow"), std::string::npos);
+  EXPECT_NE(error_of([] { parse_weight_policy("strong"); }).find("expected unweighted"),
+            std::string::npos);
+  EXPECT_NE(error_of([] { parse_law_kind("gossip"); }).find("laplacian or edge-flow"),
+            std::string::npos);
   TrackingGains g;
   g.max_tilt_rad = 2.0;
   EXPECT_NE(error_of([&] { g.validate(); }).find("max_tilt_rad"), std::string::npos);
