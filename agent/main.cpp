@@ -1,0 +1,172 @@
+// swarm-agent: one quadcopter (or particle) as its own process with its own DDS participant. It
+// learns of other agents only from DDS samples, runs the agreement law and (in quadcopter mode)
+// the tracking controller and dynamics in real time, and stops cleanly on SIGINT/SIGTERM.
+#include <CLI/CLI.hpp>
+#include <spdlog/sinks/basic_file_sink.h>
+#include <spdlog/sinks/stdout_color_sinks.h>
+#include <spdlog/spdlog.h>
+
+#include <atomic>
+#include <chrono>
+#include <csignal>
+#include <thread>
+
+#include "common/runtime/agent_runtime.hpp"
+#include "common/runtime/scenario.hpp"
+#include "common/transport/dds_bus.hpp"
+
+namespace {
+
+std::atomic<bool> g_stop{false};
+void on_signal(int) { g_stop = true; }
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  using namespace qswarm;
+  using Clock = std::chrono::steady_clock;
+  CLI::App app{"swarm-agent: one quadcopter of the swarm, over DDS"};
+  std::string scenario_path, run_dir;
+  unsigned id = 0;
+  double time_scale = 1.0;
+  int domain = -1;
+  double start_timeout_s = 30.0;
+  double max_wall_s = -1.0;
+  bool ignore_sigterm = false;
+  std::int64_t seed = -1;
+  app.add_option("--scenario", scenario_path, "scenario file (Protobuf text format)")->required();
+  app.add_option("--id", id, "this agent's id (must be listed in the scenario)")->required();
+  app.add_option("--run-dir", run_dir, "directory for this agent's log");
+  app.add_option("--time-scale", time_scale, "simulated seconds per wall second")
+      ->check(CLI::PositiveNumber);
+  app.add_option("--domain", domain, "DDS domain id (overrides the scenario)")->check(CLI::Range(0, 232));
+  app.add_option("--seed", seed, "run seed (overrides the scenario)");
+  app.add_option("--start-timeout", start_timeout_s, "wall seconds to wait for all peers before starting")
+      ->check(CLI::NonNegativeNumber);
+  app.add_option("--max-wall", max_wall_s, "stop after this many wall seconds (default: 2x duration + 30 s)");
+  app.add_flag("--ignore-sigterm", ignore_sigterm, "(tests) ignore SIGTERM to exercise the launcher's SIGKILL")
+      ->group("");
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 2;
+  }
+
+  RunConfig rc;
+  try {
+    ScenarioOverrides o;
+    o.domain_id = domain;
+    o.seed = seed;
+    rc = load_scenario(scenario_path, o);
+  } catch (const ScenarioError& e) {
+    std::fprintf(stderr, "swarm-agent: %s\n", e.what());
+    return 2;
+  }
+  const AgentSpec* spec = rc.agent(id);
+  if (!spec) {
+    std::fprintf(stderr, "swarm-agent: --id %u: expected the id of an agent listed in %s\n", id,
+                 scenario_path.c_str());
+    return 2;
+  }
+
+  std::vector<spdlog::sink_ptr> sinks;
+  auto console = std::make_shared<spdlog::sinks::stderr_color_sink_mt>();
+  console->set_level(spdlog::level::warn);
+  sinks.push_back(console);
+  if (!run_dir.empty()) {
+    sinks.push_back(std::make_shared<spdlog::sinks::basic_file_sink_mt>(
+        run_dir + "/agent-" + std::to_string(id) + ".log", true));
+  }
+  auto logger = std::make_shared<spdlog::logger>("agent-" + std::to_string(id), sinks.begin(), sinks.end());
+  logger->set_level(spdlog::level::info);
+  logger->flush_on(spdlog::level::info);
+  spdlog::set_default_logger(logger);
+
+  std::signal(SIGINT, on_signal);
+  std::signal(SIGTERM, ignore_sigterm ? SIG_IGN : on_signal);
+
+  try {
+    DdsOptions dopt;
+    dopt.domain_id = rc.domain_id;
+    dopt.participant_name = "swarm-agent-" + std::to_string(id);
+    dopt.interface = rc.interface;
+    dopt.shared_memory = rc.shared_memory;
+    dopt.max_agents = static_cast<int>(std::max<std::size_t>(rc.agents.size(), 16));
+    DdsBus bus(dopt);
+
+    AgentParams p;
+    p.id = id;
+    p.p0_W = spec->position_W;
+    p.yaw0_rad = spec->yaw_rad;
+    p.mode = rc.mode;
+    p.law = rc.law;
+    p.physics_hz = rc.physics_hz;
+    p.consensus_hz = rc.consensus_hz;
+    p.airframe = rc.airframe;
+    p.gains = rc.gains;
+    p.reference_speed_mps = rc.reference_speed_mps;
+    p.reference_accel_mps2 = rc.reference_accel_mps2;
+    p.neighbor_timeout_s = rc.neighbor_timeout_s;
+    p.incarnation = wall_now_ns();
+    AgentRuntime agent(p, bus);
+    agent.set_wall_clock(wall_now_ns);
+    logger->info("agent {} up: domain {}, {} mode, {} law, start ({:.3f}, {:.3f}, {:.3f}), time scale {}",
+                 id, rc.domain_id, rc.mode == AgentMode::kQuadcopter ? "quadcopter" : "particle",
+                 to_string(rc.law.kind), p.p0_W.x(), p.p0_W.y(), p.p0_W.z(), time_scale);
+
+    // Wait until every other agent of the scenario has been heard, so the run starts together.
+    const auto wall_start = Clock::now();
+    const auto publish_period = std::chrono::duration<double>(1.0 / (rc.consensus_hz * time_scale));
+    std::size_t expected = rc.agents.size() - 1;
+    while (!g_stop) {
+      const auto heard = agent.heard_peers();
+      if (heard.size() >= expected) break;
+      if (Clock::now() - wall_start > std::chrono::duration<double>(start_timeout_s)) {
+        logger->warn("start timeout: heard {} of {} peers, starting anyway", heard.size(), expected);
+        break;
+      }
+      agent.publish(kWaiting);
+      std::this_thread::sleep_for(publish_period);
+    }
+    logger->info("running after {:.2f} s of discovery",
+                 std::chrono::duration<double>(Clock::now() - wall_start).count());
+
+    if (max_wall_s < 0) max_wall_s = 2.0 * rc.duration_s / time_scale + 30.0;
+    const double step_wall_s = 1.0 / (rc.physics_hz * time_scale);
+    const auto t0 = Clock::now();
+    std::uint64_t k = 0, overruns = 0;
+    while (!g_stop) {
+      const auto due = t0 + std::chrono::duration_cast<Clock::duration>(
+                                std::chrono::duration<double>(static_cast<double>(k) * step_wall_s));
+      auto now = Clock::now();
+      if (now < due) {
+        std::this_thread::sleep_until(due);
+      } else if (now - due > std::chrono::duration<double>(step_wall_s)) {
+        ++overruns;
+      }
+      const BusCounters c = bus.counters();
+      agent.set_counters(c.received, c.dropped + c.stale, overruns);
+      for (const AgentEvent& e : agent.step()) {
+        logger->info("t={:.3f} s: neighbour {} {}", e.t_s, e.peer,
+                     e.kind == AgentEvent::kNeighborHeard ? "heard" : "lost (silent past timeout)");
+      }
+      ++k;
+      if (std::chrono::duration<double>(Clock::now() - t0).count() > max_wall_s) {
+        logger->warn("max wall time reached, stopping");
+        break;
+      }
+    }
+    agent.publish(kStopping);
+    const BusCounters c = bus.counters();
+    const Vec3 q = agent.consensus(), x = agent.position();
+    logger->info(
+        "stopping at t={:.3f} s: consensus ({:.6f}, {:.6f}, {:.6f}) position ({:.6f}, {:.6f}, {:.6f}); "
+        "published {}, received {}, dropped {}, stale {}, physics overruns {} of {} steps",
+        agent.time_s(), q.x(), q.y(), q.z(), x.x(), x.y(), x.z(), c.published, c.received,
+        c.dropped, c.stale, overruns, k);
+  } catch (const std::exception& e) {
+    logger->error("fatal: {}", e.what());
+    return 1;
+  }
+  return 0;
+}

@@ -1,0 +1,125 @@
+#include "common/runtime/agent_runtime.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "common/core/primitives.hpp"
+
+namespace qswarm {
+namespace {
+
+Vec3 clamp_norm(const Vec3& v, double max) {
+  const double n = v.norm();
+  return n > max ? Vec3(v * (max / n)) : v;
+}
+
+}  // namespace
+
+AgentRuntime::AgentRuntime(AgentParams p, NeighborBus& bus)
+    : p_(std::move(p)), bus_(bus), law_(make_law(p_.id, p_.p0_W, p_.law)) {
+  if (!(p_.physics_hz > 0.0) || !(p_.consensus_hz > 0.0) || p_.consensus_hz > p_.physics_hz) {
+    throw std::invalid_argument("rates: need 0 < consensus_hz <= physics_hz");
+  }
+  p_.airframe.validate();
+  p_.gains.validate();
+  steps_per_tick_ = std::max(1, static_cast<int>(std::lround(p_.physics_hz / p_.consensus_hz)));
+  if (p_.law.topology.policy == TopologyPolicy::kFixed) {
+    for (const auto& [a, b] : p_.law.topology.edges) {
+      if (a == p_.id) listen_to_.insert(b);
+      if (b == p_.id) listen_to_.insert(a);
+    }
+  }
+  quad_.p_W = p_.p0_W;
+  quad_.R_WB = rotation_from_tait_bryan({0.0, 0.0, p_.yaw0_rad});
+  ref_p_W_ = p_.p0_W;
+  if (p_.mode == AgentMode::kQuadcopter) rotors_ = hover_rotors(p_.airframe);
+}
+
+Vec3 AgentRuntime::position() const {
+  return p_.mode == AgentMode::kQuadcopter ? quad_.p_W : law_->state();
+}
+
+std::set<AgentId> AgentRuntime::heard_peers() {
+  std::set<AgentId> out;
+  for (const StateMessage& m : bus_.latest(p_.id)) out.insert(m.view.id);
+  return out;
+}
+
+void AgentRuntime::publish(std::uint8_t phase) {
+  StateMessage m;
+  m.view = law_->message();
+  m.seq = ++seq_;
+  m.stamp_s = time_s();
+  m.mode = p_.mode;
+  m.phase = phase;
+  m.p_W = position();
+  m.v_W = p_.mode == AgentMode::kQuadcopter ? quad_.velocity_W() : Vec3::Zero();
+  m.q_WB = Eigen::Quaterniond(quad_.R_WB);
+  m.rotors_radps = rotors_;
+  for (const auto& [peer, w] : law_->links()) m.links.emplace_back(peer, w);
+  m.initial_W = p_.p0_W;
+  m.wall_ns = wall_clock_ ? wall_clock_() : 0;
+  m.incarnation = p_.incarnation;
+  m.received = received_;
+  m.dropped = dropped_;
+  m.overruns = overruns_;
+  bus_.publish(m);
+}
+
+void AgentRuntime::consensus_tick(std::vector<AgentEvent>& events) {
+  const double t = time_s();
+  std::vector<NeighborView> views;
+  for (const StateMessage& m : bus_.latest(p_.id)) {
+    const AgentId peer = m.view.id;
+    if (m.phase != kRunning) continue;
+    if (!listen_to_.empty() && !listen_to_.count(peer)) continue;  // explicit graph: not a neighbour
+    Peer& st = peers_[peer];
+    if (m.incarnation != st.incarnation || m.seq != st.seq) {
+      st.seq = m.seq;
+      st.incarnation = m.incarnation;
+      st.last_new_s = t;
+      if (live_.insert(peer).second) events.push_back({AgentEvent::kNeighborHeard, peer, t});
+    }
+    if (t - st.last_new_s > p_.neighbor_timeout_s) {
+      if (live_.erase(peer)) events.push_back({AgentEvent::kNeighborLost, peer, t});
+      continue;
+    }
+    views.push_back(m.view);
+  }
+  if (!started_) {
+    law_->observe(views);
+    started_ = true;
+  } else {
+    law_->step(static_cast<double>(steps_per_tick_) / p_.physics_hz, views);
+  }
+  publish(kRunning);
+}
+
+void AgentRuntime::physics(double dt) {
+  if (p_.mode != AgentMode::kQuadcopter) return;
+  // The consensus state is the goal; the reference moves toward it within speed and acceleration
+  // limits so that it stays flyable, and the controller tracks the reference.
+  const Vec3 goal = law_->state();
+  const Vec3 v_des = clamp_norm(1.5 * (goal - ref_p_W_), p_.reference_speed_mps);
+  const Vec3 a = clamp_norm((v_des - ref_v_W_) / std::max(dt, 1e-9), p_.reference_accel_mps2);
+  ref_v_W_ += a * dt;
+  ref_p_W_ += ref_v_W_ * dt;
+  TrackingReference ref;
+  ref.p_W = ref_p_W_;
+  ref.v_W = ref_v_W_;
+  ref.a_W = a;
+  ref.yaw_rad = p_.yaw0_rad;
+  rotors_ = track(p_.airframe, p_.gains, quad_, ref).allocation.omega_radps;
+  quad_ = rk4_step(p_.airframe, quad_, rotors_, dt);
+}
+
+std::vector<AgentEvent> AgentRuntime::step() {
+  std::vector<AgentEvent> events;
+  if (steps_ % static_cast<std::uint64_t>(steps_per_tick_) == 0) consensus_tick(events);
+  physics(1.0 / p_.physics_hz);
+  ++steps_;
+  return events;
+}
+
+}  // namespace qswarm

@@ -1,0 +1,100 @@
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <memory>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "common/core/airframe.hpp"
+#include "common/core/dynamics.hpp"
+#include "common/core/tracking_controller.hpp"
+#include "common/core/update_law.hpp"
+#include "common/transport/neighbor_bus.hpp"
+
+namespace qswarm {
+
+struct AgentParams {
+  AgentId id = 0;
+  Vec3 p0_W = Vec3::Zero();
+  double yaw0_rad = 0.0;
+  AgentMode mode = AgentMode::kParticle;
+  LawConfig law;
+  double physics_hz = 500.0;
+  double consensus_hz = 50.0;
+  Airframe airframe;
+  TrackingGains gains;
+  double reference_speed_mps = 3.0;
+  double reference_accel_mps2 = 2.0;
+  double neighbor_timeout_s = 1.0;  // simulated seconds without a new message
+  std::int64_t incarnation = 0;
+};
+
+// What happened in a step that the process should log (the runtime itself does no I/O).
+struct AgentEvent {
+  enum Kind { kNeighborHeard, kNeighborLost } kind;
+  AgentId peer;
+  double t_s;
+};
+
+// One agent: its quadcopter (or particle), its tracking controller and its agreement law, stepped
+// in simulated time. No clock, no I/O: the agent process paces it in real time, tests step it.
+class AgentRuntime {
+ public:
+  AgentRuntime(AgentParams p, NeighborBus& bus);
+
+  // One physics step of 1/physics_hz; every physics_hz/consensus_hz steps also a consensus tick
+  // (read neighbours, update the law, publish). Returns events for logging.
+  std::vector<AgentEvent> step();
+  // Publish the current state (the process calls this while waiting for peers, with kWaiting).
+  void publish(std::uint8_t phase);
+
+  double time_s() const { return static_cast<double>(steps_) / p_.physics_hz; }
+  const QuadState& quad() const { return quad_; }
+  Vec3 consensus() const { return law_->state(); }
+  Vec3 position() const;
+  const UpdateLaw& law() const { return *law_; }
+  const AgentParams& params() const { return p_; }
+  std::uint64_t published() const { return seq_; }
+  std::size_t live_neighbors() const { return live_.size(); }
+
+  // Peers heard in any phase (the process waits for all expected peers before running).
+  std::set<AgentId> heard_peers();
+  // Stamps for publication: the process injects wall time and its counters.
+  void set_wall_clock(std::function<std::int64_t()> f) { wall_clock_ = std::move(f); }
+  void set_counters(std::uint64_t received, std::uint64_t dropped, std::uint64_t overruns) {
+    received_ = received;
+    dropped_ = dropped;
+    overruns_ = overruns;
+  }
+
+ private:
+  void consensus_tick(std::vector<AgentEvent>& events);
+  void physics(double dt);
+
+  AgentParams p_;
+  NeighborBus& bus_;
+  std::unique_ptr<UpdateLaw> law_;
+  std::set<AgentId> listen_to_;  // fixed topology: only these peers
+  int steps_per_tick_ = 10;
+  std::uint64_t steps_ = 0;
+  std::uint64_t seq_ = 0;
+  bool started_ = false;
+  QuadState quad_;
+  RotorSpeeds rotors_ = RotorSpeeds::Zero();
+  Vec3 ref_p_W_ = Vec3::Zero();  // rate-limited reference that the quadcopter tracks
+  Vec3 ref_v_W_ = Vec3::Zero();
+  struct Peer {
+    std::uint64_t seq = 0;
+    std::int64_t incarnation = 0;
+    double last_new_s = 0.0;
+  };
+  std::map<AgentId, Peer> peers_;
+  std::set<AgentId> live_;
+  std::function<std::int64_t()> wall_clock_;
+  std::uint64_t received_ = 0, dropped_ = 0, overruns_ = 0;
+};
+
+}  // namespace qswarm

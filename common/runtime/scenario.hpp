@@ -1,0 +1,71 @@
+#pragma once
+
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "common/core/airframe.hpp"
+#include "common/core/tracking_controller.hpp"
+#include "common/core/update_law.hpp"
+#include "common/transport/state_message.hpp"
+#include "proto/scenario.pb.h"
+
+namespace qswarm {
+
+// Bad scenario input: the message names the field (and line for syntax) and what was expected.
+class ScenarioError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct AgentSpec {
+  AgentId id = 0;
+  Vec3 position_W = Vec3::Zero();
+  double yaw_rad = 0.0;
+};
+
+// A scenario with every default filled in and random agents resolved: what a run actually uses.
+struct RunConfig {
+  std::string name;
+  std::vector<AgentSpec> agents;
+  AgentMode mode = AgentMode::kParticle;
+  LawConfig law;
+  double physics_hz = 500.0;
+  double consensus_hz = 50.0;
+  Airframe airframe;
+  TrackingGains gains;
+  double reference_speed_mps = 3.0;
+  double reference_accel_mps2 = 2.0;
+  double tolerance_m = 0.01;
+  double hold_s = 1.0;
+  double duration_s = 60.0;
+  std::uint64_t seed = 1;
+  std::uint32_t domain_id = 0;
+  std::string interface = "127.0.0.1";
+  bool shared_memory = false;
+  double neighbor_timeout_s = 1.0;
+  scenario::Scenario resolved;  // the scenario as run (agents listed, defaults explicit)
+
+  Vec3 initial_average() const;
+  const AgentSpec* agent(AgentId id) const;
+};
+
+// Overrides from the command line, applied before validation.
+struct ScenarioOverrides {
+  int agents = -1;          // --agents N: replace the agent list with N seeded random agents
+  std::int64_t seed = -1;   // --seed S
+  double duration_s = -1;   // --duration S
+  int domain_id = -1;       // --domain D
+};
+
+scenario::Scenario parse_scenario_text(const std::string& text, const std::string& source);
+scenario::Scenario read_scenario_file(const std::string& path);
+RunConfig resolve_scenario(scenario::Scenario s, const ScenarioOverrides& o = {});
+RunConfig load_scenario(const std::string& path, const ScenarioOverrides& o = {});
+std::string to_text(const scenario::Scenario& s);
+
+// n agents uniformly in a cube of side box_m, ids 1..n, from the seed (same as the in-process swarm).
+std::vector<AgentSpec> random_agent_specs(int n, std::uint64_t seed, double box_m);
+
+}  // namespace qswarm

@@ -1,0 +1,112 @@
+// swarm-supervisor: subscribes to every agent's state and records the run. It publishes nothing an
+// agent acts on (its participant has no writer). Exit 0 when the swarm converged, 1 when the
+// duration ended (or it was interrupted) without convergence, 2 for bad input.
+#include <CLI/CLI.hpp>
+#include <spdlog/sinks/basic_file_sink.h>
+#include <spdlog/spdlog.h>
+
+#include <atomic>
+#include <chrono>
+#include <csignal>
+#include <cstdio>
+#include <mutex>
+#include <thread>
+
+#include "common/runtime/scenario.hpp"
+#include "common/transport/dds_bus.hpp"
+#include "supervisor/recorder.hpp"
+
+namespace {
+std::atomic<bool> g_stop{false};
+void on_signal(int) { g_stop = true; }
+}  // namespace
+
+int main(int argc, char** argv) {
+  using namespace qswarm;
+  CLI::App app{"swarm-supervisor: records a swarm run (telemetry, graph, events, summary)"};
+  std::string scenario_path, run_dir;
+  double time_scale = 1.0;
+  int domain = -1;
+  std::int64_t seed = -1;
+  bool progress = false;
+  double start_timeout_s = 30.0;
+  app.add_option("--scenario", scenario_path, "scenario file")->required();
+  app.add_option("--run-dir", run_dir, "run directory to write")->required();
+  app.add_option("--time-scale", time_scale, "simulated seconds per wall second")->check(CLI::PositiveNumber);
+  app.add_option("--domain", domain, "DDS domain id (overrides the scenario)")->check(CLI::Range(0, 232));
+  app.add_option("--seed", seed, "run seed (overrides the scenario)");
+  app.add_option("--start-timeout", start_timeout_s, "wall seconds to wait for the first agent");
+  app.add_flag("--progress", progress, "print a live progress line");
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 2;
+  }
+  RunConfig rc;
+  try {
+    ScenarioOverrides o;
+    o.domain_id = domain;
+    o.seed = seed;
+    rc = load_scenario(scenario_path, o);
+  } catch (const ScenarioError& e) {
+    std::fprintf(stderr, "swarm-supervisor: %s\n", e.what());
+    return 2;
+  }
+  auto logger = spdlog::basic_logger_mt("supervisor", run_dir + "/supervisor.log", true);
+  logger->flush_on(spdlog::level::info);
+  spdlog::set_default_logger(logger);
+  std::signal(SIGINT, on_signal);
+  std::signal(SIGTERM, on_signal);
+
+  const auto wall0 = std::chrono::steady_clock::now();
+  const auto wall_s = [&] {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+  };
+  try {
+    Recorder rec(rc, run_dir, time_scale);
+    std::mutex mu;
+    DdsOptions dopt;
+    dopt.domain_id = rc.domain_id;
+    dopt.participant_name = "swarm-supervisor";
+    dopt.interface = rc.interface;
+    dopt.shared_memory = rc.shared_memory;
+    dopt.max_agents = static_cast<int>(std::max<std::size_t>(rc.agents.size(), 16));
+    dopt.publish = false;
+    DdsBus bus(dopt);
+    bus.set_sample_callback([&](const StateMessage& m, std::int64_t recv_ns) {
+      std::lock_guard<std::mutex> lock(mu);
+      rec.on_sample(m, recv_ns);
+    });
+    logger->info("supervisor up on domain {}, expecting {} agents", rc.domain_id, rc.agents.size());
+    std::string reason;
+    double last_print = -1.0;
+    while (true) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+      std::lock_guard<std::mutex> lock(mu);
+      rec.tick(wall_now_ns());
+      if (progress && wall_s() - last_print >= 1.0) {
+        std::printf("%s\n", rec.progress_line().c_str());
+        std::fflush(stdout);
+        last_print = wall_s();
+      }
+      if (rec.converged()) { reason = "converged"; break; }
+      if (rec.duration_reached()) { reason = "duration"; break; }
+      if (g_stop) { reason = "interrupted"; break; }
+      if (rec.time_s() == 0.0 && wall_s() > start_timeout_s + rc.duration_s / time_scale) {
+        reason = "no agents running";
+        break;
+      }
+    }
+    bus.set_sample_callback(nullptr);
+    std::lock_guard<std::mutex> lock(mu);
+    const std::string text = rec.finish(reason, wall_s());
+    std::printf("%s", text.c_str());
+    std::fflush(stdout);
+    logger->info("finished: {}", reason);
+    return rec.converged() ? 0 : 1;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "swarm-supervisor: %s\n", e.what());
+    logger->error("fatal: {}", e.what());
+    return 1;
+  }
+}

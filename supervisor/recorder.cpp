@@ -1,0 +1,355 @@
+#include "supervisor/recorder.hpp"
+
+#include <google/protobuf/io/coded_stream.h>
+#include <google/protobuf/io/zero_copy_stream_impl.h>
+#include <google/protobuf/util/json_util.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <iomanip>
+#include <sstream>
+
+#include "common/core/graph.hpp"
+
+namespace qswarm {
+namespace {
+
+void put(google::protobuf::RepeatedField<double>* f, const Vec3& v) {
+  f->Add(v.x());
+  f->Add(v.y());
+  f->Add(v.z());
+}
+
+double percentile(std::vector<double> v, double p) {
+  if (v.empty()) return 0.0;
+  const std::size_t k = static_cast<std::size_t>(p * static_cast<double>(v.size() - 1));
+  std::nth_element(v.begin(), v.begin() + static_cast<long>(k), v.end());
+  return v[k];
+}
+
+std::string fmt(const char* f, double x) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, f, x);
+  return buf;
+}
+
+}  // namespace
+
+Recorder::Recorder(RunConfig rc, std::string run_dir, double time_scale)
+    : rc_(std::move(rc)), dir_(std::move(run_dir)), time_scale_(time_scale) {
+  telemetry_.open(dir_ + "/telemetry.csv");
+  graph_.open(dir_ + "/graph.csv");
+  events_.open(dir_ + "/events.csv");
+  records_.open(dir_ + "/records.pb", std::ios::binary);
+  if (!telemetry_ || !graph_ || !events_ || !records_) {
+    throw std::runtime_error("cannot write the run directory " + dir_);
+  }
+  telemetry_ << "stamp_s,id,seq,phase,mode,qx,qy,qz,px,py,pz,vx,vy,vz,qw,qxr,qyr,qzr,w1,w2,w3,w4,"
+                "total_weight,links,age_ms\n";
+  graph_ << "t_s,agents,edges,lambda2,components,disagreement_m,mean_drift_m,min_separation_m,"
+            "spread_m,edge_list\n";
+  events_ << "t_s,kind,agent,detail\n";
+  for (const AgentSpec& a : rc_.agents) agents_[a.id];
+  telemetry_ << std::setprecision(10);
+  graph_ << std::setprecision(10);
+}
+
+Recorder::~Recorder() = default;
+
+void Recorder::write_record(const records::Record& r) {
+  google::protobuf::io::OstreamOutputStream raw(&records_);
+  google::protobuf::io::CodedOutputStream out(&raw);
+  out.WriteVarint32(static_cast<std::uint32_t>(r.ByteSizeLong()));
+  r.SerializeWithCachedSizes(&out);
+}
+
+void Recorder::event(const std::string& kind, AgentId agent, const std::string& detail) {
+  events_ << t_s_ << ',' << kind << ',' << agent << ",\"" << detail << "\"\n";
+  events_.flush();
+  records::Record r;
+  records::Event* e = r.mutable_event();
+  e->set_t_s(t_s_);
+  e->set_kind(kind);
+  e->set_agent(agent);
+  e->set_detail(detail);
+  write_record(r);
+}
+
+void Recorder::on_sample(const StateMessage& m, std::int64_t recv_ns) {
+  const AgentId id = m.view.id;
+  auto it = agents_.find(id);
+  if (it == agents_.end()) {
+    // Not an agent of this scenario (e.g. a stray participant on the domain): note it once.
+    agents_[id];
+    it = agents_.find(id);
+    event("unknown_agent", id, "sample from an agent not in the scenario");
+  }
+  AgentTrack& a = it->second;
+  if (m.phase == kRunning) t_s_ = std::max(t_s_, m.stamp_s);
+  if (!a.seen) {
+    a.seen = true;
+    a.first = m;
+    a.first_stamp = m.stamp_s;
+    ++joins_;
+    event("join", id, "first sample");
+  } else if (!a.present && m.phase != kStopping) {
+    ++joins_;
+    event("rejoin", id, "heard again after departure");
+  }
+  if (a.samples > 0 && m.incarnation == a.last.incarnation && m.seq > a.last.seq + 1) {
+    a.gaps += m.seq - a.last.seq - 1;
+  }
+  if (m.phase == kStopping && a.present) {
+    ++departures_;
+    event("depart", id, "agent stopped");
+  }
+  a.present = m.phase != kStopping;
+  a.last = m;
+  a.last_recv_ns = recv_ns;
+  ++a.samples;
+  const double age_ms = m.wall_ns > 0 ? static_cast<double>(recv_ns - m.wall_ns) / 1e6 : 0.0;
+  if (m.wall_ns > 0) ages_ms_.push_back(age_ms);
+
+  const Vec3& q = m.view.q;
+  const Eigen::Quaterniond& o = m.q_WB;
+  telemetry_ << m.stamp_s << ',' << id << ',' << m.seq << ',' << int(m.phase) << ',' << int(m.mode) << ','
+             << q.x() << ',' << q.y() << ',' << q.z() << ',' << m.p_W.x() << ',' << m.p_W.y() << ','
+             << m.p_W.z() << ',' << m.v_W.x() << ',' << m.v_W.y() << ',' << m.v_W.z() << ',' << o.w()
+             << ',' << o.x() << ',' << o.y() << ',' << o.z() << ',' << m.rotors_radps[0] << ','
+             << m.rotors_radps[1] << ',' << m.rotors_radps[2] << ',' << m.rotors_radps[3] << ','
+             << m.view.total_weight << ',' << m.links.size() << ',' << age_ms << '\n';
+  records::Record r;
+  records::AgentSample* s = r.mutable_sample();
+  s->set_id(id);
+  s->set_seq(m.seq);
+  s->set_stamp_s(m.stamp_s);
+  s->set_age_ms(age_ms);
+  put(s->mutable_consensus(), q);
+  put(s->mutable_position(), m.p_W);
+  put(s->mutable_velocity(), m.v_W);
+  s->add_orientation(o.w());
+  s->add_orientation(o.x());
+  s->add_orientation(o.y());
+  s->add_orientation(o.z());
+  for (int i = 0; i < 4; ++i) s->add_rotors(m.rotors_radps[i]);
+  s->set_mode(static_cast<std::uint32_t>(m.mode));
+  write_record(r);
+}
+
+void Recorder::tick(std::int64_t now_ns) {
+  // An agent silent past the neighbour timeout (in wall time at this time scale) has departed.
+  const double timeout_ns = rc_.neighbor_timeout_s / time_scale_ * 1e9;
+  for (auto& [id, a] : agents_) {
+    if (a.present && a.seen && static_cast<double>(now_ns - a.last_recv_ns) > timeout_ns) {
+      a.present = false;
+      ++departures_;
+      event("depart", id, "silent past the neighbour timeout");
+    }
+  }
+  while (t_s_ >= next_snapshot_s_) {
+    snapshot();
+    next_snapshot_s_ += 0.1;
+  }
+}
+
+void Recorder::snapshot() {
+  std::vector<AgentId> ids;
+  Positions q, p;
+  for (const auto& [id, a] : agents_) {
+    if (a.present && a.last.phase == kRunning) {
+      ids.push_back(id);
+      q.push_back(a.last.view.q);
+      p.push_back(a.last.p_W);
+    }
+  }
+  records::Record r;
+  records::GraphSnapshot& g = *r.mutable_graph();
+  g.set_t_s(t_s_);
+  g.set_agents(static_cast<std::uint32_t>(ids.size()));
+  std::map<AgentId, int> index;
+  for (int i = 0; i < static_cast<int>(ids.size()); ++i) index[ids[i]] = i;
+  std::map<std::pair<int, int>, double> found;
+  for (int i = 0; i < static_cast<int>(ids.size()); ++i) {
+    for (const auto& [peer, w] : agents_.at(ids[i]).last.links) {
+      auto j = index.find(peer);
+      if (j == index.end()) continue;
+      const auto key = std::minmax(i, j->second);
+      if (ids[i] < peer || !found.count(key)) found[key] = w;  // the owner's weight wins
+    }
+  }
+  std::vector<Edge> edges;
+  std::ostringstream list;
+  for (const auto& [key, w] : found) {
+    edges.push_back({key.first, key.second, w});
+    records::GraphEdge* e = g.add_edges();
+    e->set_a(ids[key.first]);
+    e->set_b(ids[key.second]);
+    e->set_weight(w);
+    list << (list.tellp() > 0 ? ";" : "") << ids[key.first] << '-' << ids[key.second] << ':' << w;
+  }
+  const int n = static_cast<int>(ids.size());
+  if (n > 0) {
+    const Spectrum s = analyze(laplacian(n, edges));
+    g.set_lambda2(s.lambda2);
+    g.set_components(static_cast<std::uint32_t>(s.components));
+    g.set_disagreement_m(disagreement(q));
+    g.set_mean_drift_m((average(q) - rc_.initial_average()).norm());
+    double min_sep = 1e300;
+    for (int i = 0; i < n; ++i)
+      for (int j = i + 1; j < n; ++j) min_sep = std::min(min_sep, (p[i] - p[j]).norm());
+    if (n > 1) {
+      g.set_min_separation_m(min_sep);
+      min_separation_ = std::min(min_separation_, min_sep);
+    }
+    const Vec3 qbar = average(q);
+    double spread = 0.0;
+    for (const Vec3& x : p) spread = std::max(spread, (x - qbar).norm());
+    g.set_spread_m(spread);
+  }
+  graph_ << g.t_s() << ',' << g.agents() << ',' << g.edges_size() << ',' << g.lambda2() << ','
+         << g.components() << ',' << g.disagreement_m() << ',' << g.mean_drift_m() << ','
+         << g.min_separation_m() << ',' << g.spread_m() << ",\"" << list.str() << "\"\n";
+  write_record(r);
+  last_ = g;
+  std::size_t joined = 0;
+  for (const auto& [id, a] : agents_) joined += a.seen ? 1 : 0;
+  if (!first_full_ && n == static_cast<int>(rc_.agents.size())) first_full_ = g;
+
+  // Converged: every agent of the scenario has joined, the present ones agree (consensus states and
+  // physical positions within tolerance of their mean), and this holds for hold_s.
+  const bool agree = n > 0 && joined >= rc_.agents.size() && g.disagreement_m() < rc_.tolerance_m &&
+                     g.spread_m() < rc_.tolerance_m;
+  if (agree) {
+    if (hold_start_s_ < 0.0) hold_start_s_ = t_s_;
+    if (!converged_ && t_s_ - hold_start_s_ >= rc_.hold_s) {
+      converged_ = true;
+      converged_at_s_ = hold_start_s_;
+      event("converged", 0, "disagreement " + fmt("%.3g", g.disagreement_m()) + " m, spread " + fmt("%.3g", g.spread_m()) + " m");
+    }
+  } else {
+    hold_start_s_ = -1.0;
+  }
+}
+
+std::string Recorder::progress_line() const {
+  std::size_t present = 0;
+  for (const auto& [id, a] : agents_) present += a.present ? 1 : 0;
+  char buf[200];
+  std::snprintf(buf, sizeof buf, "t=%7.2f s  agents %zu/%zu  edges %3d  lambda2 %8.4f  disagreement %9.5f m",
+                t_s_, present, rc_.agents.size(), last_ ? last_->edges_size() : 0,
+                last_ ? last_->lambda2() : 0.0, last_ ? last_->disagreement_m() : 0.0);
+  return buf;
+}
+
+std::string Recorder::finish(const std::string& end_reason, double wall_time_s) {
+  if (t_s_ >= next_snapshot_s_ || !last_) snapshot();
+  records::Summary& s = summary_;
+  s.set_scenario(rc_.name);
+  s.set_converged(converged_);
+  s.set_convergence_time_s(converged_ ? converged_at_s_ : -1.0);
+  s.set_end_reason(end_reason);
+  s.set_wall_time_s(wall_time_s);
+  s.set_duration_s(t_s_);
+  s.set_seed(static_cast<std::uint32_t>(rc_.seed));
+  s.set_mode(rc_.mode == AgentMode::kQuadcopter ? "quadcopter" : "particle");
+  s.set_law(to_string(rc_.law.kind));
+  s.set_agents_expected(static_cast<std::uint32_t>(rc_.agents.size()));
+  s.set_joins(joins_);
+  s.set_departures(departures_);
+  s.set_min_separation_m(min_separation_ < 1e299 ? min_separation_ : 0.0);
+  put(s.mutable_initial_average(), rc_.initial_average());
+
+  Positions final_q, final_p;
+  records::Messages& msg = *s.mutable_messages();
+  double rate_sum = 0.0;
+  int rate_n = 0;
+  for (const auto& [id, a] : agents_) {
+    records::AgentSummary* as = s.add_agents();
+    as->set_id(id);
+    const AgentSpec* spec = rc_.agent(id);
+    put(as->mutable_initial_position(), spec ? spec->position_W : a.first.initial_W);
+    if (!a.seen) continue;
+    put(as->mutable_final_position(), a.last.p_W);
+    put(as->mutable_final_consensus(), a.last.view.q);
+    as->set_samples(static_cast<std::uint32_t>(a.samples));
+    as->set_seq_gaps(static_cast<std::uint32_t>(a.gaps));
+    as->set_dropped_by_agent(static_cast<std::uint32_t>(a.last.dropped));
+    const double span = a.last.stamp_s - a.first_stamp;
+    if (span > 0.0) {
+      as->set_rate_hz(static_cast<double>(a.samples - 1) / (span / time_scale_));
+      rate_sum += as->rate_hz();
+      ++rate_n;
+    }
+    if (spec) {
+      final_q.push_back(a.last.view.q);
+      final_p.push_back(a.last.p_W);
+    }
+    msg.set_published(msg.published() + static_cast<std::uint32_t>(a.last.seq));
+    msg.set_received(msg.received() + static_cast<std::uint32_t>(a.samples));
+    msg.set_dropped(msg.dropped() + static_cast<std::uint32_t>(a.last.dropped));
+    msg.set_seq_gaps(msg.seq_gaps() + static_cast<std::uint32_t>(a.gaps));
+  }
+  msg.set_age_p50_ms(percentile(ages_ms_, 0.50));
+  msg.set_age_p99_ms(percentile(ages_ms_, 0.99));
+  msg.set_rate_hz(rate_n ? rate_sum / rate_n : 0.0);
+  const Vec3 mean = average(final_q);
+  put(s.mutable_final_consensus_mean(), mean);
+  s.set_average_drift_m(final_q.empty() ? 0.0 : (mean - rc_.initial_average()).norm());
+  double spread = 0.0;
+  for (const Vec3& x : final_p) spread = std::max(spread, (x - average(final_p)).norm());
+  s.set_max_final_spread_m(spread);
+  s.set_final_disagreement_m(final_q.empty() ? 0.0 : disagreement(final_q));
+  const auto edges_of = [](const records::GraphSnapshot& g, auto* out) {
+    for (const records::GraphEdge& e : g.edges()) {
+      google::protobuf::ListValue* l = out->Add();
+      l->add_values()->set_number_value(e.a());
+      l->add_values()->set_number_value(e.b());
+      l->add_values()->set_number_value(e.weight());
+    }
+  };
+  if (first_full_) {
+    s.set_lambda2_initial(first_full_->lambda2());
+    edges_of(*first_full_, s.mutable_edges_initial());
+  }
+  if (last_) {
+    s.set_lambda2_final(last_->lambda2());
+    edges_of(*last_, s.mutable_edges_final());
+  }
+  event("end", 0, end_reason);
+
+  std::string json;
+  google::protobuf::util::JsonPrintOptions opt;
+  opt.add_whitespace = true;
+  opt.preserve_proto_field_names = true;
+  opt.always_print_primitive_fields = true;
+  (void)google::protobuf::util::MessageToJsonString(s, &json, opt);
+  std::ofstream(dir_ + "/summary.json") << json;
+  telemetry_.flush();
+  graph_.flush();
+  records_.flush();
+
+  std::ostringstream h;
+  h << "\n== " << rc_.name << ": " << (converged_ ? "CONVERGED" : "NOT CONVERGED") << " (" << end_reason
+    << ") ==\n";
+  if (converged_) h << "converged at t = " << fmt("%.2f", converged_at_s_) << " s (simulated)\n";
+  h << "agents " << final_q.size() << "/" << rc_.agents.size() << ", " << s.mode() << " mode, " << s.law()
+    << " law, seed " << rc_.seed << ", " << fmt("%.2f", t_s_) << " s simulated in "
+    << fmt("%.2f", wall_time_s) << " s wall\n";
+  const Vec3 avg = rc_.initial_average();
+  h << "initial average   (" << fmt("%.6f", avg.x()) << ", " << fmt("%.6f", avg.y()) << ", "
+    << fmt("%.6f", avg.z()) << ")\n";
+  h << "final mean        (" << fmt("%.6f", mean.x()) << ", " << fmt("%.6f", mean.y()) << ", "
+    << fmt("%.6f", mean.z()) << ")  drift " << fmt("%.3e", s.average_drift_m()) << " m\n";
+  h << "final disagreement " << fmt("%.3e", s.final_disagreement_m()) << " m, physical spread "
+    << fmt("%.3e", spread) << " m, min separation " << fmt("%.3f", s.min_separation_m()) << " m\n";
+  h << "lambda2 " << fmt("%.4f", s.lambda2_initial()) << " -> " << fmt("%.4f", s.lambda2_final()) << ", edges "
+    << s.edges_initial_size() << " -> " << s.edges_final_size() << "\n";
+  h << "messages: published " << msg.published() << ", received " << msg.received() << ", dropped "
+    << msg.dropped() << ", gaps " << msg.seq_gaps() << ", age p50 " << fmt("%.3f", msg.age_p50_ms())
+    << " ms p99 " << fmt("%.3f", msg.age_p99_ms()) << " ms\n";
+  h << "joins " << joins_ << ", departures " << departures_ << "\nrun directory: " << dir_ << "\n";
+  return h.str();
+}
+
+}  // namespace qswarm

@@ -1,0 +1,294 @@
+// swarm: launch a swarm of agent processes plus a supervisor (`swarm run`), or analyse a scenario's
+// initial graph without flying (`swarm inspect`).
+#include <CLI/CLI.hpp>
+#include <unistd.h>
+
+#include <atomic>
+#include <chrono>
+#include <csignal>
+#include <ctime>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+#include <thread>
+
+#include "common/core/graph.hpp"
+#include "common/runtime/scenario.hpp"
+#include "tools/process_group.hpp"
+
+namespace fs = std::filesystem;
+using namespace qswarm;
+
+namespace {
+
+std::atomic<int> g_signal{0};
+void on_signal(int sig) { g_signal = sig; }
+
+fs::path bin_dir() { return fs::read_symlink("/proc/self/exe").parent_path(); }
+
+// The scenario `swarm run --agents N` flies when no file is given.
+scenario::Scenario random_scenario() {
+  scenario::Scenario s;
+  s.set_name("random");
+  s.set_description("seeded random agents in a 30 m cube, sticky proximity 20 m, distance weights");
+  s.mutable_topology()->set_policy(scenario::STICKY_PROXIMITY);
+  s.mutable_topology()->set_threshold_m(20.0);
+  s.mutable_weight()->set_policy(scenario::DISTANCE);
+  s.mutable_random_agents()->set_box_m(30.0);
+  return s;
+}
+
+struct InitialGraph {
+  std::vector<Edge> edges;
+  Eigen::MatrixXd L;
+  Spectrum spectrum;
+};
+
+InitialGraph initial_graph(const RunConfig& rc) {
+  InitialGraph g;
+  const int n = static_cast<int>(rc.agents.size());
+  for (int i = 0; i < n; ++i) {
+    LinkTracker tracker(rc.agents[i].id, rc.law.topology);
+    for (int j = i + 1; j < n; ++j) {
+      const double d = (rc.agents[i].position_W - rc.agents[j].position_W).norm();
+      if (tracker.update(rc.agents[j].id, d)) {
+        g.edges.push_back({i, j, weight_for_distance(rc.law.weight, d)});
+      }
+    }
+  }
+  g.L = laplacian(n, g.edges);
+  g.spectrum = analyze(g.L);
+  return g;
+}
+
+int inspect(const std::string& path, bool json) {
+  RunConfig rc;
+  try {
+    rc = load_scenario(path);
+  } catch (const ScenarioError& e) {
+    std::cerr << "swarm inspect: " << e.what() << "\n";
+    return 2;
+  }
+  const InitialGraph g = initial_graph(rc);
+  const Vec3 avg = rc.initial_average();
+  const double tau = g.spectrum.lambda2 > 0 ? 1.0 / (rc.law.gain * g.spectrum.lambda2) : -1.0;
+  const int n = static_cast<int>(rc.agents.size());
+  std::ostringstream o;
+  o.precision(10);
+  if (json) {
+    o << "{\n  \"scenario\": \"" << rc.name << "\",\n  \"agents\": [";
+    for (int i = 0; i < n; ++i) {
+      const Vec3& p = rc.agents[i].position_W;
+      o << (i ? ", " : "") << "{\"id\": " << rc.agents[i].id << ", \"position\": [" << p.x() << ", " << p.y()
+        << ", " << p.z() << "]}";
+    }
+    o << "],\n  \"edges\": [";
+    for (size_t k = 0; k < g.edges.size(); ++k) {
+      o << (k ? ", " : "") << "[" << rc.agents[g.edges[k].i].id << ", " << rc.agents[g.edges[k].j].id << ", "
+        << g.edges[k].weight << "]";
+    }
+    o << "],\n  \"laplacian\": [";
+    for (int i = 0; i < n; ++i) {
+      o << (i ? ", " : "") << "[";
+      for (int j = 0; j < n; ++j) o << (j ? ", " : "") << g.L(i, j);
+      o << "]";
+    }
+    o << "],\n  \"eigenvalues\": [";
+    for (int i = 0; i < n; ++i) o << (i ? ", " : "") << g.spectrum.eigenvalues[i];
+    o << "],\n  \"lambda2\": " << g.spectrum.lambda2 << ",\n  \"components\": " << g.spectrum.components
+      << ",\n  \"connected\": " << (g.spectrum.components == 1 ? "true" : "false")
+      << ",\n  \"agreement_point\": [" << avg.x() << ", " << avg.y() << ", " << avg.z()
+      << "],\n  \"time_constant_s\": " << tau << "\n}\n";
+  } else {
+    o.precision(6);
+    o << "scenario " << rc.name << ": " << n << " agents, " << to_string(rc.law.weight.policy) << " weights, "
+      << to_string(rc.law.topology.policy) << " topology, " << to_string(rc.law.kind) << " law, gain "
+      << rc.law.gain << "\n";
+    o << "initial edges (" << g.edges.size() << "):";
+    for (const Edge& e : g.edges) o << " " << rc.agents[e.i].id << "-" << rc.agents[e.j].id << " (w=" << e.weight << ")";
+    o << "\nweighted Laplacian:\n";
+    for (int i = 0; i < n && n <= 16; ++i) {
+      for (int j = 0; j < n; ++j) {
+        char buf[32];
+        std::snprintf(buf, sizeof buf, "%10.4f", g.L(i, j));
+        o << buf;
+      }
+      o << "\n";
+    }
+    if (n > 16) o << "  (" << n << " x " << n << ", not printed)\n";
+    o << "eigenvalues:";
+    for (int i = 0; i < std::min(n, 16); ++i) o << " " << g.spectrum.eigenvalues[i];
+    o << "\nlambda2 " << g.spectrum.lambda2 << ", components " << g.spectrum.components
+      << (g.spectrum.components == 1 ? " (connected)" : " (NOT connected: proximity may join them later)")
+      << "\npredicted agreement point (the initial average): (" << avg.x() << ", " << avg.y() << ", "
+      << avg.z() << ")\n";
+    if (tau > 0) o << "time constant 1/(k lambda2) = " << tau << " s (exact for fixed weights)\n";
+  }
+  std::cout << o.str();
+  return 0;
+}
+
+std::string timestamp() {
+  const std::time_t t = std::time(nullptr);
+  char buf[32];
+  std::strftime(buf, sizeof buf, "%Y%m%d-%H%M%S", std::localtime(&t));
+  return buf;
+}
+
+struct RunOptions {
+  std::string scenario;
+  std::string out;
+  int agents = -1;
+  std::int64_t seed = -1;
+  double duration = -1;
+  double time_scale = 1.0;
+  int domain = -1;
+  double grace_s = 5.0;
+  bool quiet = false;
+  bool stop_on_agent_exit = false;
+  std::vector<unsigned> ignore_sigterm;  // (tests) agents started with --ignore-sigterm
+};
+
+int run(const RunOptions& opt) {
+  RunConfig rc;
+  ScenarioOverrides o;
+  o.agents = opt.agents;
+  o.seed = opt.seed;
+  o.duration_s = opt.duration;
+  o.domain_id = opt.domain;
+  try {
+    if (opt.scenario.empty() && opt.agents < 0) {
+      throw ScenarioError("give a SCENARIO file, or --agents N for seeded random agents");
+    }
+    if (opt.agents == 0) throw ScenarioError("--agents: expected a count of at least 1");
+    rc = resolve_scenario(opt.scenario.empty() ? random_scenario() : read_scenario_file(opt.scenario), o);
+  } catch (const ScenarioError& e) {
+    std::cerr << "swarm run: " << e.what() << "\n";
+    return 2;
+  }
+  fs::path dir = opt.out.empty() ? fs::path("runs") / (timestamp() + "-" + rc.name) : fs::path(opt.out);
+  std::error_code ec;
+  if (fs::exists(dir / "summary.json")) {
+    std::cerr << "swarm run: --out " << dir << ": expected a new directory, this one holds a run already\n";
+    return 2;
+  }
+  fs::create_directories(dir, ec);
+  if (ec) {
+    std::cerr << "swarm run: --out " << dir << ": cannot create (" << ec.message() << ")\n";
+    return 2;
+  }
+  dir = fs::absolute(dir);
+  const std::string scen = (dir / "scenario.txtpb").string();
+  std::ofstream(scen) << "# The scenario as run (defaults filled in, agents listed).\n" << to_text(rc.resolved);
+  const InitialGraph g = initial_graph(rc);
+  if (!opt.quiet) {
+    std::cout << "swarm run: " << rc.name << ", " << rc.agents.size() << " agents, domain " << rc.domain_id
+              << ", time scale " << opt.time_scale << ", seed " << rc.seed << "\n"
+              << "initial graph: " << g.edges.size() << " edges, lambda2 " << g.spectrum.lambda2
+              << (g.spectrum.components > 1 ? " (not connected yet)" : "") << "\nrun directory: " << dir.string()
+              << std::endl;
+  }
+
+  std::signal(SIGINT, on_signal);
+  std::signal(SIGTERM, on_signal);
+  std::signal(SIGHUP, on_signal);
+  const std::string ts = std::to_string(opt.time_scale);
+  const std::string bin = bin_dir().string();
+  ProcessGroup procs;
+  try {
+    std::vector<std::string> sup = {bin + "/swarm-supervisor", "--scenario", scen, "--run-dir", dir.string(),
+                                    "--time-scale", ts};
+    if (!opt.quiet) sup.push_back("--progress");
+    procs.spawn("supervisor", 0, sup, opt.quiet ? (dir / "supervisor.out").string() : "");
+    for (const AgentSpec& a : rc.agents) {
+      std::vector<std::string> args = {bin + "/swarm-agent", "--scenario", scen, "--id", std::to_string(a.id),
+                                       "--run-dir", dir.string(), "--time-scale", ts};
+      for (unsigned id : opt.ignore_sigterm)
+        if (id == a.id) args.push_back("--ignore-sigterm");
+      procs.spawn("agent", a.id, args, (dir / ("agent-" + std::to_string(a.id) + ".out")).string());
+    }
+  } catch (const std::exception& e) {
+    std::cerr << "swarm run: " << e.what() << "\n";
+    procs.terminate_all(opt.grace_s);
+    return 1;
+  }
+  {
+    std::ofstream pids(dir / "processes.csv");
+    pids << "role,id,pid\n";
+    for (const auto& c : procs.children()) pids << c.role << ',' << c.id << ',' << c.pid << '\n';
+  }
+
+  int supervisor_status = -1;
+  std::string why;
+  const auto wall0 = std::chrono::steady_clock::now();
+  const double wall_limit = rc.duration_s / opt.time_scale + 120.0;
+  while (true) {
+    for (const auto& c : procs.reap()) {
+      if (c.role == "supervisor") {
+        supervisor_status = c.status;
+      } else {
+        std::cerr << "swarm run: agent " << c.id << " " << describe_status(c.status) << "\n";
+        if (opt.stop_on_agent_exit && why.empty()) why = "agent " + std::to_string(c.id) + " exited";
+      }
+    }
+    if (supervisor_status >= 0) break;
+    if (g_signal) {
+      why = "interrupted";
+      break;
+    }
+    if (!why.empty()) break;
+    if (std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count() > wall_limit) {
+      why = "the supervisor did not finish in time";
+      break;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  const int killed = procs.terminate_all(opt.grace_s);
+  for (const auto& c : procs.children()) {
+    if (c.role == "supervisor" && supervisor_status < 0) supervisor_status = c.status;
+  }
+  if (!opt.quiet || killed > 0) {
+    std::cout << "swarm run: stopped " << procs.children().size() << " processes"
+              << (killed ? " (" + std::to_string(killed) + " needed SIGKILL)" : std::string()) << "\n";
+  }
+  if (!why.empty()) std::cerr << "swarm run: " << why << "\n";
+  const bool converged = WIFEXITED(supervisor_status) && WEXITSTATUS(supervisor_status) == 0;
+  std::cout << "swarm run: " << (converged ? "converged" : "not converged") << "; run record in "
+            << dir.string() << std::endl;
+  return converged ? 0 : 1;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"swarm: a quadcopter swarm that agrees over DDS"};
+  app.require_subcommand(1);
+  RunOptions ro;
+  CLI::App* run_cmd = app.add_subcommand("run", "launch the supervisor and one agent process per agent");
+  run_cmd->add_option("scenario", ro.scenario, "scenario file (Protobuf text format)")->check(CLI::ExistingFile);
+  run_cmd->add_option("--out", ro.out, "run directory to create (default runs/TIMESTAMP-NAME)");
+  run_cmd->add_option("--agents", ro.agents, "fly N agents from seeded random positions")->check(CLI::Range(1, 512));
+  run_cmd->add_option("--seed", ro.seed, "seed (overrides the scenario)")->check(CLI::Range(std::int64_t{0}, std::int64_t{4294967295}));
+  run_cmd->add_option("--duration", ro.duration, "simulated seconds before giving up")->check(CLI::PositiveNumber);
+  run_cmd->add_option("--time-scale", ro.time_scale, "simulated seconds per wall second (default 1)")
+      ->check(CLI::Range(0.01, 100.0));
+  run_cmd->add_option("--domain", ro.domain, "DDS domain id (overrides the scenario)")->check(CLI::Range(0, 232));
+  run_cmd->add_option("--grace", ro.grace_s, "seconds between SIGTERM and SIGKILL at teardown")->check(CLI::NonNegativeNumber);
+  run_cmd->add_flag("--quiet", ro.quiet, "no progress line");
+  run_cmd->add_flag("--stop-on-agent-exit", ro.stop_on_agent_exit, "end the run when any agent exits");
+  run_cmd->add_option("--test-ignore-sigterm", ro.ignore_sigterm, "(tests) agents that ignore SIGTERM")->group("");
+
+  std::string inspect_path;
+  bool json = false;
+  CLI::App* inspect_cmd = app.add_subcommand("inspect", "initial graph, Laplacian, eigenvalues, predicted agreement");
+  inspect_cmd->add_option("scenario", inspect_path, "scenario file")->required()->check(CLI::ExistingFile);
+  inspect_cmd->add_flag("--json", json, "machine-readable output");
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 2;
+  }
+  if (*run_cmd) return run(ro);
+  return inspect(inspect_path, json);
+}
