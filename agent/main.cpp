@@ -1,10 +1,10 @@
 // swarm-agent: one quadcopter (or particle) as its own process with its own DDS participant. It
 // learns of other agents only from DDS samples, runs the agreement law and (in quadcopter mode)
 // the tracking controller and dynamics in real time, and stops cleanly on SIGINT/SIGTERM.
-#include <CLI/CLI.hpp>
 #include <spdlog/sinks/basic_file_sink.h>
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
+#include <CLI/CLI.hpp>
 
 #include <atomic>
 #include <chrono>
@@ -39,12 +39,16 @@ int main(int argc, char** argv) {
   app.add_option("--run-dir", run_dir, "directory for this agent's log");
   app.add_option("--time-scale", time_scale, "simulated seconds per wall second")
       ->check(CLI::PositiveNumber);
-  app.add_option("--domain", domain, "DDS domain id (overrides the scenario)")->check(CLI::Range(0, 232));
+  app.add_option("--domain", domain, "DDS domain id (overrides the scenario)")
+      ->check(CLI::Range(0, 232));
   app.add_option("--seed", seed, "run seed (overrides the scenario)");
-  app.add_option("--start-timeout", start_timeout_s, "wall seconds to wait for all peers before starting")
+  app.add_option("--start-timeout", start_timeout_s,
+                 "wall seconds to wait for all peers before starting")
       ->check(CLI::NonNegativeNumber);
-  app.add_option("--max-wall", max_wall_s, "stop after this many wall seconds (default: 2x duration + 30 s)");
-  app.add_flag("--ignore-sigterm", ignore_sigterm, "(tests) ignore SIGTERM to exercise the launcher's SIGKILL")
+  app.add_option("--max-wall", max_wall_s,
+                 "stop after this many wall seconds (default: 2x duration + 30 s)");
+  app.add_flag("--ignore-sigterm", ignore_sigterm,
+               "(tests) ignore SIGTERM to exercise the launcher's SIGKILL")
       ->group("");
   try {
     app.parse(argc, argv);
@@ -77,7 +81,8 @@ int main(int argc, char** argv) {
     sinks.push_back(std::make_shared<spdlog::sinks::basic_file_sink_mt>(
         run_dir + "/agent-" + std::to_string(id) + ".log", true));
   }
-  auto logger = std::make_shared<spdlog::logger>("agent-" + std::to_string(id), sinks.begin(), sinks.end());
+  auto logger =
+      std::make_shared<spdlog::logger>("agent-" + std::to_string(id), sinks.begin(), sinks.end());
   logger->set_level(spdlog::level::info);
   logger->flush_on(spdlog::level::info);
   spdlog::set_default_logger(logger);
@@ -108,25 +113,33 @@ int main(int argc, char** argv) {
     p.reference_accel_mps2 = rc.reference_accel_mps2;
     p.neighbor_timeout_s = rc.neighbor_timeout_s;
     p.incarnation = wall_now_ns();
+    p.expected_peers = rc.agents.size() - 1;
+    if (rc.law.topology.policy == TopologyPolicy::kFixed) {
+      p.expected_peers = 0;  // only its listed neighbours count
+      for (const auto& [a, b] : rc.law.topology.edges)
+        p.expected_peers += (a == id || b == id) ? 1 : 0;
+    }
     AgentRuntime agent(p, bus);
     agent.set_wall_clock(wall_now_ns);
-    logger->info("agent {} up: domain {}, {} mode, {} law, start ({:.3f}, {:.3f}, {:.3f}), time scale {}",
-                 id, rc.domain_id, rc.mode == AgentMode::kQuadcopter ? "quadcopter" : "particle",
-                 to_string(rc.law.kind), p.p0_W.x(), p.p0_W.y(), p.p0_W.z(), time_scale);
+    logger->info(
+        "agent {} up: domain {}, {} mode, {} law, start ({:.3f}, {:.3f}, {:.3f}), time scale {}",
+        id, rc.domain_id, rc.mode == AgentMode::kQuadcopter ? "quadcopter" : "particle",
+        to_string(rc.law.kind), p.p0_W.x(), p.p0_W.y(), p.p0_W.z(), time_scale);
 
-    // Wait until every other agent of the scenario has been heard, so the run starts together.
+    // Start barrier: kWaiting until every other agent is heard, then kReady; run once all are
+    // ready or running. Publishing every 5 ms meanwhile keeps the start skew to a few ms.
     const auto wall_start = Clock::now();
-    const auto publish_period = std::chrono::duration<double>(1.0 / (rc.consensus_hz * time_scale));
-    std::size_t expected = rc.agents.size() - 1;
+    const std::size_t expected = rc.agents.size() - 1;
     while (!g_stop) {
-      const auto heard = agent.heard_peers();
-      if (heard.size() >= expected) break;
+      const bool all_heard = agent.heard_peers().size() >= expected;
+      const std::size_t ready = agent.ready_peers().size();
+      if (all_heard && ready >= expected) break;
       if (Clock::now() - wall_start > std::chrono::duration<double>(start_timeout_s)) {
-        logger->warn("start timeout: heard {} of {} peers, starting anyway", heard.size(), expected);
+        logger->warn("start timeout: {} of {} peers ready, starting anyway", ready, expected);
         break;
       }
-      agent.publish(kWaiting);
-      std::this_thread::sleep_for(publish_period);
+      agent.publish(all_heard ? kReady : kWaiting);
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
     }
     logger->info("running after {:.2f} s of discovery",
                  std::chrono::duration<double>(Clock::now() - wall_start).count());
@@ -136,8 +149,9 @@ int main(int argc, char** argv) {
     const auto t0 = Clock::now();
     std::uint64_t k = 0, overruns = 0;
     while (!g_stop) {
-      const auto due = t0 + std::chrono::duration_cast<Clock::duration>(
-                                std::chrono::duration<double>(static_cast<double>(k) * step_wall_s));
+      const auto due =
+          t0 + std::chrono::duration_cast<Clock::duration>(
+                   std::chrono::duration<double>(static_cast<double>(k) * step_wall_s));
       auto now = Clock::now();
       if (now < due) {
         std::this_thread::sleep_until(due);
@@ -160,7 +174,8 @@ int main(int argc, char** argv) {
     const BusCounters c = bus.counters();
     const Vec3 q = agent.consensus(), x = agent.position();
     logger->info(
-        "stopping at t={:.3f} s: consensus ({:.6f}, {:.6f}, {:.6f}) position ({:.6f}, {:.6f}, {:.6f}); "
+        "stopping at t={:.3f} s: consensus ({:.6f}, {:.6f}, {:.6f}) position ({:.6f}, {:.6f}, "
+        "{:.6f}); "
         "published {}, received {}, dropped {}, stale {}, physics overruns {} of {} steps",
         agent.time_s(), q.x(), q.y(), q.z(), x.x(), x.y(), x.z(), c.published, c.received,
         c.dropped, c.stale, overruns, k);

@@ -1,9 +1,9 @@
 // swarm-supervisor: subscribes to every agent's state and records the run. It publishes nothing an
 // agent acts on (its participant has no writer). Exit 0 when the swarm converged, 1 when the
 // duration ended (or it was interrupted) without convergence, 2 for bad input.
-#include <CLI/CLI.hpp>
 #include <spdlog/sinks/basic_file_sink.h>
 #include <spdlog/spdlog.h>
+#include <CLI/CLI.hpp>
 
 #include <atomic>
 #include <chrono>
@@ -32,8 +32,10 @@ int main(int argc, char** argv) {
   double start_timeout_s = 30.0;
   app.add_option("--scenario", scenario_path, "scenario file")->required();
   app.add_option("--run-dir", run_dir, "run directory to write")->required();
-  app.add_option("--time-scale", time_scale, "simulated seconds per wall second")->check(CLI::PositiveNumber);
-  app.add_option("--domain", domain, "DDS domain id (overrides the scenario)")->check(CLI::Range(0, 232));
+  app.add_option("--time-scale", time_scale, "simulated seconds per wall second")
+      ->check(CLI::PositiveNumber);
+  app.add_option("--domain", domain, "DDS domain id (overrides the scenario)")
+      ->check(CLI::Range(0, 232));
   app.add_option("--seed", seed, "run seed (overrides the scenario)");
   app.add_option("--start-timeout", start_timeout_s, "wall seconds to wait for the first agent");
   app.add_flag("--progress", progress, "print a live progress line");
@@ -89,9 +91,18 @@ int main(int argc, char** argv) {
         std::fflush(stdout);
         last_print = wall_s();
       }
-      if (rec.converged()) { reason = "converged"; break; }
-      if (rec.duration_reached()) { reason = "duration"; break; }
-      if (g_stop) { reason = "interrupted"; break; }
+      if (rec.converged()) {
+        reason = "converged";
+        break;
+      }
+      if (rec.duration_reached()) {
+        reason = "duration";
+        break;
+      }
+      if (g_stop) {
+        reason = "interrupted";
+        break;
+      }
       if (rec.time_s() == 0.0 && wall_s() > start_timeout_s + rc.duration_s / time_scale) {
         reason = "no agents running";
         break;

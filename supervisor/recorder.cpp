@@ -105,6 +105,7 @@ void Recorder::on_sample(const StateMessage& m, std::int64_t recv_ns) {
     event("depart", id, "agent stopped");
   }
   a.present = m.phase != kStopping;
+  const bool was_running_law = a.last.phase == kRunning && a.last.view.seq >= 1 && a.samples > 0;
   a.last = m;
   a.last_recv_ns = recv_ns;
   ++a.samples;
@@ -113,12 +114,12 @@ void Recorder::on_sample(const StateMessage& m, std::int64_t recv_ns) {
 
   const Vec3& q = m.view.q;
   const Eigen::Quaterniond& o = m.q_WB;
-  telemetry_ << m.stamp_s << ',' << id << ',' << m.seq << ',' << int(m.phase) << ',' << int(m.mode) << ','
-             << q.x() << ',' << q.y() << ',' << q.z() << ',' << m.p_W.x() << ',' << m.p_W.y() << ','
-             << m.p_W.z() << ',' << m.v_W.x() << ',' << m.v_W.y() << ',' << m.v_W.z() << ',' << o.w()
-             << ',' << o.x() << ',' << o.y() << ',' << o.z() << ',' << m.rotors_radps[0] << ','
-             << m.rotors_radps[1] << ',' << m.rotors_radps[2] << ',' << m.rotors_radps[3] << ','
-             << m.view.total_weight << ',' << m.links.size() << ',' << age_ms << '\n';
+  telemetry_ << m.stamp_s << ',' << id << ',' << m.seq << ',' << int(m.phase) << ',' << int(m.mode)
+             << ',' << q.x() << ',' << q.y() << ',' << q.z() << ',' << m.p_W.x() << ',' << m.p_W.y()
+             << ',' << m.p_W.z() << ',' << m.v_W.x() << ',' << m.v_W.y() << ',' << m.v_W.z() << ','
+             << o.w() << ',' << o.x() << ',' << o.y() << ',' << o.z() << ',' << m.rotors_radps[0]
+             << ',' << m.rotors_radps[1] << ',' << m.rotors_radps[2] << ',' << m.rotors_radps[3]
+             << ',' << m.view.total_weight << ',' << m.links.size() << ',' << age_ms << '\n';
   records::Record r;
   records::AgentSample* s = r.mutable_sample();
   s->set_id(id);
@@ -135,6 +136,14 @@ void Recorder::on_sample(const StateMessage& m, std::int64_t recv_ns) {
   for (int i = 0; i < 4; ++i) s->add_rotors(m.rotors_radps[i]);
   s->set_mode(static_cast<std::uint32_t>(m.mode));
   write_record(r);
+  // The initial graph: snapshot the moment every agent of the scenario has made its first law tick
+  // (view seq 1: links found, nobody moved yet).
+  if (!first_full_ && m.phase == kRunning && m.view.seq >= 1 && !was_running_law) {
+    std::size_t started = 0;
+    for (const auto& [aid, t] : agents_)
+      started += (t.present && t.last.phase == kRunning && t.last.view.seq >= 1) ? 1 : 0;
+    if (started == rc_.agents.size()) snapshot();
+  }
 }
 
 void Recorder::tick(std::int64_t now_ns) {
@@ -225,7 +234,9 @@ void Recorder::snapshot() {
     if (!converged_ && t_s_ - hold_start_s_ >= rc_.hold_s) {
       converged_ = true;
       converged_at_s_ = hold_start_s_;
-      event("converged", 0, "disagreement " + fmt("%.3g", g.disagreement_m()) + " m, spread " + fmt("%.3g", g.spread_m()) + " m");
+      event("converged", 0,
+            "disagreement " + fmt("%.3g", g.disagreement_m()) + " m, spread " +
+                fmt("%.3g", g.spread_m()) + " m");
     }
   } else {
     hold_start_s_ = -1.0;
@@ -236,8 +247,9 @@ std::string Recorder::progress_line() const {
   std::size_t present = 0;
   for (const auto& [id, a] : agents_) present += a.present ? 1 : 0;
   char buf[200];
-  std::snprintf(buf, sizeof buf, "t=%7.2f s  agents %zu/%zu  edges %3d  lambda2 %8.4f  disagreement %9.5f m",
-                t_s_, present, rc_.agents.size(), last_ ? last_->edges_size() : 0,
+  std::snprintf(buf, sizeof buf,
+                "t=%7.2f s  agents %zu/%zu  edges %3d  lambda2 %8.4f  disagreement %9.5f m", t_s_,
+                present, rc_.agents.size(), last_ ? last_->edges_size() : 0,
                 last_ ? last_->lambda2() : 0.0, last_ ? last_->disagreement_m() : 0.0);
   return buf;
 }
@@ -268,7 +280,7 @@ std::string Recorder::finish(const std::string& end_reason, double wall_time_s) 
     records::AgentSummary* as = s.add_agents();
     as->set_id(id);
     const AgentSpec* spec = rc_.agent(id);
-    put(as->mutable_initial_position(), spec ? spec->position_W : a.first.initial_W);
+    put(as->mutable_initial_position(), spec ? spec->position_W : a.first.view.q0);
     if (!a.seen) continue;
     put(as->mutable_final_position(), a.last.p_W);
     put(as->mutable_final_consensus(), a.last.view.q);
@@ -330,11 +342,11 @@ std::string Recorder::finish(const std::string& end_reason, double wall_time_s) 
   records_.flush();
 
   std::ostringstream h;
-  h << "\n== " << rc_.name << ": " << (converged_ ? "CONVERGED" : "NOT CONVERGED") << " (" << end_reason
-    << ") ==\n";
+  h << "\n== " << rc_.name << ": " << (converged_ ? "CONVERGED" : "NOT CONVERGED") << " ("
+    << end_reason << ") ==\n";
   if (converged_) h << "converged at t = " << fmt("%.2f", converged_at_s_) << " s (simulated)\n";
-  h << "agents " << final_q.size() << "/" << rc_.agents.size() << ", " << s.mode() << " mode, " << s.law()
-    << " law, seed " << rc_.seed << ", " << fmt("%.2f", t_s_) << " s simulated in "
+  h << "agents " << final_q.size() << "/" << rc_.agents.size() << ", " << s.mode() << " mode, "
+    << s.law() << " law, seed " << rc_.seed << ", " << fmt("%.2f", t_s_) << " s simulated in "
     << fmt("%.2f", wall_time_s) << " s wall\n";
   const Vec3 avg = rc_.initial_average();
   h << "initial average   (" << fmt("%.6f", avg.x()) << ", " << fmt("%.6f", avg.y()) << ", "
@@ -343,8 +355,8 @@ std::string Recorder::finish(const std::string& end_reason, double wall_time_s) 
     << fmt("%.6f", mean.z()) << ")  drift " << fmt("%.3e", s.average_drift_m()) << " m\n";
   h << "final disagreement " << fmt("%.3e", s.final_disagreement_m()) << " m, physical spread "
     << fmt("%.3e", spread) << " m, min separation " << fmt("%.3f", s.min_separation_m()) << " m\n";
-  h << "lambda2 " << fmt("%.4f", s.lambda2_initial()) << " -> " << fmt("%.4f", s.lambda2_final()) << ", edges "
-    << s.edges_initial_size() << " -> " << s.edges_final_size() << "\n";
+  h << "lambda2 " << fmt("%.4f", s.lambda2_initial()) << " -> " << fmt("%.4f", s.lambda2_final())
+    << ", edges " << s.edges_initial_size() << " -> " << s.edges_final_size() << "\n";
   h << "messages: published " << msg.published() << ", received " << msg.received() << ", dropped "
     << msg.dropped() << ", gaps " << msg.seq_gaps() << ", age p50 " << fmt("%.3f", msg.age_p50_ms())
     << " ms p99 " << fmt("%.3f", msg.age_p99_ms()) << " ms\n";

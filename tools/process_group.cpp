@@ -17,8 +17,8 @@ ProcessGroup::~ProcessGroup() {
   if (any_running()) terminate_all(2.0);
 }
 
-pid_t ProcessGroup::spawn(const std::string& role, unsigned id, const std::vector<std::string>& argv,
-                          const std::string& log_path) {
+pid_t ProcessGroup::spawn(const std::string& role, unsigned id,
+                          const std::vector<std::string>& argv, const std::string& log_path) {
   const pid_t parent = getpid();
   const pid_t pid = fork();
   if (pid < 0) throw std::runtime_error(std::string("fork: ") + std::strerror(errno));

@@ -1,7 +1,7 @@
 // swarm: launch a swarm of agent processes plus a supervisor (`swarm run`), or analyse a scenario's
 // initial graph without flying (`swarm inspect`).
-#include <CLI/CLI.hpp>
 #include <unistd.h>
+#include <CLI/CLI.hpp>
 
 #include <atomic>
 #include <chrono>
@@ -80,13 +80,13 @@ int inspect(const std::string& path, bool json) {
     o << "{\n  \"scenario\": \"" << rc.name << "\",\n  \"agents\": [";
     for (int i = 0; i < n; ++i) {
       const Vec3& p = rc.agents[i].position_W;
-      o << (i ? ", " : "") << "{\"id\": " << rc.agents[i].id << ", \"position\": [" << p.x() << ", " << p.y()
-        << ", " << p.z() << "]}";
+      o << (i ? ", " : "") << "{\"id\": " << rc.agents[i].id << ", \"position\": [" << p.x() << ", "
+        << p.y() << ", " << p.z() << "]}";
     }
     o << "],\n  \"edges\": [";
     for (size_t k = 0; k < g.edges.size(); ++k) {
-      o << (k ? ", " : "") << "[" << rc.agents[g.edges[k].i].id << ", " << rc.agents[g.edges[k].j].id << ", "
-        << g.edges[k].weight << "]";
+      o << (k ? ", " : "") << "[" << rc.agents[g.edges[k].i].id << ", "
+        << rc.agents[g.edges[k].j].id << ", " << g.edges[k].weight << "]";
     }
     o << "],\n  \"laplacian\": [";
     for (int i = 0; i < n; ++i) {
@@ -96,17 +96,19 @@ int inspect(const std::string& path, bool json) {
     }
     o << "],\n  \"eigenvalues\": [";
     for (int i = 0; i < n; ++i) o << (i ? ", " : "") << g.spectrum.eigenvalues[i];
-    o << "],\n  \"lambda2\": " << g.spectrum.lambda2 << ",\n  \"components\": " << g.spectrum.components
+    o << "],\n  \"lambda2\": " << g.spectrum.lambda2
+      << ",\n  \"components\": " << g.spectrum.components
       << ",\n  \"connected\": " << (g.spectrum.components == 1 ? "true" : "false")
       << ",\n  \"agreement_point\": [" << avg.x() << ", " << avg.y() << ", " << avg.z()
       << "],\n  \"time_constant_s\": " << tau << "\n}\n";
   } else {
     o.precision(6);
-    o << "scenario " << rc.name << ": " << n << " agents, " << to_string(rc.law.weight.policy) << " weights, "
-      << to_string(rc.law.topology.policy) << " topology, " << to_string(rc.law.kind) << " law, gain "
-      << rc.law.gain << "\n";
+    o << "scenario " << rc.name << ": " << n << " agents, " << to_string(rc.law.weight.policy)
+      << " weights, " << to_string(rc.law.topology.policy) << " topology, "
+      << to_string(rc.law.kind) << " law, gain " << rc.law.gain << "\n";
     o << "initial edges (" << g.edges.size() << "):";
-    for (const Edge& e : g.edges) o << " " << rc.agents[e.i].id << "-" << rc.agents[e.j].id << " (w=" << e.weight << ")";
+    for (const Edge& e : g.edges)
+      o << " " << rc.agents[e.i].id << "-" << rc.agents[e.j].id << " (w=" << e.weight << ")";
     o << "\nweighted Laplacian:\n";
     for (int i = 0; i < n && n <= 16; ++i) {
       for (int j = 0; j < n; ++j) {
@@ -120,9 +122,10 @@ int inspect(const std::string& path, bool json) {
     o << "eigenvalues:";
     for (int i = 0; i < std::min(n, 16); ++i) o << " " << g.spectrum.eigenvalues[i];
     o << "\nlambda2 " << g.spectrum.lambda2 << ", components " << g.spectrum.components
-      << (g.spectrum.components == 1 ? " (connected)" : " (NOT connected: proximity may join them later)")
-      << "\npredicted agreement point (the initial average): (" << avg.x() << ", " << avg.y() << ", "
-      << avg.z() << ")\n";
+      << (g.spectrum.components == 1 ? " (connected)"
+                                     : " (NOT connected: proximity may join them later)")
+      << "\npredicted agreement point (the initial average): (" << avg.x() << ", " << avg.y()
+      << ", " << avg.z() << ")\n";
     if (tau > 0) o << "time constant 1/(k lambda2) = " << tau << " s (exact for fixed weights)\n";
   }
   std::cout << o.str();
@@ -162,15 +165,18 @@ int run(const RunOptions& opt) {
       throw ScenarioError("give a SCENARIO file, or --agents N for seeded random agents");
     }
     if (opt.agents == 0) throw ScenarioError("--agents: expected a count of at least 1");
-    rc = resolve_scenario(opt.scenario.empty() ? random_scenario() : read_scenario_file(opt.scenario), o);
+    rc = resolve_scenario(
+        opt.scenario.empty() ? random_scenario() : read_scenario_file(opt.scenario), o);
   } catch (const ScenarioError& e) {
     std::cerr << "swarm run: " << e.what() << "\n";
     return 2;
   }
-  fs::path dir = opt.out.empty() ? fs::path("runs") / (timestamp() + "-" + rc.name) : fs::path(opt.out);
+  fs::path dir =
+      opt.out.empty() ? fs::path("runs") / (timestamp() + "-" + rc.name) : fs::path(opt.out);
   std::error_code ec;
   if (fs::exists(dir / "summary.json")) {
-    std::cerr << "swarm run: --out " << dir << ": expected a new directory, this one holds a run already\n";
+    std::cerr << "swarm run: --out " << dir
+              << ": expected a new directory, this one holds a run already\n";
     return 2;
   }
   fs::create_directories(dir, ec);
@@ -180,14 +186,15 @@ int run(const RunOptions& opt) {
   }
   dir = fs::absolute(dir);
   const std::string scen = (dir / "scenario.txtpb").string();
-  std::ofstream(scen) << "# The scenario as run (defaults filled in, agents listed).\n" << to_text(rc.resolved);
+  std::ofstream(scen) << "# The scenario as run (defaults filled in, agents listed).\n"
+                      << to_text(rc.resolved);
   const InitialGraph g = initial_graph(rc);
   if (!opt.quiet) {
-    std::cout << "swarm run: " << rc.name << ", " << rc.agents.size() << " agents, domain " << rc.domain_id
-              << ", time scale " << opt.time_scale << ", seed " << rc.seed << "\n"
+    std::cout << "swarm run: " << rc.name << ", " << rc.agents.size() << " agents, domain "
+              << rc.domain_id << ", time scale " << opt.time_scale << ", seed " << rc.seed << "\n"
               << "initial graph: " << g.edges.size() << " edges, lambda2 " << g.spectrum.lambda2
-              << (g.spectrum.components > 1 ? " (not connected yet)" : "") << "\nrun directory: " << dir.string()
-              << std::endl;
+              << (g.spectrum.components > 1 ? " (not connected yet)" : "")
+              << "\nrun directory: " << dir.string() << std::endl;
   }
 
   std::signal(SIGINT, on_signal);
@@ -197,13 +204,19 @@ int run(const RunOptions& opt) {
   const std::string bin = bin_dir().string();
   ProcessGroup procs;
   try {
-    std::vector<std::string> sup = {bin + "/swarm-supervisor", "--scenario", scen, "--run-dir", dir.string(),
-                                    "--time-scale", ts};
+    std::vector<std::string> sup = {bin + "/swarm-supervisor",
+                                    "--scenario",
+                                    scen,
+                                    "--run-dir",
+                                    dir.string(),
+                                    "--time-scale",
+                                    ts};
     if (!opt.quiet) sup.push_back("--progress");
     procs.spawn("supervisor", 0, sup, opt.quiet ? (dir / "supervisor.out").string() : "");
     for (const AgentSpec& a : rc.agents) {
-      std::vector<std::string> args = {bin + "/swarm-agent", "--scenario", scen, "--id", std::to_string(a.id),
-                                       "--run-dir", dir.string(), "--time-scale", ts};
+      std::vector<std::string> args = {
+          bin + "/swarm-agent", "--scenario", scen,           "--id", std::to_string(a.id),
+          "--run-dir",          dir.string(), "--time-scale", ts};
       for (unsigned id : opt.ignore_sigterm)
         if (id == a.id) args.push_back("--ignore-sigterm");
       procs.spawn("agent", a.id, args, (dir / ("agent-" + std::to_string(a.id) + ".out")).string());
@@ -229,7 +242,8 @@ int run(const RunOptions& opt) {
         supervisor_status = c.status;
       } else {
         std::cerr << "swarm run: agent " << c.id << " " << describe_status(c.status) << "\n";
-        if (opt.stop_on_agent_exit && why.empty()) why = "agent " + std::to_string(c.id) + " exited";
+        if (opt.stop_on_agent_exit && why.empty())
+          why = "agent " + std::to_string(c.id) + " exited";
       }
     }
     if (supervisor_status >= 0) break;
@@ -238,7 +252,8 @@ int run(const RunOptions& opt) {
       break;
     }
     if (!why.empty()) break;
-    if (std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count() > wall_limit) {
+    if (std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count() >
+        wall_limit) {
       why = "the supervisor did not finish in time";
       break;
     }
@@ -250,7 +265,8 @@ int run(const RunOptions& opt) {
   }
   if (!opt.quiet || killed > 0) {
     std::cout << "swarm run: stopped " << procs.children().size() << " processes"
-              << (killed ? " (" + std::to_string(killed) + " needed SIGKILL)" : std::string()) << "\n";
+              << (killed ? " (" + std::to_string(killed) + " needed SIGKILL)" : std::string())
+              << "\n";
   }
   if (!why.empty()) std::cerr << "swarm run: " << why << "\n";
   const bool converged = WIFEXITED(supervisor_status) && WEXITSTATUS(supervisor_status) == 0;
@@ -265,24 +281,38 @@ int main(int argc, char** argv) {
   CLI::App app{"swarm: a quadcopter swarm that agrees over DDS"};
   app.require_subcommand(1);
   RunOptions ro;
-  CLI::App* run_cmd = app.add_subcommand("run", "launch the supervisor and one agent process per agent");
-  run_cmd->add_option("scenario", ro.scenario, "scenario file (Protobuf text format)")->check(CLI::ExistingFile);
+  CLI::App* run_cmd =
+      app.add_subcommand("run", "launch the supervisor and one agent process per agent");
+  run_cmd->add_option("scenario", ro.scenario, "scenario file (Protobuf text format)")
+      ->check(CLI::ExistingFile);
   run_cmd->add_option("--out", ro.out, "run directory to create (default runs/TIMESTAMP-NAME)");
-  run_cmd->add_option("--agents", ro.agents, "fly N agents from seeded random positions")->check(CLI::Range(1, 512));
-  run_cmd->add_option("--seed", ro.seed, "seed (overrides the scenario)")->check(CLI::Range(std::int64_t{0}, std::int64_t{4294967295}));
-  run_cmd->add_option("--duration", ro.duration, "simulated seconds before giving up")->check(CLI::PositiveNumber);
-  run_cmd->add_option("--time-scale", ro.time_scale, "simulated seconds per wall second (default 1)")
+  run_cmd->add_option("--agents", ro.agents, "fly N agents from seeded random positions")
+      ->check(CLI::Range(1, 512));
+  run_cmd->add_option("--seed", ro.seed, "seed (overrides the scenario)")
+      ->check(CLI::Range(std::int64_t{0}, std::int64_t{4294967295}));
+  run_cmd->add_option("--duration", ro.duration, "simulated seconds before giving up")
+      ->check(CLI::PositiveNumber);
+  run_cmd
+      ->add_option("--time-scale", ro.time_scale, "simulated seconds per wall second (default 1)")
       ->check(CLI::Range(0.01, 100.0));
-  run_cmd->add_option("--domain", ro.domain, "DDS domain id (overrides the scenario)")->check(CLI::Range(0, 232));
-  run_cmd->add_option("--grace", ro.grace_s, "seconds between SIGTERM and SIGKILL at teardown")->check(CLI::NonNegativeNumber);
+  run_cmd->add_option("--domain", ro.domain, "DDS domain id (overrides the scenario)")
+      ->check(CLI::Range(0, 232));
+  run_cmd->add_option("--grace", ro.grace_s, "seconds between SIGTERM and SIGKILL at teardown")
+      ->check(CLI::NonNegativeNumber);
   run_cmd->add_flag("--quiet", ro.quiet, "no progress line");
-  run_cmd->add_flag("--stop-on-agent-exit", ro.stop_on_agent_exit, "end the run when any agent exits");
-  run_cmd->add_option("--test-ignore-sigterm", ro.ignore_sigterm, "(tests) agents that ignore SIGTERM")->group("");
+  run_cmd->add_flag("--stop-on-agent-exit", ro.stop_on_agent_exit,
+                    "end the run when any agent exits");
+  run_cmd
+      ->add_option("--test-ignore-sigterm", ro.ignore_sigterm, "(tests) agents that ignore SIGTERM")
+      ->group("");
 
   std::string inspect_path;
   bool json = false;
-  CLI::App* inspect_cmd = app.add_subcommand("inspect", "initial graph, Laplacian, eigenvalues, predicted agreement");
-  inspect_cmd->add_option("scenario", inspect_path, "scenario file")->required()->check(CLI::ExistingFile);
+  CLI::App* inspect_cmd =
+      app.add_subcommand("inspect", "initial graph, Laplacian, eigenvalues, predicted agreement");
+  inspect_cmd->add_option("scenario", inspect_path, "scenario file")
+      ->required()
+      ->check(CLI::ExistingFile);
   inspect_cmd->add_flag("--json", json, "machine-readable output");
   try {
     app.parse(argc, argv);

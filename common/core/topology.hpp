@@ -15,8 +15,7 @@ using AgentId = std::uint32_t;
 enum class WeightPolicy {
   kUnweighted,       // w = 1 (paper, unweighted networks)
   kDistance,         // w = |q_i - q_j| now (paper's time-varying weighted example)
-  kInitialDistance,  // w = |q_i - q_j| when the edge formed, then fixed (paper's fixed weighted
-                     // example)
+  kInitialDistance,  // w = |q_i(0) - q_j(0)|, fixed (the paper's fixed weighted example)
   kInverseDistance,  // w = scale / max(|q_i - q_j|, 1 cm): strong when close, like a radio link
 };
 

@@ -13,6 +13,7 @@ std::string check_view(const NeighborView& v, double max_abs) {
   };
   if (bad_vec(v.q))
     return "consensus state not finite or beyond +-" + std::to_string(max_abs) + " m";
+  if (bad_vec(v.q0)) return "initial state not finite or absurd";
   if (!std::isfinite(v.total_weight) || v.total_weight < 0.0 || v.total_weight > 1e9) {
     return "total weight not finite, negative or absurd";
   }
@@ -37,6 +38,10 @@ void LawConfig::validate() const {
     throw std::invalid_argument("law.gain = " + std::to_string(gain) +
                                 ": expected a finite value > 0");
   }
+  if (!std::isfinite(max_step_fraction) || max_step_fraction <= 0.0 || max_step_fraction > 1.0) {
+    throw std::invalid_argument("law.max_step_fraction = " + std::to_string(max_step_fraction) +
+                                ": expected a value in (0, 1]");
+  }
   if (!std::isfinite(weight.scale) || weight.scale <= 0.0) {
     throw std::invalid_argument("weight.scale: expected a finite value > 0");
   }
@@ -59,7 +64,8 @@ std::vector<double> UpdateLaw::update_links(const std::vector<NeighborView>& nei
     if (!tracker_.update(n.id, d)) continue;
     double w = weight_for_distance(cfg_.weight, d);
     if (cfg_.weight.policy == WeightPolicy::kInitialDistance) {
-      w = frozen_weight_.try_emplace(n.id, w).first->second;
+      // The paper's "weights due to initial distance": |q_i(0) - q_j(0)|, whenever the link forms.
+      w = weight_for_distance(cfg_.weight, (q0_ - n.q0).norm());
     }
     next[n.id] = w;
     weights[k] = w;
@@ -90,7 +96,8 @@ void UpdateLaw::step(double dt, const std::vector<NeighborView>& neighbors) {
   for (size_t k = 0; k < neighbors.size(); ++k) {
     if (w[k] <= 0.0) continue;
     const double W = std::max({w_self, neighbors[k].total_weight, w[k]});
-    coef[k] = w[k] * (-std::expm1(-cfg_.gain * W * dt)) / W;
+    const double s = cfg_.max_step_fraction;
+    coef[k] = w[k] / W * std::min(-std::expm1(-cfg_.gain * W * dt), s);
   }
   integrate(neighbors, coef);
   ++ticks_;
@@ -102,6 +109,7 @@ NeighborView UpdateLaw::message() const {
   NeighborView v;
   v.id = self_;
   v.q = state();
+  v.q0 = q0_;
   v.total_weight = published_total_weight_;
   v.flows = owned_flows();
   v.seq = ticks_;

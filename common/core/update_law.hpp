@@ -23,6 +23,7 @@ struct FlowEntry {
 struct NeighborView {
   AgentId id = 0;
   Vec3 q = Vec3::Zero();      // consensus state
+  Vec3 q0 = Vec3::Zero();     // the sender's initial state q_j(0)
   double total_weight = 0.0;  // sum of the sender's link weights, as of its last tick
   std::vector<FlowEntry> flows;
   std::uint64_t seq = 0;  // sender's tick count: a new message has a larger one
@@ -44,16 +45,22 @@ struct LawConfig {
   WeightConfig weight;
   TopologyConfig topology;
   double gain = 1.0;  // k: time scale of the agreement [1/s per unit weight]
+  // s: the most a tick may move an agent, as a fraction of the way to its neighbours' weighted
+  // mean. Below 1/2 the step survives a tick or two of message delay (see UpdateLaw).
+  double max_step_fraction = 0.3;
   void validate() const;
 };
 
 // The per-agent agreement law: the same object runs in the in-process swarm and in each agent
 // process. Discretisation: one tick of length dt moves along each edge by
-//   c_ij = w_ij (1 - exp(-k W dt)) / W,   W = max(W_i, W_j, w_ij)
-// where W_i, W_j are the endpoints' published total weights. The row sums of c are then < 1 for
-// any weights and dt, so a tick is a convex combination (stable for the paper's large distance
-// weights), c_ij = c_ji when both ends see the same snapshot, and c_ij -> k w_ij dt as dt -> 0 (the
-// paper's ODE).
+//   c_ij = (w_ij / W) min(1 - exp(-k W dt), s),   W = max(W_i, W_j, w_ij)
+// where W_i, W_j are the endpoints' published total weights and s the max step fraction. The row
+// sums of c are then below s for any weights and dt, so a tick is a convex combination (stable for
+// the paper's large distance weights), c_ij = c_ji when both ends see the same snapshot, and
+// c_ij -> k w_ij dt as dt -> 0 (the paper's ODE). s < 1/2 matters between processes: a neighbour's
+// state is up to a tick old, and x' = x - g x(t - dt) is stable only for g < 1, while the step's
+// Laplacian has eigenvalues up to 2s. With s near 1 and distance weights, a 12-agent swarm over DDS
+// diverged (weights grow with the error it makes).
 class UpdateLaw {
  public:
   UpdateLaw(AgentId self, const Vec3& q0, LawConfig cfg);
@@ -87,7 +94,6 @@ class UpdateLaw {
   LawConfig cfg_;
   LinkTracker tracker_;
   std::map<AgentId, double> links_;
-  std::map<AgentId, double> frozen_weight_;  // kInitialDistance: weight when the edge formed
   double published_total_weight_ = 0.0;
   bool observed_ = false;
   std::uint64_t ticks_ = 0;

@@ -46,6 +46,13 @@ std::set<AgentId> AgentRuntime::heard_peers() {
   return out;
 }
 
+std::set<AgentId> AgentRuntime::ready_peers() {
+  std::set<AgentId> out;
+  for (const StateMessage& m : bus_.latest(p_.id))
+    if (m.phase == kReady || m.phase == kRunning) out.insert(m.view.id);
+  return out;
+}
+
 void AgentRuntime::publish(std::uint8_t phase) {
   StateMessage m;
   m.view = law_->message();
@@ -58,7 +65,6 @@ void AgentRuntime::publish(std::uint8_t phase) {
   m.q_WB = Eigen::Quaterniond(quad_.R_WB);
   m.rotors_radps = rotors_;
   for (const auto& [peer, w] : law_->links()) m.links.emplace_back(peer, w);
-  m.initial_W = p_.p0_W;
   m.wall_ns = wall_clock_ ? wall_clock_() : 0;
   m.incarnation = p_.incarnation;
   m.received = received_;
@@ -73,7 +79,8 @@ void AgentRuntime::consensus_tick(std::vector<AgentEvent>& events) {
   for (const StateMessage& m : bus_.latest(p_.id)) {
     const AgentId peer = m.view.id;
     if (m.phase != kRunning) continue;
-    if (!listen_to_.empty() && !listen_to_.count(peer)) continue;  // explicit graph: not a neighbour
+    if (!listen_to_.empty() && !listen_to_.count(peer))
+      continue;  // explicit graph: not a neighbour
     Peer& st = peers_[peer];
     if (m.incarnation != st.incarnation || m.seq != st.seq) {
       st.seq = m.seq;
@@ -88,6 +95,10 @@ void AgentRuntime::consensus_tick(std::vector<AgentEvent>& events) {
     views.push_back(m.view);
   }
   if (!started_) {
+    if (views.size() < p_.expected_peers && t < p_.start_grace_s) {
+      publish(kRunning);  // running, but the law waits for the whole initial graph
+      return;
+    }
     law_->observe(views);
     started_ = true;
   } else {

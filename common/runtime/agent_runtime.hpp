@@ -30,6 +30,10 @@ struct AgentParams {
   double reference_accel_mps2 = 2.0;
   double neighbor_timeout_s = 1.0;  // simulated seconds without a new message
   std::int64_t incarnation = 0;
+  // The law starts when this many peers are running (so the first tick sees the whole initial
+  // graph), or after start_grace_s when some never come (late join, dead peer).
+  std::size_t expected_peers = 0;
+  double start_grace_s = 1.0;
 };
 
 // What happened in a step that the process should log (the runtime itself does no I/O).
@@ -60,8 +64,9 @@ class AgentRuntime {
   std::uint64_t published() const { return seq_; }
   std::size_t live_neighbors() const { return live_.size(); }
 
-  // Peers heard in any phase (the process waits for all expected peers before running).
+  // Peers heard in any phase, and those ready or running (the start barrier).
   std::set<AgentId> heard_peers();
+  std::set<AgentId> ready_peers();
   // Stamps for publication: the process injects wall time and its counters.
   void set_wall_clock(std::function<std::int64_t()> f) { wall_clock_ = std::move(f); }
   void set_counters(std::uint64_t received, std::uint64_t dropped, std::uint64_t overruns) {

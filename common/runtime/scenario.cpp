@@ -18,7 +18,8 @@ class Collector : public google::protobuf::io::ErrorCollector {
   explicit Collector(std::string source) : source_(std::move(source)) {}
   void AddError(int line, google::protobuf::io::ColumnNumber col, const std::string& msg) override {
     if (first_.empty()) {
-      first_ = source_ + ":" + std::to_string(line + 1) + ":" + std::to_string(col + 1) + ": " + msg;
+      first_ =
+          source_ + ":" + std::to_string(line + 1) + ":" + std::to_string(col + 1) + ": " + msg;
     }
   }
   void AddWarning(int, google::protobuf::io::ColumnNumber, const std::string&) override {}
@@ -29,7 +30,8 @@ class Collector : public google::protobuf::io::ErrorCollector {
   std::string first_;
 };
 
-[[noreturn]] void fail(const std::string& field, const std::string& expected, const std::string& got) {
+[[noreturn]] void fail(const std::string& field, const std::string& expected,
+                       const std::string& got) {
   throw ScenarioError("scenario field '" + field + "': expected " + expected + ", got " + got);
 }
 
@@ -84,7 +86,8 @@ scenario::Scenario parse_scenario_text(const std::string& text, const std::strin
   Collector errors(source);
   parser.RecordErrorsTo(&errors);
   if (!parser.ParseFromString(text, &s)) {
-    throw ScenarioError(errors.first().empty() ? source + ": not a valid scenario" : errors.first());
+    throw ScenarioError(errors.first().empty() ? source + ": not a valid scenario"
+                                               : errors.first());
   }
   return s;
 }
@@ -108,7 +111,8 @@ RunConfig resolve_scenario(scenario::Scenario s, const ScenarioOverrides& o) {
   RunConfig rc;
   if (o.seed >= 0) s.set_seed(static_cast<std::uint64_t>(o.seed));
   if (o.duration_s >= 0) s.set_duration_s(o.duration_s);
-  if (o.domain_id >= 0) s.mutable_transport()->set_domain_id(static_cast<std::uint32_t>(o.domain_id));
+  if (o.domain_id >= 0)
+    s.mutable_transport()->set_domain_id(static_cast<std::uint32_t>(o.domain_id));
   if (o.agents >= 0) {
     s.clear_agents();
     s.mutable_random_agents()->set_count(static_cast<std::uint32_t>(o.agents));
@@ -126,7 +130,8 @@ RunConfig resolve_scenario(scenario::Scenario s, const ScenarioOverrides& o) {
     const std::uint32_t n = s.random_agents().count();
     if (n > 512) fail("random_agents.count", "1..512", std::to_string(n));
     const double box = s.random_agents().box_m() == 0.0 ? 30.0 : s.random_agents().box_m();
-    if (!std::isfinite(box) || box <= 0.0) fail("random_agents.box_m", "a finite value > 0", num(box));
+    if (!std::isfinite(box) || box <= 0.0)
+      fail("random_agents.box_m", "a finite value > 0", num(box));
     for (const AgentSpec& a : random_agent_specs(static_cast<int>(n), rc.seed, box)) {
       scenario::Agent* pa = s.add_agents();
       pa->set_id(a.id);
@@ -136,18 +141,22 @@ RunConfig resolve_scenario(scenario::Scenario s, const ScenarioOverrides& o) {
     }
     s.clear_random_agents();
   }
-  if (s.agents_size() == 0) fail("agents", "at least one agent (or random_agents / --agents N)", "none");
+  if (s.agents_size() == 0)
+    fail("agents", "at least one agent (or random_agents / --agents N)", "none");
   std::map<AgentId, int> seen;
   for (int i = 0; i < s.agents_size(); ++i) {
     const scenario::Agent& a = s.agents(i);
     const std::string f = "agents[" + std::to_string(i) + "]";
     if (a.id() == 0) fail(f + ".id", "an id > 0", "0 (unset?)");
     if (seen.count(a.id())) {
-      fail(f + ".id", "a unique id", std::to_string(a.id()) + " (also agents[" + std::to_string(seen[a.id()]) + "])");
+      fail(f + ".id", "a unique id",
+           std::to_string(a.id()) + " (also agents[" + std::to_string(seen[a.id()]) + "])");
     }
     seen[a.id()] = i;
     const Vec3 p = vec(a.position());
-    if (!p.allFinite() || p.cwiseAbs().maxCoeff() > 1e5) fail(f + ".position", "finite coordinates within 100 km", "(" + num(p.x()) + ", " + num(p.y()) + ", " + num(p.z()) + ")");
+    if (!p.allFinite() || p.cwiseAbs().maxCoeff() > 1e5)
+      fail(f + ".position", "finite coordinates within 100 km",
+           "(" + num(p.x()) + ", " + num(p.y()) + ", " + num(p.z()) + ")");
     if (!std::isfinite(a.yaw_deg())) fail(f + ".yaw_deg", "a finite angle", num(a.yaw_deg()));
     rc.agents.push_back({a.id(), p, a.yaw_deg() * std::numbers::pi / 180.0});
   }
@@ -156,43 +165,72 @@ RunConfig resolve_scenario(scenario::Scenario s, const ScenarioOverrides& o) {
   rc.law.kind = s.law() == scenario::LAPLACIAN ? LawKind::kLaplacian : LawKind::kEdgeFlow;
   rc.law.gain = positive("gain", s.has_gain(), s.gain(), 1.0);
   switch (s.weight().policy()) {
-    case scenario::UNWEIGHTED: rc.law.weight.policy = WeightPolicy::kUnweighted; break;
-    case scenario::INITIAL_DISTANCE: rc.law.weight.policy = WeightPolicy::kInitialDistance; break;
-    case scenario::INVERSE_DISTANCE: rc.law.weight.policy = WeightPolicy::kInverseDistance; break;
-    default: rc.law.weight.policy = WeightPolicy::kDistance; break;
+    case scenario::UNWEIGHTED:
+      rc.law.weight.policy = WeightPolicy::kUnweighted;
+      break;
+    case scenario::INITIAL_DISTANCE:
+      rc.law.weight.policy = WeightPolicy::kInitialDistance;
+      break;
+    case scenario::INVERSE_DISTANCE:
+      rc.law.weight.policy = WeightPolicy::kInverseDistance;
+      break;
+    default:
+      rc.law.weight.policy = WeightPolicy::kDistance;
+      break;
   }
   rc.law.weight.scale = positive("weight.scale", s.weight().has_scale(), s.weight().scale(), 1.0);
   switch (s.topology().policy()) {
-    case scenario::FIXED: rc.law.topology.policy = TopologyPolicy::kFixed; break;
-    case scenario::PROXIMITY: rc.law.topology.policy = TopologyPolicy::kProximity; break;
-    default: rc.law.topology.policy = TopologyPolicy::kStickyProximity; break;
+    case scenario::FIXED:
+      rc.law.topology.policy = TopologyPolicy::kFixed;
+      break;
+    case scenario::PROXIMITY:
+      rc.law.topology.policy = TopologyPolicy::kProximity;
+      break;
+    default:
+      rc.law.topology.policy = TopologyPolicy::kStickyProximity;
+      break;
   }
-  rc.law.topology.threshold_m = positive("topology.threshold_m", s.topology().has_threshold_m(), s.topology().threshold_m(), 12.5);
-  rc.law.topology.hysteresis_m = non_negative("topology.hysteresis_m", s.topology().has_hysteresis_m(), s.topology().hysteresis_m(), 0.5);
+  rc.law.topology.threshold_m = positive("topology.threshold_m", s.topology().has_threshold_m(),
+                                         s.topology().threshold_m(), 12.5);
+  rc.law.topology.hysteresis_m = non_negative(
+      "topology.hysteresis_m", s.topology().has_hysteresis_m(), s.topology().hysteresis_m(), 0.5);
   for (int i = 0; i < s.topology().edges_size(); ++i) {
     const scenario::Edge& e = s.topology().edges(i);
     const std::string f = "topology.edges[" + std::to_string(i) + "]";
     if (!seen.count(e.a())) fail(f + ".a", "the id of a listed agent", std::to_string(e.a()));
     if (!seen.count(e.b())) fail(f + ".b", "the id of a listed agent", std::to_string(e.b()));
-    if (e.a() == e.b()) fail(f, "two different agents", std::to_string(e.a()) + "-" + std::to_string(e.b()));
+    if (e.a() == e.b())
+      fail(f, "two different agents", std::to_string(e.a()) + "-" + std::to_string(e.b()));
     rc.law.topology.edges.emplace_back(e.a(), e.b());
   }
-  if (rc.law.topology.policy == TopologyPolicy::kFixed && rc.law.topology.edges.empty() && rc.agents.size() > 1) {
+  if (rc.law.topology.policy == TopologyPolicy::kFixed && rc.law.topology.edges.empty() &&
+      rc.agents.size() > 1) {
     fail("topology.edges", "at least one edge for a FIXED topology", "none");
   }
 
-  rc.physics_hz = positive("rates.physics_hz", s.rates().has_physics_hz(), s.rates().physics_hz(), 500.0);
-  rc.consensus_hz = positive("rates.consensus_hz", s.rates().has_consensus_hz(), s.rates().consensus_hz(), 50.0);
+  rc.physics_hz =
+      positive("rates.physics_hz", s.rates().has_physics_hz(), s.rates().physics_hz(), 500.0);
+  rc.consensus_hz =
+      positive("rates.consensus_hz", s.rates().has_consensus_hz(), s.rates().consensus_hz(), 50.0);
   if (rc.physics_hz > 20000.0) fail("rates.physics_hz", "at most 20000", num(rc.physics_hz));
-  if (rc.mode == AgentMode::kQuadcopter && rc.physics_hz < 500.0) fail("rates.physics_hz", ">= 500 in QUADCOPTER mode", num(rc.physics_hz));
-  if (rc.consensus_hz > rc.physics_hz) fail("rates.consensus_hz", "at most rates.physics_hz", num(rc.consensus_hz));
+  if (rc.mode == AgentMode::kQuadcopter && rc.physics_hz < 500.0)
+    fail("rates.physics_hz", ">= 500 in QUADCOPTER mode", num(rc.physics_hz));
+  if (rc.consensus_hz > rc.physics_hz)
+    fail("rates.consensus_hz", "at most rates.physics_hz", num(rc.consensus_hz));
 
   const scenario::Gains& g = s.gains();
-  rc.gains.pos_natural_freq_radps = positive("gains.pos_natural_freq_radps", g.has_pos_natural_freq_radps(), g.pos_natural_freq_radps(), rc.gains.pos_natural_freq_radps);
-  rc.gains.pos_damping = positive("gains.pos_damping", g.has_pos_damping(), g.pos_damping(), rc.gains.pos_damping);
-  rc.gains.att_natural_freq_radps = positive("gains.att_natural_freq_radps", g.has_att_natural_freq_radps(), g.att_natural_freq_radps(), rc.gains.att_natural_freq_radps);
-  rc.gains.att_damping = positive("gains.att_damping", g.has_att_damping(), g.att_damping(), rc.gains.att_damping);
-  rc.gains.max_tilt_rad = positive("gains.max_tilt_rad", g.has_max_tilt_rad(), g.max_tilt_rad(), rc.gains.max_tilt_rad);
+  rc.gains.pos_natural_freq_radps =
+      positive("gains.pos_natural_freq_radps", g.has_pos_natural_freq_radps(),
+               g.pos_natural_freq_radps(), rc.gains.pos_natural_freq_radps);
+  rc.gains.pos_damping =
+      positive("gains.pos_damping", g.has_pos_damping(), g.pos_damping(), rc.gains.pos_damping);
+  rc.gains.att_natural_freq_radps =
+      positive("gains.att_natural_freq_radps", g.has_att_natural_freq_radps(),
+               g.att_natural_freq_radps(), rc.gains.att_natural_freq_radps);
+  rc.gains.att_damping =
+      positive("gains.att_damping", g.has_att_damping(), g.att_damping(), rc.gains.att_damping);
+  rc.gains.max_tilt_rad =
+      positive("gains.max_tilt_rad", g.has_max_tilt_rad(), g.max_tilt_rad(), rc.gains.max_tilt_rad);
   try {
     rc.gains.validate();
   } catch (const std::invalid_argument& e) {
@@ -200,26 +238,34 @@ RunConfig resolve_scenario(scenario::Scenario s, const ScenarioOverrides& o) {
   }
 
   const scenario::Limits& l = s.limits();
-  rc.reference_speed_mps = positive("limits.reference_speed_mps", l.has_reference_speed_mps(), l.reference_speed_mps(), 3.0);
-  rc.reference_accel_mps2 = positive("limits.reference_accel_mps2", l.has_reference_accel_mps2(), l.reference_accel_mps2(), 2.0);
-  rc.airframe.rotor_min_radps = non_negative("limits.rotor_min_radps", l.has_rotor_min_radps(), l.rotor_min_radps(), rc.airframe.rotor_min_radps);
-  rc.airframe.rotor_max_radps = positive("limits.rotor_max_radps", l.has_rotor_max_radps(), l.rotor_max_radps(), rc.airframe.rotor_max_radps);
+  rc.reference_speed_mps = positive("limits.reference_speed_mps", l.has_reference_speed_mps(),
+                                    l.reference_speed_mps(), 3.0);
+  rc.reference_accel_mps2 = positive("limits.reference_accel_mps2", l.has_reference_accel_mps2(),
+                                     l.reference_accel_mps2(), 2.0);
+  rc.airframe.rotor_min_radps = non_negative("limits.rotor_min_radps", l.has_rotor_min_radps(),
+                                             l.rotor_min_radps(), rc.airframe.rotor_min_radps);
+  rc.airframe.rotor_max_radps = positive("limits.rotor_max_radps", l.has_rotor_max_radps(),
+                                         l.rotor_max_radps(), rc.airframe.rotor_max_radps);
   try {
     rc.airframe.validate();
   } catch (const std::invalid_argument& e) {
     throw ScenarioError(std::string("scenario limits: ") + e.what());
   }
 
-  rc.tolerance_m = positive("convergence.tolerance_m", s.convergence().has_tolerance_m(), s.convergence().tolerance_m(), 0.01);
-  rc.hold_s = non_negative("convergence.hold_s", s.convergence().has_hold_s(), s.convergence().hold_s(), 1.0);
+  rc.tolerance_m = positive("convergence.tolerance_m", s.convergence().has_tolerance_m(),
+                            s.convergence().tolerance_m(), 0.01);
+  rc.hold_s = non_negative("convergence.hold_s", s.convergence().has_hold_s(),
+                           s.convergence().hold_s(), 1.0);
   rc.duration_s = positive("duration_s", s.has_duration_s(), s.duration_s(), 60.0);
   const scenario::Transport& t = s.transport();
   rc.domain_id = t.has_domain_id() ? t.domain_id() : 0;
   if (rc.domain_id > 232) fail("transport.domain_id", "0..232", std::to_string(rc.domain_id));
   rc.interface = t.has_interface() ? t.interface() : "127.0.0.1";
-  if (rc.interface.empty()) fail("transport.interface", "an IPv4 address such as 127.0.0.1", "\"\"");
+  if (rc.interface.empty())
+    fail("transport.interface", "an IPv4 address such as 127.0.0.1", "\"\"");
   rc.shared_memory = t.has_shared_memory() && t.shared_memory();
-  rc.neighbor_timeout_s = positive("transport.neighbor_timeout_s", t.has_neighbor_timeout_s(), t.neighbor_timeout_s(), 1.0);
+  rc.neighbor_timeout_s = positive("transport.neighbor_timeout_s", t.has_neighbor_timeout_s(),
+                                   t.neighbor_timeout_s(), 1.0);
 
   // Write every default back so the run directory's scenario says exactly what ran.
   s.set_gain(rc.law.gain);

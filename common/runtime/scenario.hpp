@@ -53,10 +53,10 @@ struct RunConfig {
 
 // Overrides from the command line, applied before validation.
 struct ScenarioOverrides {
-  int agents = -1;          // --agents N: replace the agent list with N seeded random agents
-  std::int64_t seed = -1;   // --seed S
-  double duration_s = -1;   // --duration S
-  int domain_id = -1;       // --domain D
+  int agents = -1;         // --agents N: replace the agent list with N seeded random agents
+  std::int64_t seed = -1;  // --seed S
+  double duration_s = -1;  // --duration S
+  int domain_id = -1;      // --domain D
 };
 
 scenario::Scenario parse_scenario_text(const std::string& text, const std::string& source);
@@ -65,7 +65,8 @@ RunConfig resolve_scenario(scenario::Scenario s, const ScenarioOverrides& o = {}
 RunConfig load_scenario(const std::string& path, const ScenarioOverrides& o = {});
 std::string to_text(const scenario::Scenario& s);
 
-// n agents uniformly in a cube of side box_m, ids 1..n, from the seed (same as the in-process swarm).
+// n agents uniformly in a cube of side box_m, ids 1..n, from the seed (same as the in-process
+// swarm).
 std::vector<AgentSpec> random_agent_specs(int n, std::uint64_t seed, double box_m);
 
 }  // namespace qswarm

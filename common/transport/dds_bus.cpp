@@ -1,5 +1,9 @@
 #include "common/transport/dds_bus.hpp"
 
+#include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
+#include <fastdds/rtps/transport/shared_mem/SharedMemTransportDescriptor.h>
+#include <fastdds/rtps/transport/test_UDPv4TransportDescriptor.h>
+#include <spdlog/spdlog.h>
 #include <fastdds/dds/domain/DomainParticipant.hpp>
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
 #include <fastdds/dds/publisher/DataWriter.hpp>
@@ -9,10 +13,6 @@
 #include <fastdds/dds/subscriber/SampleInfo.hpp>
 #include <fastdds/dds/subscriber/Subscriber.hpp>
 #include <fastdds/dds/topic/TypeSupport.hpp>
-#include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
-#include <fastdds/rtps/transport/shared_mem/SharedMemTransportDescriptor.h>
-#include <fastdds/rtps/transport/test_UDPv4TransportDescriptor.h>
-#include <spdlog/spdlog.h>
 
 #include <chrono>
 #include <stdexcept>
@@ -45,7 +45,7 @@ void to_idl(const StateMessage& m, qswarm_msgs::AgentState& s) {
   s.mode(static_cast<uint8_t>(m.mode));
   s.phase(m.phase);
   s.consensus(arr(m.view.q));
-  s.initial(arr(m.initial_W));
+  s.initial(arr(m.view.q0));
   s.total_weight(m.view.total_weight);
   s.position(arr(m.p_W));
   s.velocity(arr(m.v_W));
@@ -85,7 +85,7 @@ StateMessage from_idl(const qswarm_msgs::AgentState& s) {
   m.mode = static_cast<AgentMode>(s.mode());
   m.phase = s.phase();
   m.view.q = vec(s.consensus());
-  m.initial_W = vec(s.initial());
+  m.view.q0 = vec(s.initial());
   m.view.total_weight = s.total_weight();
   m.p_W = vec(s.position());
   m.v_W = vec(s.velocity());
@@ -96,7 +96,8 @@ StateMessage from_idl(const qswarm_msgs::AgentState& s) {
   m.dropped = s.dropped();
   m.overruns = s.overruns();
   for (const auto& e : s.links()) m.links.emplace_back(e.peer(), e.weight());
-  for (const auto& e : s.flows()) m.view.flows.push_back({e.peer(), vec(e.flow()), e.weight(), e.active()});
+  for (const auto& e : s.flows())
+    m.view.flows.push_back({e.peer(), vec(e.flow()), e.weight(), e.active()});
   return m;
 }
 
@@ -136,7 +137,8 @@ struct DdsBus::Impl : public dds::DataReaderListener {
     }
   }
 
-  void on_subscription_matched(dds::DataReader*, const dds::SubscriptionMatchedStatus& st) override {
+  void on_subscription_matched(dds::DataReader*,
+                               const dds::SubscriptionMatchedStatus& st) override {
     matched = st.current_count;
   }
 
@@ -148,8 +150,9 @@ struct DdsBus::Impl : public dds::DataReaderListener {
       if (const std::string why = check_message(m); !why.empty()) {
         ++counters.dropped;
         if (warned.insert(m.view.id).second) {
-          spdlog::warn("dropped a sample from agent {}: {} (further drops from it are counted, not logged)",
-                       m.view.id, why);
+          spdlog::warn(
+              "dropped a sample from agent {}: {} (further drops from it are counted, not logged)",
+              m.view.id, why);
         }
         return;
       }
@@ -188,14 +191,19 @@ DdsBus::DdsBus(const DdsOptions& opts) : impl_(std::make_unique<Impl>()) {
     pqos.transport().user_transports.push_back(udp);
   }
   if (opts.shared_memory) {
-    pqos.transport().user_transports.push_back(std::make_shared<rtps::SharedMemTransportDescriptor>());
+    pqos.transport().user_transports.push_back(
+        std::make_shared<rtps::SharedMemTransportDescriptor>());
   }
   // Many participants on one host: allow more port retries than the default 100.
   pqos.wire_protocol().builtin.mutation_tries = 400;
-  d.participant = dds::DomainParticipantFactory::get_instance()->create_participant(opts.domain_id, pqos);
-  if (!d.participant) throw std::runtime_error("dds: cannot create a participant on domain " + std::to_string(opts.domain_id));
+  d.participant =
+      dds::DomainParticipantFactory::get_instance()->create_participant(opts.domain_id, pqos);
+  if (!d.participant)
+    throw std::runtime_error("dds: cannot create a participant on domain " +
+                             std::to_string(opts.domain_id));
   d.type.register_type(d.participant);
-  d.topic = d.participant->create_topic("qswarm/agent_state", d.type.get_type_name(), dds::TOPIC_QOS_DEFAULT);
+  d.topic = d.participant->create_topic("qswarm/agent_state", d.type.get_type_name(),
+                                        dds::TOPIC_QOS_DEFAULT);
   if (!d.topic) throw std::runtime_error("dds: cannot create the state topic");
 
   if (opts.publish) {
@@ -206,7 +214,8 @@ DdsBus::DdsBus(const DdsOptions& opts) : impl_(std::make_unique<Impl>()) {
     wq.history().kind = dds::KEEP_LAST_HISTORY_QOS;
     wq.history().depth = 1;
     wq.data_sharing().off();
-    wq.endpoint().history_memory_policy = eprosima::fastrtps::rtps::PREALLOCATED_WITH_REALLOC_MEMORY_MODE;
+    wq.endpoint().history_memory_policy =
+        eprosima::fastrtps::rtps::PREALLOCATED_WITH_REALLOC_MEMORY_MODE;
     d.writer = d.publisher->create_datawriter(d.topic, wq);
     if (!d.writer) throw std::runtime_error("dds: cannot create the state writer");
   }
@@ -222,7 +231,8 @@ DdsBus::DdsBus(const DdsOptions& opts) : impl_(std::make_unique<Impl>()) {
   rq.resource_limits().max_samples_per_instance = 1;
   rq.resource_limits().max_samples = opts.max_agents + 16;
   rq.resource_limits().allocated_samples = 32;
-  rq.endpoint().history_memory_policy = eprosima::fastrtps::rtps::PREALLOCATED_WITH_REALLOC_MEMORY_MODE;
+  rq.endpoint().history_memory_policy =
+      eprosima::fastrtps::rtps::PREALLOCATED_WITH_REALLOC_MEMORY_MODE;
   d.reader = d.subscriber->create_datareader(d.topic, rq, &d);
   if (!d.reader) throw std::runtime_error("dds: cannot create the state reader");
 }

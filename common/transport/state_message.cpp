@@ -11,7 +11,6 @@ std::string check_message(const StateMessage& m) {
     return !x.allFinite() || x.cwiseAbs().maxCoeff() > limit;
   };
   if (bad(m.p_W, 1e6)) return "position not finite or beyond 1000 km";
-  if (bad(m.initial_W, 1e6)) return "initial state not finite or absurd";
   if (bad(m.v_W, 1e3)) return "velocity not finite or above 1 km/s";
   if (!m.q_WB.coeffs().allFinite() || std::abs(m.q_WB.norm() - 1.0) > 1e-3) {
     return "orientation not a unit quaternion";
@@ -22,7 +21,7 @@ std::string check_message(const StateMessage& m) {
   }
   if (!std::isfinite(m.stamp_s) || m.stamp_s < 0.0 || m.stamp_s > 1e7) return "stamp not finite";
   if (m.mode != AgentMode::kParticle && m.mode != AgentMode::kQuadcopter) return "unknown mode";
-  if (m.phase > kStopping) return "unknown phase";
+  if (m.phase > kReady) return "unknown phase";
   for (const auto& [peer, w] : m.links) {
     if (!std::isfinite(w) || w < 0.0 || w > 1e9 || peer == m.view.id) return "link invalid";
   }

@@ -26,16 +26,18 @@ struct StateMessage {
   Eigen::Quaterniond q_WB = Eigen::Quaterniond::Identity();
   RotorSpeeds rotors_radps = RotorSpeeds::Zero();
   std::vector<std::pair<AgentId, double>> links;  // edges the sender holds, with weights
-  Vec3 initial_W = Vec3::Zero();      // q_i(0)
-  std::int64_t wall_ns = 0;           // sender's CLOCK_REALTIME at publication
-  std::int64_t incarnation = 0;       // sender's start time: a restarted agent has a newer one
-  std::uint8_t phase = 0;             // 0 waiting for peers, 1 running, 2 stopping
-  std::uint64_t received = 0;         // samples the sender accepted
-  std::uint64_t dropped = 0;          // samples the sender rejected
-  std::uint64_t overruns = 0;         // the sender's late physics steps
+  std::int64_t wall_ns = 0;                       // sender's CLOCK_REALTIME at publication
+  std::int64_t incarnation = 0;  // sender's start time: a restarted agent has a newer one
+  std::uint8_t phase = 0;        // see Phase
+  std::uint64_t received = 0;    // samples the sender accepted
+  std::uint64_t dropped = 0;     // samples the sender rejected
+  std::uint64_t overruns = 0;    // the sender's late physics steps
 };
 
-enum Phase : std::uint8_t { kWaiting = 0, kRunning = 1, kStopping = 2 };
+// Start barrier: an agent is kWaiting until it has heard every expected peer, then kReady; it runs
+// once every expected peer is kReady or kRunning, so a swarm starts within one waiting-publish
+// period.
+enum Phase : std::uint8_t { kWaiting = 0, kRunning = 1, kStopping = 2, kReady = 3 };
 
 // Empty if a received message is usable, else why not. Anything non-finite or absurd is refused.
 std::string check_message(const StateMessage& m);

@@ -1,0 +1,331 @@
+// Multi-process acceptance tests: real agent processes, each with its own DDS participant, plus
+// the supervisor, launched by `swarm run` exactly as a user would. Each test has its own DDS domain
+// so parallel ctest runs do not cross-talk.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+
+#include "common/core/graph.hpp"
+#include "common/runtime/scenario.hpp"
+#include "common/transport/dds_bus.hpp"
+#include "tests/swarm/harness.hpp"
+
+namespace qswarm::test {
+namespace {
+
+Vec3 vec(const google::protobuf::RepeatedField<double>& f) {
+  return f.size() == 3 ? Vec3(f[0], f[1], f[2]) : Vec3::Constant(std::nan(""));
+}
+
+struct PaperCase {
+  std::string scenario;
+  Vec3 agreement;  // the paper's point
+  int domain;
+};
+void PrintTo(const PaperCase& c, std::ostream* os) { *os << c.scenario; }
+
+void expect_met_at(const records::Summary& s, const Vec3& point, double tol, bool physical) {
+  ASSERT_EQ(s.agents_size(), 4);
+  for (const auto& a : s.agents()) {
+    const Vec3 q = vec(a.final_consensus());
+    const Vec3 p = vec(a.final_position());
+    EXPECT_LT((q - point).norm(), tol) << "agent " << a.id() << " consensus " << q.transpose();
+    if (physical)
+      EXPECT_LT((p - point).norm(), tol) << "agent " << a.id() << " position " << p.transpose();
+  }
+}
+
+Result swarm_run(const std::string& scen, const std::filesystem::path& out, int domain,
+                 double time_scale, std::vector<std::string> extra = {}) {
+  std::vector<std::string> argv = {bin("swarm"),
+                                   "run",
+                                   scen,
+                                   "--out",
+                                   out.string(),
+                                   "--domain",
+                                   std::to_string(domain),
+                                   "--time-scale",
+                                   std::to_string(time_scale),
+                                   "--quiet"};
+  argv.insert(argv.end(), extra.begin(), extra.end());
+  return run(argv, 240.0);
+}
+
+class PaperParticle : public ::testing::TestWithParam<PaperCase> {};
+
+TEST_P(PaperParticle, FourAgentProcessesMeetAtThePapersPointWithin1cm) {
+  const PaperCase& c = GetParam();
+  const auto dir = fresh_dir("particle-" + c.scenario);
+  const Result r = swarm_run(scenario(c.scenario), dir, c.domain, 4.0);
+  ASSERT_EQ(r.code, 0) << r.output;
+  const records::Summary s = read_summary(dir);
+  EXPECT_TRUE(s.converged());
+  EXPECT_EQ(s.mode(), "particle");
+  EXPECT_EQ(s.joins(), 4u);
+  expect_met_at(s, c.agreement, 0.01, /*physical=*/true);
+  EXPECT_LT(s.average_drift_m(), 1e-3);
+  EXPECT_EQ(s.messages().dropped(), 0u);
+  EXPECT_GT(s.messages().received(), 100u);
+}
+
+INSTANTIATE_TEST_SUITE_P(Paper, PaperParticle,
+                         ::testing::Values(PaperCase{"paper_unweighted", {10.25, 9.75, 29.25}, 61},
+                                           PaperCase{"paper_weighted", {9, 12.75, 30.25}, 62},
+                                           PaperCase{"paper_time_varying", {15.25, 10.25, 31}, 63}),
+                         [](const ::testing::TestParamInfo<PaperCase>& p) {
+                           return p.param.scenario;
+                         });
+
+class PaperQuadcopter : public ::testing::TestWithParam<PaperCase> {};
+
+TEST_P(PaperQuadcopter, FourQuadcoptersFlyToThePapersPointWithin10cm) {
+  const PaperCase& c = GetParam();
+  const auto dir = fresh_dir("quadcopter-" + c.scenario);
+  const Result r = swarm_run(scenario(c.scenario + "_quadcopter"), dir, c.domain, 2.0);
+  ASSERT_EQ(r.code, 0) << r.output;
+  const records::Summary s = read_summary(dir);
+  EXPECT_TRUE(s.converged());
+  EXPECT_EQ(s.mode(), "quadcopter");
+  expect_met_at(s, c.agreement, 0.10, /*physical=*/true);
+  // The quadcopters really flew: the telemetry has rotor speeds near hover and moving positions.
+  const auto rows = read_csv(dir / "telemetry.csv");
+  ASSERT_FALSE(rows.empty());
+  double max_rotor = 0.0;
+  for (const auto& row : rows) max_rotor = std::max(max_rotor, std::stod(row.at("w1")));
+  EXPECT_GT(max_rotor, 150.0);
+  EXPECT_LE(max_rotor, 350.0);
+}
+
+INSTANTIATE_TEST_SUITE_P(Paper, PaperQuadcopter,
+                         ::testing::Values(PaperCase{"paper_unweighted", {10.25, 9.75, 29.25}, 64},
+                                           PaperCase{"paper_weighted", {9, 12.75, 30.25}, 65},
+                                           PaperCase{"paper_time_varying", {15.25, 10.25, 31}, 66}),
+                         [](const ::testing::TestParamInfo<PaperCase>& p) {
+                           return p.param.scenario;
+                         });
+
+TEST(SwarmRun, TwelveSeededRandomAgentsConvergeToTheirInitialAverage) {
+  const auto dir = fresh_dir("random12");
+  const Result r = run({bin("swarm"), "run", "--agents", "12", "--seed", "7", "--out", dir.string(),
+                        "--domain", "67", "--time-scale", "2", "--quiet"},
+                       240.0);
+  ASSERT_EQ(r.code, 0) << r.output;
+  const records::Summary s = read_summary(dir);
+  EXPECT_TRUE(s.converged());
+  EXPECT_EQ(s.seed(), 7u);
+  ASSERT_EQ(s.agents_size(), 12);
+  // The positions are the seeded ones, independently regenerated here.
+  const auto specs = random_agent_specs(12, 7, 30.0);
+  Vec3 avg = Vec3::Zero();
+  for (const auto& a : specs) avg += a.position_W / 12.0;
+  EXPECT_LT((vec(s.initial_average()) - avg).norm(), 1e-9);
+  for (int i = 0; i < 12; ++i) {
+    EXPECT_LT((vec(s.agents(i).initial_position()) - specs[i].position_W).norm(), 1e-9);
+    EXPECT_LT((vec(s.agents(i).final_consensus()) - avg).norm(), 0.02)
+        << "agent " << s.agents(i).id();
+  }
+  EXPECT_LT(s.average_drift_m(), 1e-3);
+}
+
+TEST(SwarmRun, ProximityAddsLinksAtRuntimeVisibleInGraphCsv) {
+  const auto dir = fresh_dir("proximity");
+  const Result r = swarm_run(scenario("paper_time_varying"), dir, 68, 4.0);
+  ASSERT_EQ(r.code, 0) << r.output;
+  const auto rows = read_csv(dir / "graph.csv");
+  int first_full_edges = -1, last_edges = -1;
+  double first_added_t = -1.0;
+  for (const auto& row : rows) {
+    if (std::stoi(row.at("agents")) != 4) continue;
+    const int e = std::stoi(row.at("edges"));
+    if (first_full_edges < 0) first_full_edges = e;
+    if (first_added_t < 0 && e > first_full_edges) first_added_t = std::stod(row.at("t_s"));
+    last_edges = e;
+  }
+  EXPECT_EQ(first_full_edges, 3);  // sparse and connected: the paper's 1-3, 1-4, 2-3
+  EXPECT_EQ(last_edges, 6);        // complete at the end
+  EXPECT_GT(first_added_t, 0.0);
+  const records::Summary s = read_summary(dir);
+  EXPECT_EQ(s.edges_initial_size(), 3);
+  EXPECT_EQ(s.edges_final_size(), 6);
+  EXPECT_NEAR(s.lambda2_initial(), 6.2395, 5e-3);  // the paper's L_2i
+}
+
+TEST(SwarmRun, SigkillOfOneAgentIsRecordedAndTheOthersAgree) {
+  const auto dir = fresh_dir("sigkill");
+  Child launcher({bin("swarm"), "run", "--agents", "12", "--seed", "7", "--out", dir.string(),
+                  "--domain", "69", "--time-scale", "1", "--quiet"},
+                 dir.parent_path() / "sigkill.log");
+  // Wait until the swarm is running (the supervisor has graph rows with all 12 agents).
+  ASSERT_TRUE(wait_for(
+      [&] {
+        for (const auto& row : read_csv(dir / "graph.csv"))
+          if (std::stoi(row.at("agents")) == 12 && std::stod(row.at("t_s")) > 0.5) return true;
+        return false;
+      },
+      60.0));
+  const pid_t victim = pid_of(dir, "agent", 5);
+  ASSERT_GT(victim, 0);
+  ASSERT_EQ(::kill(victim, SIGKILL), 0);
+  const Result r = launcher.wait(240.0);
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find("agent 5 killed by signal"), std::string::npos) << r.output;
+  bool departed = false;
+  for (const auto& row : read_csv(dir / "events.csv"))
+    if (row.at("kind") == "depart" && row.at("agent") == "5") departed = true;
+  EXPECT_TRUE(departed);
+  const records::Summary s = read_summary(dir);
+  EXPECT_TRUE(s.converged());
+  EXPECT_GE(s.departures(), 1u);
+  // The eleven survivors agree.
+  Positions q;
+  for (const auto& a : s.agents())
+    if (a.id() != 5) q.push_back(vec(a.final_consensus()));
+  EXPECT_LT(disagreement(q), 0.01);
+}
+
+TEST(SwarmRun, MalformedScenariosExit2NamingTheProblem) {
+  const auto dir = fresh_dir("malformed");
+  std::filesystem::create_directories(dir);
+  const std::string agents =
+      "agents { id: 1 position { x: 0 y: 0 z: 0 } }\nagents { id: 2 position { x: 1 y: 0 z: 0 } "
+      "}\n";
+  struct Case {
+    std::string text, expect;
+  };
+  const std::vector<Case> cases = {
+      {"name: \"x\"\nagnets { id: 1 }\n", ".txtpb:2:"},  // syntax: line
+      {"name: \"x\"\nagnets { id: 1 }\n", "agnets"},
+      {agents + "agents { id: 2 position { x: 5 } }\n", "agents[2].id"},  // duplicate
+      {agents + "topology { threshold_m: -3 }\n", "topology.threshold_m"},
+      {"agents { id: 1 position { x: nan } }\n", "agents[0].position"},
+      {agents + "topology { policy: FIXED edges { a: 1 b: 9 } }\n", "topology.edges[0].b"},
+      {agents + "mode: QUADCOPTER\nrates { physics_hz: 100 }\n", "rates.physics_hz"},
+      {agents + "law: GOSSIP\n", "GOSSIP"},
+      {"", "agents"},
+  };
+  int k = 0;
+  for (const Case& c : cases) {
+    const auto file = dir / ("bad" + std::to_string(k++) + ".txtpb");
+    std::ofstream(file) << c.text;
+    const Result r =
+        run({bin("swarm"), "run", file.string(), "--out", (dir / "never").string(), "--quiet"});
+    EXPECT_EQ(r.code, 2) << c.text << "\n" << r.output;
+    EXPECT_NE(r.output.find(c.expect), std::string::npos)
+        << "expected '" << c.expect << "' in: " << r.output;
+    const Result ri = run({bin("swarm"), "inspect", file.string()});
+    EXPECT_EQ(ri.code, 2) << ri.output;
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir / "never" / "summary.json"));
+  // Bad flags.
+  EXPECT_EQ(run({bin("swarm"), "run", scenario("demo"), "--time-scale", "-1"}).code, 2);
+  EXPECT_EQ(run({bin("swarm"), "run", "--agents", "0"}).code, 2);
+  const Result none = run({bin("swarm"), "run"});
+  EXPECT_EQ(none.code, 2);
+  EXPECT_NE(none.output.find("--agents"), std::string::npos) << none.output;
+  EXPECT_EQ(run({bin("swarm"), "run", "/nonexistent.txtpb"}).code, 2);
+  const Result wrong_id = run({bin("swarm-agent"), "--scenario", scenario("demo"), "--id", "77"});
+  EXPECT_EQ(wrong_id.code, 2);
+  EXPECT_NE(wrong_id.output.find("--id"), std::string::npos) << wrong_id.output;
+}
+
+TEST(SwarmRun, BadSamplesFromATestParticipantAreDroppedByEveryAgentAndChangeNothing) {
+  const auto dir = fresh_dir("bad-samples");
+  Child launcher({bin("swarm"), "run", scenario("paper_unweighted"), "--out", dir.string(),
+                  "--domain", "70", "--time-scale", "1", "--quiet"},
+                 dir.parent_path() / "bad-samples.log");
+  DdsOptions opt;
+  opt.domain_id = 70;
+  opt.participant_name = "test-saboteur";
+  DdsBus saboteur(opt);
+  std::uint64_t seq = 1u << 30;
+  std::int64_t life = wall_now_ns() + 1'000'000'000'000LL;  // "newer" than any agent's incarnation
+  int published = 0;
+  while (launcher.running()) {
+    StateMessage nan_msg;  // a stranger with NaN consensus
+    nan_msg.view.id = 99;
+    nan_msg.view.q = Vec3(std::nan(""), 0, 0);
+    nan_msg.phase = kRunning;
+    nan_msg.seq = ++seq;
+    nan_msg.incarnation = life;
+    saboteur.publish(nan_msg);
+    StateMessage absurd;  // impersonates agent 2 with an absurd position and flow
+    absurd.view.id = 2;
+    absurd.view.q = Vec3(1e12, 0, 0);
+    absurd.view.flows.push_back({3, Vec3(0, 1e300 * 10, 0), 1.0, true});
+    absurd.phase = kRunning;
+    absurd.seq = ++seq;
+    absurd.incarnation = life;
+    saboteur.publish(absurd);
+    ++published;
+    wait_for([&] { return !launcher.running(); }, 0.05);
+  }
+  const Result r = launcher.wait(10.0);
+  ASSERT_EQ(r.code, 0) << r.output;
+  ASSERT_GT(published, 10);
+  const records::Summary s = read_summary(dir);
+  EXPECT_TRUE(s.converged());
+  for (const auto& a : s.agents()) EXPECT_GE(a.dropped_by_agent(), 1u) << "agent " << a.id();
+  expect_met_at(s, Vec3(10.25, 9.75, 29.25), 0.01, true);
+  EXPECT_LT(s.average_drift_m(), 1e-3);
+}
+
+TEST(SwarmRun, CtrlCLeavesNoOrphansAndACompleteRunRecord) {
+  const auto dir = fresh_dir("ctrl-c");
+  // Agent 2 ignores SIGTERM, so the launcher's escalation to SIGKILL is exercised too.
+  Child launcher(
+      {bin("swarm"), "run", scenario("paper_time_varying"), "--out", dir.string(), "--domain", "71",
+       "--time-scale", "0.5", "--grace", "1", "--test-ignore-sigterm", "2"},
+      dir.parent_path() / "ctrl-c.log");
+  ASSERT_TRUE(wait_for(
+      [&] {
+        for (const auto& row : read_csv(dir / "graph.csv"))
+          if (std::stoi(row.at("agents")) == 4) return true;
+        return false;
+      },
+      60.0));
+  std::vector<pid_t> pids;
+  for (unsigned id = 1; id <= 4; ++id) pids.push_back(pid_of(dir, "agent", id));
+  pids.push_back(pid_of(dir, "supervisor", 0));
+  for (pid_t p : pids) ASSERT_TRUE(process_alive(p));
+  launcher.signal(SIGINT);
+  const Result r = launcher.wait(60.0);
+  EXPECT_EQ(r.code, 1) << r.output;
+  EXPECT_NE(r.output.find("1 needed SIGKILL"), std::string::npos) << r.output;
+  for (pid_t p : pids) EXPECT_FALSE(process_alive(p)) << "orphan pid " << p;
+  const records::Summary s = read_summary(dir);
+  EXPECT_EQ(s.end_reason(), "interrupted");
+  EXPECT_FALSE(s.converged());
+  EXPECT_EQ(s.agents_size(), 4);
+  bool ended = false;
+  for (const auto& row : read_csv(dir / "events.csv")) ended |= row.at("kind") == "end";
+  EXPECT_TRUE(ended);
+  EXPECT_GT(read_csv(dir / "telemetry.csv").size(), 10u);
+}
+
+TEST(Smoke, EveryBinaryRunsWithATinyDuration) {
+  for (const std::string b : {"swarm", "swarm-agent", "swarm-supervisor", "swarm-preview"}) {
+    const Result r = run({bin(b), "--help"});
+    EXPECT_EQ(r.code, 0) << b << ": " << r.output;
+  }
+  const auto dir = fresh_dir("smoke");
+  const Result r = swarm_run(scenario("demo"), dir, 72, 1.0, {"--duration", "0.1"});
+  EXPECT_EQ(r.code, 1) << r.output;  // 0.1 s is too short to converge: exit 1, record written
+  const records::Summary s = read_summary(dir);
+  EXPECT_EQ(s.end_reason(), "duration");
+  EXPECT_TRUE(std::filesystem::exists(dir / "records.pb"));
+  EXPECT_TRUE(std::filesystem::exists(dir / "scenario.txtpb"));
+}
+
+TEST(Smoke, InspectPredictsWithoutFlying) {
+  const Result r = run({bin("swarm"), "inspect", scenario("paper_time_varying"), "--json"});
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find("\"lambda2\": 6.2395"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("\"agreement_point\": [15.25, 10.25, 31]"), std::string::npos)
+      << r.output;
+  const Result text = run({bin("swarm"), "inspect", scenario("paper_weighted")});
+  EXPECT_NE(text.output.find("13.06"), std::string::npos) << text.output;
+}
+
+}  // namespace
+}  // namespace qswarm::test
