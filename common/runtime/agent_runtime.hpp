@@ -62,6 +62,7 @@ class AgentRuntime {
   const UpdateLaw& law() const { return *law_; }
   const AgentParams& params() const { return p_; }
   std::uint64_t published() const { return seq_; }
+  int steps_per_tick() const { return steps_per_tick_; }
   std::size_t live_neighbors() const { return live_.size(); }
 
   // Peers heard in any phase, and those ready or running (the start barrier).
