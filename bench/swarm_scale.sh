@@ -11,7 +11,7 @@ SIZES=("$@")
 ((${#SIZES[@]})) || SIZES=(8 16 32 64)
 OUT=build/bench-runs
 mkdir -p "$OUT"
-printf "| agents | mode | CPU per agent [%% of a core] | physics overruns | sample age p50 / p99 [ms] | discovery max [s] | RSS per agent [MB] | converged-free run [s] |\n"
+printf "| agents | mode | CPU per agent [%% of a core] | late ticks | sample age p50 / p99 [ms] | discovery max [s] | RSS per agent [MB] | converged-free run [s] |\n"
 printf "| --- | --- | --- | --- | --- | --- | --- | --- |\n"
 domain=150
 for mode in PARTICLE QUADCOPTER; do
