@@ -82,11 +82,14 @@ int main(int argc, char** argv) {
     logger->info("supervisor up on domain {}, expecting {} agents", rc.domain_id, rc.agents.size());
     std::string reason;
     double last_print = -1.0;
+    int last_edges = 0;
     while (true) {
       std::this_thread::sleep_for(std::chrono::milliseconds(20));
       std::lock_guard<std::mutex> lock(mu);
       rec.tick(wall_now_ns());
-      if (progress && wall_s() - last_print >= 1.0) {
+      // Once a second, and whenever the graph gains or loses an edge.
+      if (progress && (wall_s() - last_print >= 1.0 || rec.edges_now() != last_edges)) {
+        last_edges = rec.edges_now();
         std::printf("%s\n", rec.progress_line().c_str());
         std::fflush(stdout);
         last_print = wall_s();

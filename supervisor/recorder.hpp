@@ -30,6 +30,7 @@ class Recorder {
   bool converged() const { return converged_; }
   bool duration_reached() const { return t_s_ >= rc_.duration_s; }
   std::string progress_line() const;
+  int edges_now() const { return last_ ? last_->edges_size() : 0; }
   // Writes summary.json and closes the files; returns the human-readable summary.
   std::string finish(const std::string& end_reason, double wall_time_s);
   const records::Summary& summary() const { return summary_; }
