@@ -15,6 +15,7 @@
 #include <thread>
 
 #include "common/runtime/agent_runtime.hpp"
+#include "common/runtime/faults.hpp"
 #include "common/runtime/scenario.hpp"
 #include "common/transport/dds_bus.hpp"
 
@@ -36,6 +37,8 @@ int main(int argc, char** argv) {
   double start_timeout_s = 30.0;
   double max_wall_s = -1.0;
   bool ignore_sigterm = false;
+  double join_at_s = -1.0;
+  bool restarted = false;
   std::int64_t seed = -1;
   app.add_option("--scenario", scenario_path, "scenario file (Protobuf text format)")->required();
   app.add_option("--id", id, "this agent's id (must be listed in the scenario)")->required();
@@ -50,6 +53,10 @@ int main(int argc, char** argv) {
       ->check(CLI::NonNegativeNumber);
   app.add_option("--max-wall", max_wall_s,
                  "stop after this many wall seconds (default: 2x duration + 30 s)");
+  app.add_option("--join-at", join_at_s,
+                 "join late: wait silently until the swarm's clock reaches this simulated time");
+  app.add_flag("--restart", restarted,
+               "this is a restart: recover the flows this agent owned from its neighbours' copies");
   app.add_flag("--ignore-sigterm", ignore_sigterm,
                "(tests) ignore SIGTERM to exercise the launcher's SIGKILL")
       ->group("");
@@ -100,7 +107,11 @@ int main(int argc, char** argv) {
     dopt.interface = rc.interface;
     dopt.shared_memory = rc.shared_memory;
     dopt.max_agents = static_cast<int>(std::max<std::size_t>(rc.agents.size(), 16));
+    dopt.test_drop_data_percent = static_cast<std::uint8_t>(rc.faults.transport_drop_percent);
     DdsBus bus(dopt);
+    // Faults belong to links: every sample this agent receives passes the plan (seeded per link).
+    FaultyBus faulty(bus, LinkFaults(rc.faults, id, rc.seed), id);
+    bus.set_sample_callback([&faulty](const StateMessage& m, std::int64_t) { faulty.deliver(m); });
 
     AgentParams p;
     p.id = id;
@@ -122,7 +133,36 @@ int main(int argc, char** argv) {
       for (const auto& [a, b] : rc.law.topology.edges)
         p.expected_peers += (a == id || b == id) ? 1 : 0;
     }
-    AgentRuntime agent(p, bus);
+    std::set<AgentId> late;
+    for (const auto& j : rc.faults.late_join) late.insert(j.agent);
+    if (late.count(id) && join_at_s < 0) {
+      for (const auto& j : rc.faults.late_join)
+        if (j.agent == id) join_at_s = j.at_s;
+    }
+    const auto wall_start = Clock::now();
+    if (join_at_s >= 0) {
+      // Late join or restart: stay silent until the swarm's clock (the newest running peer's stamp)
+      // reaches join_at_s, then start on that clock without a barrier.
+      double swarm_t = -1.0;
+      const double wait_s = join_at_s / time_scale + start_timeout_s + 10.0;
+      while (!g_stop && swarm_t < join_at_s) {
+        for (const StateMessage& m : bus.latest(id))
+          if (m.phase == kRunning) swarm_t = std::max(swarm_t, m.stamp_s);
+        faulty.set_time(std::max(0.0, swarm_t));
+        if (std::chrono::duration<double>(Clock::now() - wall_start).count() > wait_s) {
+          logger->warn("join: the swarm's clock never reached {:.2f} s (at {:.2f} s), joining now",
+                       join_at_s, swarm_t);
+          break;
+        }
+        std::this_thread::sleep_for(std::chrono::milliseconds(2));
+      }
+      p.start_time_s = std::max(0.0, swarm_t);
+      p.expected_peers = 0;
+      p.recover_flows = restarted;
+      logger->info("{} at swarm time {:.3f} s", restarted ? "restarting" : "joining late",
+                   p.start_time_s);
+    }
+    AgentRuntime agent(p, faulty);
     agent.set_wall_clock(wall_now_ns);
     logger->info(
         "agent {} up: domain {}, {} mode, {} law, start ({:.3f}, {:.3f}, {:.3f}), time scale {}",
@@ -130,12 +170,18 @@ int main(int argc, char** argv) {
         to_string(rc.law.kind), p.p0_W.x(), p.p0_W.y(), p.p0_W.z(), time_scale);
 
     // Start barrier: kWaiting until every other agent is heard, then kReady; run once all are
-    // ready or running. Publishing every 5 ms meanwhile keeps the start skew to a few ms.
-    const auto wall_start = Clock::now();
-    const std::size_t expected = rc.agents.size() - 1;
+    // ready or running. Publishing every 5 ms meanwhile keeps the start skew to a few ms. The
+    // barrier reads the raw transport: faults apply to the run, which starts once everyone is up.
+    std::size_t expected = rc.agents.size() - 1 - (late.count(id) ? late.size() - 1 : late.size());
+    if (join_at_s >= 0) expected = 0;
     while (!g_stop) {
-      const bool all_heard = agent.heard_peers().size() >= expected;
-      const std::size_t ready = agent.ready_peers().size();
+      std::size_t heard = 0, ready = 0;
+      for (const StateMessage& m : bus.latest(id)) {
+        if (late.count(m.view.id)) continue;
+        ++heard;
+        ready += (m.phase == kReady || m.phase == kRunning) ? 1 : 0;
+      }
+      const bool all_heard = heard >= expected;
       if (all_heard && ready >= expected) break;
       if (Clock::now() - wall_start > std::chrono::duration<double>(start_timeout_s)) {
         logger->warn("start timeout: {} of {} peers ready, starting anyway", ready, expected);
@@ -156,6 +202,10 @@ int main(int argc, char** argv) {
     const double tick_wall_s = batch / (rc.physics_hz * time_scale);
     const auto t0 = Clock::now();
     std::uint64_t k = 0, ticks = 0, overruns = 0;
+    // Planned kills of this agent (not those before this process started: it is their restart).
+    std::vector<double> kills;
+    for (const auto& kill : rc.faults.kill)
+      if (kill.agent == id && kill.at_s >= agent.time_s()) kills.push_back(kill.at_s);
     while (!g_stop) {
       const auto due =
           t0 + std::chrono::duration_cast<Clock::duration>(
@@ -168,6 +218,16 @@ int main(int argc, char** argv) {
       }
       const BusCounters c = bus.counters();
       agent.set_counters(c.received, c.dropped + c.stale, overruns);
+      const FaultCounters fc = faulty.counters();
+      agent.set_fault_counters(fc.loss, fc.burst, fc.cut, fc.partition, fc.delayed);
+      faulty.set_time(agent.time_s());
+      for (double at : kills) {
+        if (agent.time_s() >= at) {
+          logger->warn("t={:.3f} s: planned kill: SIGKILL to myself", agent.time_s());
+          logger->flush();
+          std::raise(SIGKILL);
+        }
+      }
       for (int i = 0; i < batch; ++i, ++k) {
         for (const AgentEvent& e : agent.step()) {
           logger->info(
@@ -187,9 +247,10 @@ int main(int argc, char** argv) {
     logger->info(
         "stopping at t={:.3f} s: consensus ({:.6f}, {:.6f}, {:.6f}) position ({:.6f}, {:.6f}, "
         "{:.6f}); "
-        "published {}, received {}, dropped {}, stale {}, late ticks {} of {} ({} physics steps)",
+        "published {}, received {}, dropped {}, stale {}, late ticks {} of {} ({} physics steps); "
+        "flows recovered at restart {}",
         agent.time_s(), q.x(), q.y(), q.z(), x.x(), x.y(), x.z(), c.published, c.received,
-        c.dropped, c.stale, overruns, ticks, k);
+        c.dropped, c.stale, overruns, ticks, k, agent.recovered_flows());
     if (!run_dir.empty()) {
       // Machine-readable stats for bench/swarm_scale.sh.
       rusage ru{};

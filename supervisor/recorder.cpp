@@ -51,6 +51,7 @@ Recorder::Recorder(RunConfig rc, std::string run_dir, double time_scale)
             "spread_m,edge_list\n";
   events_ << "t_s,kind,agent,detail\n";
   for (const AgentSpec& a : rc_.agents) agents_[a.id];
+  timeline_ = rc_.faults.timeline();
   telemetry_ << std::setprecision(10);
   graph_ << std::setprecision(10);
 }
@@ -108,6 +109,8 @@ void Recorder::on_sample(const StateMessage& m, std::int64_t recv_ns) {
   const bool was_running_law = a.last.phase == kRunning && a.last.view.seq >= 1 && a.samples > 0;
   a.last = m;
   a.last_recv_ns = recv_ns;
+  fault_counts_[{id, m.incarnation}] = {m.fault_loss, m.fault_burst, m.fault_cut, m.fault_partition,
+                                        m.fault_delayed};
   ++a.samples;
   const double age_ms = m.wall_ns > 0 ? static_cast<double>(recv_ns - m.wall_ns) / 1e6 : 0.0;
   if (m.wall_ns > 0) ages_ms_.push_back(age_ms);
@@ -154,7 +157,18 @@ void Recorder::tick(std::int64_t now_ns) {
       a.present = false;
       ++departures_;
       event("depart", id, "silent past the neighbour timeout");
+      if (auto k = killed_at_.find(id); k != killed_at_.end()) {
+        detect_s_.push_back(t_s_ - k->second);
+        killed_at_.erase(k);
+      }
     }
+  }
+  // The fault plan's windows, as the swarm's clock passes them.
+  while (next_timeline_ < timeline_.size() && timeline_[next_timeline_].t_s <= t_s_) {
+    const FaultPlan::Event& e = timeline_[next_timeline_++];
+    event(e.kind, e.agent, e.detail);
+    ++fault_events_;
+    if (e.kind == "kill") killed_at_[e.agent] = e.t_s;
   }
   while (t_s_ >= next_snapshot_s_) {
     snapshot();
@@ -227,8 +241,10 @@ void Recorder::snapshot() {
 
   // Converged: every agent of the scenario has joined, the present ones agree (consensus states and
   // physical positions within tolerance of their mean), and this holds for hold_s.
-  const bool agree = n > 0 && joined >= rc_.agents.size() && g.disagreement_m() < rc_.tolerance_m &&
-                     g.spread_m() < rc_.tolerance_m;
+  // Not before the last planned fault is over (a kill's restart, a partition's heal, ...).
+  const bool agree = n > 0 && joined + rc_.faults.late_join.size() >= rc_.agents.size() &&
+                     t_s_ >= rc_.faults.last_fault_end_s() &&
+                     g.disagreement_m() < rc_.tolerance_m && g.spread_m() < rc_.tolerance_m;
   if (agree) {
     if (hold_start_s_ < 0.0) hold_start_s_ = t_s_;
     if (!converged_ && t_s_ - hold_start_s_ >= rc_.hold_s) {
@@ -328,6 +344,32 @@ std::string Recorder::finish(const std::string& end_reason, double wall_time_s) 
     s.set_lambda2_final(last_->lambda2());
     edges_of(*last_, s.mutable_edges_final());
   }
+  records::FaultSummary& fs = *s.mutable_faults();
+  for (const auto& [key, c] : fault_counts_) {
+    fs.set_loss(fs.loss() + static_cast<std::uint32_t>(c[0]));
+    fs.set_burst(fs.burst() + static_cast<std::uint32_t>(c[1]));
+    fs.set_cut(fs.cut() + static_cast<std::uint32_t>(c[2]));
+    fs.set_partition(fs.partition() + static_cast<std::uint32_t>(c[3]));
+    fs.set_delayed(fs.delayed() + static_cast<std::uint32_t>(c[4]));
+  }
+  fs.set_dropped(fs.loss() + fs.burst() + fs.cut() + fs.partition());
+  for (const auto& k : rc_.faults.kill) {
+    if (k.at_s <= t_s_) fs.set_kills(fs.kills() + 1);
+    if (k.restart_at_s > k.at_s && k.restart_at_s <= t_s_) fs.set_restarts(fs.restarts() + 1);
+  }
+  for (const auto& j : rc_.faults.late_join)
+    if (j.at_s <= t_s_) fs.set_late_joins(fs.late_joins() + 1);
+  fs.set_transport_drop_percent(rc_.faults.transport_drop_percent);
+  fs.set_events(fault_events_);
+  double detect = 0.0;
+  for (double d : detect_s_) detect += d;
+  s.set_detect_s(detect_s_.empty() ? -1.0 : detect / static_cast<double>(detect_s_.size()));
+  const double last_fault = rc_.faults.last_fault_end_s();
+  s.set_last_fault_end_s(last_fault);
+  s.set_reconverge_s(converged_ && last_fault > 0.0 ? std::max(0.0, converged_at_s_ - last_fault)
+                                                    : -1.0);
+  const double avg_norm = rc_.initial_average().norm();
+  s.set_average_relative_error(avg_norm > 0 ? s.average_drift_m() / avg_norm : s.average_drift_m());
   event("end", 0, end_reason);
 
   std::string json;
@@ -360,7 +402,18 @@ std::string Recorder::finish(const std::string& end_reason, double wall_time_s) 
   h << "messages: published " << msg.published() << ", received " << msg.received() << ", dropped "
     << msg.dropped() << ", gaps " << msg.seq_gaps() << ", age p50 " << fmt("%.3f", msg.age_p50_ms())
     << " ms p99 " << fmt("%.3f", msg.age_p99_ms()) << " ms\n";
-  h << "joins " << joins_ << ", departures " << departures_ << "\nrun directory: " << dir_ << "\n";
+  h << "joins " << joins_ << ", departures " << departures_ << "\n";
+  if (!rc_.faults.empty()) {
+    const records::FaultSummary& fsum = s.faults();
+    h << "faults: dropped " << fsum.dropped() << " (loss " << fsum.loss() << ", burst "
+      << fsum.burst() << ", cut " << fsum.cut() << ", partition " << fsum.partition()
+      << "), delayed " << fsum.delayed() << ", kills " << fsum.kills() << ", restarts "
+      << fsum.restarts() << ", transport drop " << fsum.transport_drop_percent() << " %\n";
+    h << "relative error of the agreed value " << fmt("%.3e", s.average_relative_error())
+      << ", detect " << fmt("%.2f", s.detect_s()) << " s, reconverge "
+      << fmt("%.2f", s.reconverge_s()) << " s\n";
+  }
+  h << "run directory: " << dir_ << "\n";
   return h.str();
 }
 

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <fstream>
 #include <map>
@@ -62,6 +63,13 @@ class Recorder {
   std::uint32_t joins_ = 0, departures_ = 0;
   double min_separation_ = 1e300;
   std::optional<records::GraphSnapshot> first_full_, last_;
+  std::vector<FaultPlan::Event> timeline_;
+  size_t next_timeline_ = 0;
+  std::map<AgentId, double> killed_at_;  // planned kill time, until the departure is seen
+  std::vector<double> detect_s_;
+  std::uint32_t fault_events_ = 0;
+  // Fault counters per agent incarnation (an incarnation's counters only grow).
+  std::map<std::pair<AgentId, std::int64_t>, std::array<std::uint64_t, 5>> fault_counts_;
   records::Summary summary_;
 };
 

@@ -1,5 +1,6 @@
 // swarm: launch a swarm of agent processes plus a supervisor (`swarm run`), or analyse a scenario's
 // initial graph without flying (`swarm inspect`).
+#include <sys/wait.h>
 #include <unistd.h>
 #include <CLI/CLI.hpp>
 
@@ -10,6 +11,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <map>
 #include <sstream>
 #include <thread>
 
@@ -151,6 +153,13 @@ struct RunOptions {
   bool quiet = false;
   bool stop_on_agent_exit = false;
   std::vector<unsigned> ignore_sigterm;  // (tests) agents started with --ignore-sigterm
+  // Fault shortcuts (added to the scenario's fault plan).
+  std::string law;
+  double loss = -1.0;
+  std::vector<std::string> cuts, partitions, kills;
+  std::string delay;
+  int transport_loss = -1;
+  int random_cuts = 0;
 };
 
 int run(const RunOptions& opt) {
@@ -165,8 +174,24 @@ int run(const RunOptions& opt) {
       throw ScenarioError("give a SCENARIO file, or --agents N for seeded random agents");
     }
     if (opt.agents == 0) throw ScenarioError("--agents: expected a count of at least 1");
-    rc = resolve_scenario(
-        opt.scenario.empty() ? random_scenario() : read_scenario_file(opt.scenario), o);
+    o.law = opt.law;
+    scenario::Scenario s =
+        opt.scenario.empty() ? random_scenario() : read_scenario_file(opt.scenario);
+    if (opt.loss >= 0) add_loss_shortcut(s, opt.loss);
+    for (const auto& c : opt.cuts) add_cut_shortcut(s, c);
+    for (const auto& p : opt.partitions) add_partition_shortcut(s, p);
+    for (const auto& k : opt.kills) add_kill_shortcut(s, k);
+    if (!opt.delay.empty()) add_delay_shortcut(s, opt.delay);
+    if (opt.transport_loss >= 0) {
+      s.mutable_faults()->set_transport_drop_percent(
+          static_cast<std::uint32_t>(opt.transport_loss));
+    }
+    if (opt.random_cuts > 0) {
+      const RunConfig first = resolve_scenario(s, o);  // agents, duration and seed for the draw
+      add_random_cuts(s, opt.random_cuts, static_cast<int>(first.agents.size()), first.duration_s,
+                      first.seed);
+    }
+    rc = resolve_scenario(s, o);
   } catch (const ScenarioError& e) {
     std::cerr << "swarm run: " << e.what() << "\n";
     return 2;
@@ -203,6 +228,29 @@ int run(const RunOptions& opt) {
   const std::string ts = std::to_string(opt.time_scale);
   const std::string bin = bin_dir().string();
   ProcessGroup procs;
+  const auto agent_args = [&](AgentId id, double join_at, bool restart) {
+    std::vector<std::string> args = {
+        bin + "/swarm-agent", "--scenario", scen,           "--id", std::to_string(id),
+        "--run-dir",          dir.string(), "--time-scale", ts};
+    if (join_at >= 0) {
+      args.push_back("--join-at");
+      args.push_back(std::to_string(join_at));
+    }
+    if (restart) args.push_back("--restart");
+    for (unsigned ign : opt.ignore_sigterm)
+      if (ign == id) args.push_back("--ignore-sigterm");
+    return args;
+  };
+  const auto agent_log = [&](AgentId id, int life) {
+    return (dir / ("agent-" + std::to_string(id) + (life ? "-restart" + std::to_string(life) : "") +
+                   ".out"))
+        .string();
+  };
+  // Planned restarts per agent, in order: a planned kill's process dies by SIGKILL and is replaced.
+  std::map<AgentId, std::vector<double>> restarts;
+  for (const auto& k : rc.faults.kill)
+    if (k.restart_at_s > k.at_s) restarts[k.agent].push_back(k.restart_at_s);
+  std::map<AgentId, int> lives;
   try {
     std::vector<std::string> sup = {bin + "/swarm-supervisor",
                                     "--scenario",
@@ -214,12 +262,7 @@ int run(const RunOptions& opt) {
     if (!opt.quiet) sup.push_back("--progress");
     procs.spawn("supervisor", 0, sup, opt.quiet ? (dir / "supervisor.out").string() : "");
     for (const AgentSpec& a : rc.agents) {
-      std::vector<std::string> args = {
-          bin + "/swarm-agent", "--scenario", scen,           "--id", std::to_string(a.id),
-          "--run-dir",          dir.string(), "--time-scale", ts};
-      for (unsigned id : opt.ignore_sigterm)
-        if (id == a.id) args.push_back("--ignore-sigterm");
-      procs.spawn("agent", a.id, args, (dir / ("agent-" + std::to_string(a.id) + ".out")).string());
+      procs.spawn("agent", a.id, agent_args(a.id, -1.0, false), agent_log(a.id, 0));
     }
   } catch (const std::exception& e) {
     std::cerr << "swarm run: " << e.what() << "\n";
@@ -242,8 +285,20 @@ int run(const RunOptions& opt) {
         supervisor_status = c.status;
       } else {
         std::cerr << "swarm run: agent " << c.id << " " << describe_status(c.status) << "\n";
-        if (opt.stop_on_agent_exit && why.empty())
+        auto& planned = restarts[c.id];
+        const int life = lives[c.id];
+        if (WIFSIGNALED(c.status) && WTERMSIG(c.status) == SIGKILL &&
+            life < static_cast<int>(planned.size())) {
+          ++lives[c.id];
+          std::cerr << "swarm run: restarting agent " << c.id << " (joins at t=" << planned[life]
+                    << " s)\n";
+          procs.spawn("agent", c.id, agent_args(c.id, planned[life], true),
+                      agent_log(c.id, life + 1));
+          std::ofstream(dir / "processes.csv", std::ios::app)
+              << "agent," << c.id << ',' << procs.children().back().pid << '\n';
+        } else if (opt.stop_on_agent_exit && why.empty()) {
           why = "agent " + std::to_string(c.id) + " exited";
+        }
       }
     }
     if (supervisor_status >= 0) break;
@@ -302,6 +357,41 @@ int main(int argc, char** argv) {
   run_cmd->add_flag("--quiet", ro.quiet, "no progress line");
   run_cmd->add_flag("--stop-on-agent-exit", ro.stop_on_agent_exit,
                     "end the run when any agent exits");
+  run_cmd->add_option("--law", ro.law,
+                      "update law: edge-flow or laplacian (overrides the scenario)");
+  run_cmd->add_option("--loss", ro.loss, "fault: drop each received message with this probability")
+      ->allow_extra_args(false)
+      ->group("Faults");
+  run_cmd
+      ->add_option("--cut", ro.cuts,
+                   "fault: cut link A-B over a window, e.g. 1-2@5:15 (repeatable)")
+      ->allow_extra_args(false)
+      ->group("Faults");
+  run_cmd
+      ->add_option("--partition", ro.partitions,
+                   "fault: cut group off from the rest, e.g. 1,2,3@5:15")
+      ->allow_extra_args(false)
+      ->group("Faults");
+  run_cmd
+      ->add_option("--delay", ro.delay,
+                   "fault: delay every message MEAN[:JITTER] seconds, e.g. 0.05:0.02")
+      ->allow_extra_args(false)
+      ->group("Faults");
+  run_cmd
+      ->add_option("--kill", ro.kills, "fault: SIGKILL agent ID at AT, restart at RESTART: 3@10:20")
+      ->allow_extra_args(false)
+      ->group("Faults");
+  run_cmd
+      ->add_option(
+          "--transport-loss", ro.transport_loss,
+          "fault below the application: Fast DDS test transport drops this % of data messages")
+      ->check(CLI::Range(0, 100))
+      ->allow_extra_args(false)
+      ->group("Faults");
+  run_cmd->add_option("--random-cuts", ro.random_cuts, "fault: N seeded random link cuts of 1-5 s")
+      ->check(CLI::Range(0, 10000))
+      ->allow_extra_args(false)
+      ->group("Faults");
   run_cmd
       ->add_option("--test-ignore-sigterm", ro.ignore_sigterm, "(tests) agents that ignore SIGTERM")
       ->group("");

@@ -22,6 +22,10 @@ std::string check_view(const NeighborView& v, double max_abs) {
     if (!std::isfinite(f.weight) || f.weight < 0.0 || f.weight > 1e9) return "flow weight invalid";
     if (f.peer == v.id) return "flow to itself";
   }
+  for (const FlowEntry& f : v.copies) {
+    if (bad_vec(f.flow)) return "copy not finite or absurd";
+    if (f.peer == v.id) return "copy of its own flow";
+  }
   return {};
 }
 
@@ -112,6 +116,7 @@ NeighborView UpdateLaw::message() const {
   v.q0 = q0_;
   v.total_weight = published_total_weight_;
   v.flows = owned_flows();
+  v.copies = held_copies();
   v.seq = ticks_;
   return v;
 }
@@ -142,6 +147,30 @@ std::vector<FlowEntry> EdgeFlowLaw::owned_flows() const {
   return out;
 }
 
+std::vector<FlowEntry> EdgeFlowLaw::held_copies() const {
+  std::vector<FlowEntry> out;
+  out.reserve(copies_.size());
+  for (const auto& [owner, c] : copies_) {
+    if (c.seen) out.push_back({owner, c.flow, 0.0, false});
+  }
+  return out;
+}
+
+int EdgeFlowLaw::recover(const std::vector<NeighborView>& neighbors) {
+  int n = 0;
+  for (const NeighborView& v : neighbors) {
+    if (!owns(v.id)) continue;
+    for (const FlowEntry& c : v.copies) {
+      if (c.peer != self_) continue;
+      FlowEntry& f = owned_[v.id];
+      f.peer = v.id;
+      f.flow = c.flow;
+      ++n;
+    }
+  }
+  return n;
+}
+
 void EdgeFlowLaw::integrate(const std::vector<NeighborView>& neighbors,
                             const std::vector<double>& coef) {
   const Vec3 q = state();  // every edge moves from the same snapshot of q_i (Jacobi)
@@ -160,7 +189,7 @@ void EdgeFlowLaw::integrate(const std::vector<NeighborView>& neighbors,
       heard[n.id] = true;
       // The neighbour owns the edge: a newer message replaces copy and prediction.
       Copy& c = copies_[n.id];
-      if (!c.seen || n.seq > c.seq) {
+      if (!c.seen || n.seq != c.seq) {  // a new message (or a restarted owner: seq from 1)
         for (const FlowEntry& e : n.flows) {
           if (e.peer == self_) c.flow = e.flow;
         }

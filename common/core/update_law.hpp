@@ -22,11 +22,12 @@ struct FlowEntry {
 // What an agent publishes and what its neighbours' laws read. Transport-independent.
 struct NeighborView {
   AgentId id = 0;
-  Vec3 q = Vec3::Zero();      // consensus state
-  Vec3 q0 = Vec3::Zero();     // the sender's initial state q_j(0)
-  double total_weight = 0.0;  // sum of the sender's link weights, as of its last tick
-  std::vector<FlowEntry> flows;
-  std::uint64_t seq = 0;  // sender's tick count: a new message has a larger one
+  Vec3 q = Vec3::Zero();          // consensus state
+  Vec3 q0 = Vec3::Zero();         // the sender's initial state q_j(0)
+  double total_weight = 0.0;      // sum of the sender's link weights, as of its last tick
+  std::vector<FlowEntry> flows;   // flows the sender owns (peer = the other end)
+  std::vector<FlowEntry> copies;  // copies the sender holds of flows owned by others (peer = owner)
+  std::uint64_t seq = 0;          // sender's tick count: a new message has a larger one
 };
 
 // Returns an empty string if a received view is usable, else why not (NaN, absurd magnitude, ...).
@@ -82,6 +83,10 @@ class UpdateLaw {
   double total_weight() const { return published_total_weight_; }
   const LawConfig& config() const { return cfg_; }
   virtual std::vector<FlowEntry> owned_flows() const { return {}; }
+  virtual std::vector<FlowEntry> held_copies() const { return {}; }
+  // After a restart: take back the flows this agent owned from its neighbours' copies, so that
+  // its state, and the swarm's total, are what they were. Returns how many flows were recovered.
+  virtual int recover(const std::vector<NeighborView>&) { return 0; }
 
  protected:
   // Move the state: `coef[k]` is c for neighbours[k] (0 when not linked).
@@ -124,6 +129,8 @@ class EdgeFlowLaw final : public UpdateLaw {
   EdgeFlowLaw(AgentId self, const Vec3& q0, LawConfig cfg) : UpdateLaw(self, q0, std::move(cfg)) {}
   Vec3 state() const override;
   std::vector<FlowEntry> owned_flows() const override;
+  std::vector<FlowEntry> held_copies() const override;
+  int recover(const std::vector<NeighborView>& neighbors) override;
   bool owns(AgentId peer) const { return self_ < peer; }
 
  private:

@@ -70,6 +70,11 @@ void AgentRuntime::publish(std::uint8_t phase) {
   m.received = received_;
   m.dropped = dropped_;
   m.overruns = overruns_;
+  m.fault_loss = faults_[0];
+  m.fault_burst = faults_[1];
+  m.fault_cut = faults_[2];
+  m.fault_partition = faults_[3];
+  m.fault_delayed = faults_[4];
   bus_.publish(m);
 }
 
@@ -95,10 +100,11 @@ void AgentRuntime::consensus_tick(std::vector<AgentEvent>& events) {
     views.push_back(m.view);
   }
   if (!started_) {
-    if (views.size() < p_.expected_peers && t < p_.start_grace_s) {
+    if (views.size() < p_.expected_peers && t < p_.start_time_s + p_.start_grace_s) {
       publish(kRunning);  // running, but the law waits for the whole initial graph
       return;
     }
+    if (p_.recover_flows) recovered_ = law_->recover(views);
     law_->observe(views);
     started_ = true;
   } else {

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <functional>
 #include <map>
@@ -34,6 +35,10 @@ struct AgentParams {
   // graph), or after start_grace_s when some never come (late join, dead peer).
   std::size_t expected_peers = 0;
   double start_grace_s = 1.0;
+  // A late joiner or restarted agent starts on the swarm's clock, not at 0.
+  double start_time_s = 0.0;
+  // Restarted: recover the flows it owned from the neighbours' copies before its first tick.
+  bool recover_flows = false;
 };
 
 // What happened in a step that the process should log (the runtime itself does no I/O).
@@ -55,7 +60,7 @@ class AgentRuntime {
   // Publish the current state (the process calls this while waiting for peers, with kWaiting).
   void publish(std::uint8_t phase);
 
-  double time_s() const { return static_cast<double>(steps_) / p_.physics_hz; }
+  double time_s() const { return p_.start_time_s + static_cast<double>(steps_) / p_.physics_hz; }
   const QuadState& quad() const { return quad_; }
   Vec3 consensus() const { return law_->state(); }
   Vec3 position() const;
@@ -70,6 +75,11 @@ class AgentRuntime {
   std::set<AgentId> ready_peers();
   // Stamps for publication: the process injects wall time and its counters.
   void set_wall_clock(std::function<std::int64_t()> f) { wall_clock_ = std::move(f); }
+  void set_fault_counters(std::uint64_t loss, std::uint64_t burst, std::uint64_t cut,
+                          std::uint64_t partition, std::uint64_t delayed) {
+    faults_ = {loss, burst, cut, partition, delayed};
+  }
+  int recovered_flows() const { return recovered_; }
   void set_counters(std::uint64_t received, std::uint64_t dropped, std::uint64_t overruns) {
     received_ = received;
     dropped_ = dropped;
@@ -101,6 +111,8 @@ class AgentRuntime {
   std::set<AgentId> live_;
   std::function<std::int64_t()> wall_clock_;
   std::uint64_t received_ = 0, dropped_ = 0, overruns_ = 0;
+  std::array<std::uint64_t, 5> faults_{};
+  int recovered_ = 0;
 };
 
 }  // namespace qswarm

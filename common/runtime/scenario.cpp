@@ -113,6 +113,15 @@ RunConfig resolve_scenario(scenario::Scenario s, const ScenarioOverrides& o) {
   if (o.duration_s >= 0) s.set_duration_s(o.duration_s);
   if (o.domain_id >= 0)
     s.mutable_transport()->set_domain_id(static_cast<std::uint32_t>(o.domain_id));
+  if (!o.law.empty()) {
+    if (o.law == "laplacian") {
+      s.set_law(scenario::LAPLACIAN);
+    } else if (o.law == "edge-flow" || o.law == "edge_flow") {
+      s.set_law(scenario::EDGE_FLOW);
+    } else {
+      fail("--law", "laplacian or edge-flow", o.law);
+    }
+  }
   if (o.agents >= 0) {
     s.clear_agents();
     s.mutable_random_agents()->set_count(static_cast<std::uint32_t>(o.agents));
@@ -267,6 +276,113 @@ RunConfig resolve_scenario(scenario::Scenario s, const ScenarioOverrides& o) {
   rc.neighbor_timeout_s = positive("transport.neighbor_timeout_s", t.has_neighbor_timeout_s(),
                                    t.neighbor_timeout_s(), 1.0);
 
+  // Faults.
+  const scenario::Faults& f = s.faults();
+  const auto agent_ok = [&](const std::string& field, std::uint32_t aid, bool zero_ok) {
+    if ((aid == 0 && !zero_ok) || (aid != 0 && !seen.count(aid))) {
+      fail(field, zero_ok ? "0 (any) or the id of a listed agent" : "the id of a listed agent",
+           std::to_string(aid));
+    }
+  };
+  const auto window = [&](const std::string& field, double start, double end) {
+    if (!std::isfinite(start) || start < 0.0) fail(field + ".start_s", "a time >= 0", num(start));
+    if (!std::isfinite(end) || (end != 0.0 && end <= start)) {
+      fail(field + ".end_s", "0 (never) or a time after start_s", num(end));
+    }
+  };
+  const auto prob = [&](const std::string& field, double p) {
+    if (!std::isfinite(p) || p < 0.0 || p > 1.0) fail(field, "a probability in [0, 1]", num(p));
+  };
+  for (int i = 0; i < f.loss_size(); ++i) {
+    const auto& ls = f.loss(i);
+    const std::string fld = "faults.loss[" + std::to_string(i) + "]";
+    prob(fld + ".probability", ls.probability());
+    agent_ok(fld + ".from", ls.from(), true);
+    agent_ok(fld + ".to", ls.to(), true);
+    window(fld, ls.start_s(), ls.end_s());
+    rc.faults.loss.push_back({ls.probability(), ls.from(), ls.to(), ls.start_s(), ls.end_s()});
+  }
+  for (int i = 0; i < f.burst_size(); ++i) {
+    const auto& b = f.burst(i);
+    const std::string fld = "faults.burst[" + std::to_string(i) + "]";
+    prob(fld + ".p_good_to_bad", b.p_good_to_bad());
+    prob(fld + ".p_bad_to_good", b.p_bad_to_good());
+    prob(fld + ".loss_good", b.loss_good());
+    prob(fld + ".loss_bad", b.loss_bad());
+    agent_ok(fld + ".from", b.from(), true);
+    agent_ok(fld + ".to", b.to(), true);
+    const double loss_bad = (b.loss_bad() == 0.0 && b.loss_good() == 0.0) ? 1.0 : b.loss_bad();
+    rc.faults.burst.push_back(
+        {b.p_good_to_bad(), b.p_bad_to_good(), b.loss_good(), loss_bad, b.from(), b.to()});
+  }
+  for (int i = 0; i < f.cut_size(); ++i) {
+    const auto& c = f.cut(i);
+    const std::string fld = "faults.cut[" + std::to_string(i) + "]";
+    agent_ok(fld + ".a", c.a(), false);
+    agent_ok(fld + ".b", c.b(), false);
+    if (c.a() == c.b()) fail(fld, "two different agents", std::to_string(c.a()));
+    window(fld, c.start_s(), c.end_s());
+    rc.faults.cut.push_back({c.a(), c.b(), c.start_s(), c.end_s(), c.directed()});
+  }
+  for (int i = 0; i < f.partition_size(); ++i) {
+    const auto& p = f.partition(i);
+    const std::string fld = "faults.partition[" + std::to_string(i) + "]";
+    if (p.group_size() == 0) fail(fld + ".group", "at least one agent id", "none");
+    for (int k = 0; k < p.group_size(); ++k) {
+      agent_ok(fld + ".group[" + std::to_string(k) + "]", p.group(k), false);
+    }
+    window(fld, p.start_s(), p.end_s());
+    rc.faults.partition.push_back({{p.group().begin(), p.group().end()}, p.start_s(), p.end_s()});
+  }
+  for (int i = 0; i < f.delay_size(); ++i) {
+    const auto& d = f.delay(i);
+    const std::string fld = "faults.delay[" + std::to_string(i) + "]";
+    if (!std::isfinite(d.mean_s()) || d.mean_s() < 0.0 || d.mean_s() > 60.0) {
+      fail(fld + ".mean_s", "a delay in [0, 60] s", num(d.mean_s()));
+    }
+    if (!std::isfinite(d.jitter_s()) || d.jitter_s() < 0.0 || d.jitter_s() > 60.0) {
+      fail(fld + ".jitter_s", "a jitter in [0, 60] s", num(d.jitter_s()));
+    }
+    agent_ok(fld + ".from", d.from(), true);
+    agent_ok(fld + ".to", d.to(), true);
+    rc.faults.delay.push_back({d.mean_s(), d.jitter_s(), d.from(), d.to()});
+  }
+  for (int i = 0; i < f.kill_size(); ++i) {
+    const auto& k = f.kill(i);
+    const std::string fld = "faults.kill[" + std::to_string(i) + "]";
+    agent_ok(fld + ".agent", k.agent(), false);
+    if (!std::isfinite(k.at_s()) || k.at_s() <= 0.0)
+      fail(fld + ".at_s", "a time > 0", num(k.at_s()));
+    if (!std::isfinite(k.restart_at_s()) ||
+        (k.restart_at_s() != 0.0 && k.restart_at_s() <= k.at_s())) {
+      fail(fld + ".restart_at_s", "0 (no restart) or a time after at_s", num(k.restart_at_s()));
+    }
+    for (const auto& prev : rc.faults.kill) {
+      const double prev_end = prev.restart_at_s > 0 ? prev.restart_at_s : 1e300;
+      if (prev.agent == k.agent() && k.at_s() < prev_end && k.at_s() + 1e-9 > prev.at_s) {
+        fail(fld + ".at_s", "a time after the agent's previous restart", num(k.at_s()));
+      }
+    }
+    rc.faults.kill.push_back({k.agent(), k.at_s(), k.restart_at_s()});
+  }
+  for (int i = 0; i < f.late_join_size(); ++i) {
+    const auto& j = f.late_join(i);
+    const std::string fld = "faults.late_join[" + std::to_string(i) + "]";
+    agent_ok(fld + ".agent", j.agent(), false);
+    if (!std::isfinite(j.at_s()) || j.at_s() <= 0.0)
+      fail(fld + ".at_s", "a time > 0", num(j.at_s()));
+    rc.faults.late_join.push_back({j.agent(), j.at_s()});
+  }
+  if (f.transport_drop_percent() > 100) {
+    fail("faults.transport_drop_percent", "0..100", std::to_string(f.transport_drop_percent()));
+  }
+  rc.faults.transport_drop_percent = f.transport_drop_percent();
+  if (rc.faults.transport_drop_percent > 0 && rc.shared_memory) {
+    fail("faults.transport_drop_percent",
+         "transport.shared_memory off (shared memory bypasses the test transport)",
+         "shared_memory on");
+  }
+
   // Write every default back so the run directory's scenario says exactly what ran.
   s.set_gain(rc.law.gain);
   s.set_duration_s(rc.duration_s);
@@ -283,6 +399,108 @@ RunConfig resolve_scenario(scenario::Scenario s, const ScenarioOverrides& o) {
   s.mutable_weight()->set_scale(rc.law.weight.scale);
   rc.resolved = s;
   return rc;
+}
+
+namespace {
+
+double parse_number(const std::string& flag, const std::string& text) {
+  try {
+    size_t used = 0;
+    const double v = std::stod(text, &used);
+    if (used != text.size() || !std::isfinite(v)) throw std::invalid_argument(text);
+    return v;
+  } catch (const std::exception&) {
+    throw ScenarioError(flag + " '" + text + "': expected a number");
+  }
+}
+
+// "T0:T1", or "T0" (until the end).
+std::pair<double, double> parse_window(const std::string& flag, const std::string& text) {
+  const auto colon = text.find(':');
+  if (colon == std::string::npos) return {parse_number(flag, text), 0.0};
+  return {parse_number(flag, text.substr(0, colon)), parse_number(flag, text.substr(colon + 1))};
+}
+
+std::pair<std::string, std::string> split_at(const std::string& flag, const std::string& spec,
+                                             const char* expected) {
+  const auto at = spec.find('@');
+  if (at == std::string::npos) throw ScenarioError(flag + " '" + spec + "': expected " + expected);
+  return {spec.substr(0, at), spec.substr(at + 1)};
+}
+
+std::uint32_t parse_id(const std::string& flag, const std::string& text) {
+  const double v = parse_number(flag, text);
+  if (v < 1 || v != std::floor(v) || v > 4e9) {
+    throw ScenarioError(flag + " '" + text + "': expected an agent id");
+  }
+  return static_cast<std::uint32_t>(v);
+}
+
+}  // namespace
+
+void add_loss_shortcut(scenario::Scenario& s, double p) {
+  if (!std::isfinite(p) || p < 0.0 || p > 1.0) {
+    throw ScenarioError("--loss " + num(p) + ": expected a probability in [0, 1]");
+  }
+  if (p > 0.0) s.mutable_faults()->add_loss()->set_probability(p);
+}
+
+void add_cut_shortcut(scenario::Scenario& s, const std::string& spec) {
+  const auto [link, win] = split_at("--cut", spec, "A-B@START:END, e.g. 1-2@5:15");
+  const auto dash = link.find('-');
+  if (dash == std::string::npos) {
+    throw ScenarioError("--cut '" + spec + "': expected A-B@START:END, e.g. 1-2@5:15");
+  }
+  auto* c = s.mutable_faults()->add_cut();
+  c->set_a(parse_id("--cut", link.substr(0, dash)));
+  c->set_b(parse_id("--cut", link.substr(dash + 1)));
+  const auto [t0, t1] = parse_window("--cut", win);
+  c->set_start_s(t0);
+  c->set_end_s(t1);
+}
+
+void add_partition_shortcut(scenario::Scenario& s, const std::string& spec) {
+  const auto [ids, win] = split_at("--partition", spec, "ID,ID,...@START:END, e.g. 1,2@5:15");
+  auto* p = s.mutable_faults()->add_partition();
+  std::stringstream in(ids);
+  std::string one;
+  while (std::getline(in, one, ',')) p->add_group(parse_id("--partition", one));
+  const auto [t0, t1] = parse_window("--partition", win);
+  p->set_start_s(t0);
+  p->set_end_s(t1);
+}
+
+void add_delay_shortcut(scenario::Scenario& s, const std::string& spec) {
+  const auto [mean, jitter] = parse_window("--delay", spec);
+  auto* d = s.mutable_faults()->add_delay();
+  d->set_mean_s(mean);
+  d->set_jitter_s(jitter);
+}
+
+void add_kill_shortcut(scenario::Scenario& s, const std::string& spec) {
+  const auto [who, win] = split_at("--kill", spec, "ID@AT[:RESTART], e.g. 3@10:20");
+  auto* k = s.mutable_faults()->add_kill();
+  k->set_agent(parse_id("--kill", who));
+  const auto [t0, t1] = parse_window("--kill", win);
+  k->set_at_s(t0);
+  k->set_restart_at_s(t1);
+}
+
+void add_random_cuts(scenario::Scenario& s, int n, int agents, double end_s, std::uint64_t seed) {
+  std::mt19937_64 rng(link_seed(seed, 0xC0, 0xC7));
+  std::uniform_int_distribution<int> pick(1, std::max(2, agents));
+  std::uniform_real_distribution<double> start(2.0, std::max(3.0, end_s - 6.0)), len(1.0, 5.0);
+  for (int i = 0; i < n; ++i) {
+    const int a = pick(rng);
+    int b = pick(rng);
+    while (b == a) b = pick(rng);
+    auto* c = s.mutable_faults()->add_cut();
+    c->set_a(static_cast<std::uint32_t>(a));
+    c->set_b(static_cast<std::uint32_t>(b));
+    const double t0 = start(rng);
+    c->set_start_s(t0);
+    c->set_end_s(t0 + len(rng));
+  }
 }
 
 RunConfig load_scenario(const std::string& path, const ScenarioOverrides& o) {

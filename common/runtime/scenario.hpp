@@ -8,6 +8,7 @@
 #include "common/core/airframe.hpp"
 #include "common/core/tracking_controller.hpp"
 #include "common/core/update_law.hpp"
+#include "common/runtime/faults.hpp"
 #include "common/transport/state_message.hpp"
 #include "proto/scenario.pb.h"
 
@@ -45,6 +46,7 @@ struct RunConfig {
   std::string interface = "127.0.0.1";
   bool shared_memory = false;
   double neighbor_timeout_s = 1.0;
+  FaultPlan faults;
   scenario::Scenario resolved;  // the scenario as run (agents listed, defaults explicit)
 
   Vec3 initial_average() const;
@@ -54,6 +56,7 @@ struct RunConfig {
 // Overrides from the command line, applied before validation.
 struct ScenarioOverrides {
   int agents = -1;         // --agents N: replace the agent list with N seeded random agents
+  std::string law;         // --law laplacian|edge-flow
   std::int64_t seed = -1;  // --seed S
   double duration_s = -1;  // --duration S
   int domain_id = -1;      // --domain D
@@ -64,6 +67,18 @@ scenario::Scenario read_scenario_file(const std::string& path);
 RunConfig resolve_scenario(scenario::Scenario s, const ScenarioOverrides& o = {});
 RunConfig load_scenario(const std::string& path, const ScenarioOverrides& o = {});
 std::string to_text(const scenario::Scenario& s);
+
+// CLI shortcuts for the common faults; each throws ScenarioError naming the flag. They add to the
+// scenario's fault plan.
+void add_loss_shortcut(scenario::Scenario& s, double probability);      // --loss 0.3
+void add_cut_shortcut(scenario::Scenario& s, const std::string& spec);  // --cut 1-2@5:15
+void add_partition_shortcut(scenario::Scenario& s,
+                            const std::string& spec);                     // --partition 1,2@5:15
+void add_delay_shortcut(scenario::Scenario& s, const std::string& spec);  // --delay 0.05:0.02
+void add_kill_shortcut(scenario::Scenario& s, const std::string& spec);   // --kill 3@10:20
+// --random-cuts N: N cuts of random links (ids 1..agents) lasting 1-5 s inside [2 s, end_s),
+// seeded.
+void add_random_cuts(scenario::Scenario& s, int n, int agents, double end_s, std::uint64_t seed);
 
 // n agents uniformly in a cube of side box_m, ids 1..n, from the seed (same as the in-process
 // swarm).

@@ -54,6 +54,11 @@ void to_idl(const StateMessage& m, qswarm_msgs::AgentState& s) {
   s.received(m.received);
   s.dropped(m.dropped);
   s.overruns(m.overruns);
+  s.fault_loss(m.fault_loss);
+  s.fault_burst(m.fault_burst);
+  s.fault_cut(m.fault_cut);
+  s.fault_partition(m.fault_partition);
+  s.fault_delayed(m.fault_delayed);
   s.links().clear();
   for (const auto& [peer, w] : m.links) {
     if (s.links().size() >= 256) break;
@@ -71,6 +76,14 @@ void to_idl(const StateMessage& m, qswarm_msgs::AgentState& s) {
     e.weight(f.weight);
     e.active(f.active);
     s.flows().push_back(e);
+  }
+  s.copies().clear();
+  for (const FlowEntry& f : m.view.copies) {
+    if (s.copies().size() >= 256) break;
+    qswarm_msgs::FlowEntry e;
+    e.peer(f.peer);
+    e.flow(arr(f.flow));
+    s.copies().push_back(e);
   }
 }
 
@@ -95,7 +108,13 @@ StateMessage from_idl(const qswarm_msgs::AgentState& s) {
   m.received = s.received();
   m.dropped = s.dropped();
   m.overruns = s.overruns();
+  m.fault_loss = s.fault_loss();
+  m.fault_burst = s.fault_burst();
+  m.fault_cut = s.fault_cut();
+  m.fault_partition = s.fault_partition();
+  m.fault_delayed = s.fault_delayed();
   for (const auto& e : s.links()) m.links.emplace_back(e.peer(), e.weight());
+  for (const auto& e : s.copies()) m.view.copies.push_back({e.peer(), vec(e.flow()), 0.0, false});
   for (const auto& e : s.flows())
     m.view.flows.push_back({e.peer(), vec(e.flow()), e.weight(), e.active()});
   return m;

@@ -31,7 +31,10 @@ struct StateMessage {
   std::uint8_t phase = 0;        // see Phase
   std::uint64_t received = 0;    // samples the sender accepted
   std::uint64_t dropped = 0;     // samples the sender rejected
-  std::uint64_t overruns = 0;    // the sender's late physics steps
+  std::uint64_t overruns = 0;    // the sender's late ticks
+  // Faults injected in the sender's receive path (this incarnation).
+  std::uint64_t fault_loss = 0, fault_burst = 0, fault_cut = 0, fault_partition = 0;
+  std::uint64_t fault_delayed = 0;
 };
 
 // Start barrier: an agent is kWaiting until it has heard every expected peer, then kReady; it runs
