@@ -40,6 +40,7 @@ int main(int argc, char** argv) {
   double join_at_s = -1.0;
   bool restarted = false;
   std::int64_t seed = -1;
+  std::string interface;
   app.add_option("--scenario", scenario_path, "scenario file (Protobuf text format)")->required();
   app.add_option("--id", id, "this agent's id (must be listed in the scenario)")->required();
   app.add_option("--run-dir", run_dir, "directory for this agent's log");
@@ -47,6 +48,8 @@ int main(int argc, char** argv) {
       ->check(CLI::PositiveNumber);
   app.add_option("--domain", domain, "DDS domain id (overrides the scenario)")
       ->check(CLI::Range(0, 232));
+  app.add_option("--interface", interface,
+                 "IPv4 address DDS binds to (overrides the scenario; e.g. a test host's address)");
   app.add_option("--seed", seed, "run seed (overrides the scenario)");
   app.add_option("--start-timeout", start_timeout_s,
                  "wall seconds to wait for all peers before starting")
@@ -89,7 +92,7 @@ int main(int argc, char** argv) {
   sinks.push_back(console);
   if (!run_dir.empty()) {
     sinks.push_back(std::make_shared<spdlog::sinks::basic_file_sink_mt>(
-        run_dir + "/agent-" + std::to_string(id) + ".log", true));
+        run_dir + "/agent-" + std::to_string(id) + ".log", false));  // append: a restart adds to it
   }
   auto logger =
       std::make_shared<spdlog::logger>("agent-" + std::to_string(id), sinks.begin(), sinks.end());
@@ -104,7 +107,7 @@ int main(int argc, char** argv) {
     DdsOptions dopt;
     dopt.domain_id = rc.domain_id;
     dopt.participant_name = "swarm-agent-" + std::to_string(id);
-    dopt.interface = rc.interface;
+    dopt.interface = interface.empty() ? rc.interface : interface;
     dopt.shared_memory = rc.shared_memory;
     dopt.max_agents = static_cast<int>(std::max<std::size_t>(rc.agents.size(), 16));
     dopt.test_drop_data_percent = static_cast<std::uint8_t>(rc.faults.transport_drop_percent);

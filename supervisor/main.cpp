@@ -28,6 +28,7 @@ int main(int argc, char** argv) {
   double time_scale = 1.0;
   int domain = -1;
   std::int64_t seed = -1;
+  std::string interface;
   bool progress = false;
   double start_timeout_s = 30.0;
   app.add_option("--scenario", scenario_path, "scenario file")->required();
@@ -36,6 +37,8 @@ int main(int argc, char** argv) {
       ->check(CLI::PositiveNumber);
   app.add_option("--domain", domain, "DDS domain id (overrides the scenario)")
       ->check(CLI::Range(0, 232));
+  app.add_option("--interface", interface,
+                 "IPv4 address DDS binds to (overrides the scenario; e.g. a test host's address)");
   app.add_option("--seed", seed, "run seed (overrides the scenario)");
   app.add_option("--start-timeout", start_timeout_s, "wall seconds to wait for the first agent");
   app.add_flag("--progress", progress, "print a live progress line");
@@ -70,7 +73,7 @@ int main(int argc, char** argv) {
     DdsOptions dopt;
     dopt.domain_id = rc.domain_id;
     dopt.participant_name = "swarm-supervisor";
-    dopt.interface = rc.interface;
+    dopt.interface = interface.empty() ? rc.interface : interface;
     dopt.shared_memory = rc.shared_memory;
     dopt.max_agents = static_cast<int>(std::max<std::size_t>(rc.agents.size(), 16));
     dopt.publish = false;

@@ -156,19 +156,22 @@ std::vector<FlowEntry> EdgeFlowLaw::held_copies() const {
   return out;
 }
 
-int EdgeFlowLaw::recover(const std::vector<NeighborView>& neighbors) {
-  int n = 0;
-  for (const NeighborView& v : neighbors) {
-    if (!owns(v.id)) continue;
-    for (const FlowEntry& c : v.copies) {
-      if (c.peer != self_) continue;
-      FlowEntry& f = owned_[v.id];
-      f.peer = v.id;
-      f.flow = c.flow;
-      ++n;
-    }
+void EdgeFlowLaw::adopt(const NeighborView& v) {
+  if (!adopted_.insert(v.id).second) return;
+  for (const FlowEntry& c : v.copies) {
+    if (c.peer != self_) continue;
+    FlowEntry& f = owned_[v.id];
+    f.peer = v.id;
+    f.flow = c.flow;
+    ++recovered_;
   }
-  return n;
+}
+
+int EdgeFlowLaw::recover(const std::vector<NeighborView>& neighbors) {
+  recovering_ = true;
+  for (const NeighborView& v : neighbors)
+    if (owns(v.id)) adopt(v);
+  return recovered_;
 }
 
 void EdgeFlowLaw::integrate(const std::vector<NeighborView>& neighbors,
@@ -179,6 +182,7 @@ void EdgeFlowLaw::integrate(const std::vector<NeighborView>& neighbors,
   for (size_t k = 0; k < neighbors.size(); ++k) {
     const NeighborView& n = neighbors[k];
     if (owns(n.id)) {
+      if (recovering_) adopt(n);  // before any increment on this edge in this life
       if (coef[k] <= 0.0) continue;
       FlowEntry& f = owned_[n.id];
       f.peer = n.id;

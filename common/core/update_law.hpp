@@ -3,6 +3,7 @@
 #include <cstdint>
 #include <map>
 #include <memory>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -86,7 +87,9 @@ class UpdateLaw {
   virtual std::vector<FlowEntry> held_copies() const { return {}; }
   // After a restart: take back the flows this agent owned from its neighbours' copies, so that
   // its state, and the swarm's total, are what they were. Returns how many flows were recovered.
+  // Recovery continues lazily: an owned neighbour first heard later is recovered then.
   virtual int recover(const std::vector<NeighborView>&) { return 0; }
+  virtual int recovered_count() const { return 0; }
 
  protected:
   // Move the state: `coef[k]` is c for neighbours[k] (0 when not linked).
@@ -131,6 +134,7 @@ class EdgeFlowLaw final : public UpdateLaw {
   std::vector<FlowEntry> owned_flows() const override;
   std::vector<FlowEntry> held_copies() const override;
   int recover(const std::vector<NeighborView>& neighbors) override;
+  int recovered_count() const override { return recovered_; }
   bool owns(AgentId peer) const { return self_ < peer; }
 
  private:
@@ -144,6 +148,10 @@ class EdgeFlowLaw final : public UpdateLaw {
   };
   std::map<AgentId, FlowEntry> owned_;  // edges this agent owns (peer id > self)
   std::map<AgentId, Copy> copies_;      // flows neighbours own toward us
+  bool recovering_ = false;             // restarted: adopt each owned flow from its first view
+  std::set<AgentId> adopted_;
+  int recovered_ = 0;
+  void adopt(const NeighborView& v);
 };
 
 }  // namespace qswarm

@@ -104,7 +104,7 @@ void AgentRuntime::consensus_tick(std::vector<AgentEvent>& events) {
       publish(kRunning);  // running, but the law waits for the whole initial graph
       return;
     }
-    if (p_.recover_flows) recovered_ = law_->recover(views);
+    if (p_.recover_flows) law_->recover(views);
     law_->observe(views);
     started_ = true;
   } else {

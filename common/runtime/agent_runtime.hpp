@@ -79,7 +79,7 @@ class AgentRuntime {
                           std::uint64_t partition, std::uint64_t delayed) {
     faults_ = {loss, burst, cut, partition, delayed};
   }
-  int recovered_flows() const { return recovered_; }
+  int recovered_flows() const { return law_->recovered_count(); }
   void set_counters(std::uint64_t received, std::uint64_t dropped, std::uint64_t overruns) {
     received_ = received;
     dropped_ = dropped;
@@ -112,7 +112,6 @@ class AgentRuntime {
   std::function<std::int64_t()> wall_clock_;
   std::uint64_t received_ = 0, dropped_ = 0, overruns_ = 0;
   std::array<std::uint64_t, 5> faults_{};
-  int recovered_ = 0;
 };
 
 }  // namespace qswarm

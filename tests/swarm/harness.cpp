@@ -26,6 +26,10 @@ std::filesystem::path fresh_dir(const std::string& name) {
   return p;
 }
 
+std::filesystem::path fresh_dir_path(const std::string& name) {
+  return std::filesystem::path(QSWARM_TEST_RUNS_DIR) / name;
+}
+
 Child::Child(const std::vector<std::string>& argv, const std::filesystem::path& log) : log_(log) {
   std::filesystem::create_directories(log.parent_path());
   pid_ = fork();

@@ -20,6 +20,8 @@ std::string bin(const std::string& name);
 std::string scenario(const std::string& name);
 // A fresh directory for a test's run (removed first if present).
 std::filesystem::path fresh_dir(const std::string& name);
+// The same path, without clearing it.
+std::filesystem::path fresh_dir_path(const std::string& name);
 
 struct Result {
   int code = -1;       // exit code, or 128 + signal

@@ -203,6 +203,12 @@ TEST(SwarmRun, MalformedScenariosExit2NamingTheProblem) {
       {agents + "mode: QUADCOPTER\nrates { physics_hz: 100 }\n", "rates.physics_hz"},
       {agents + "law: GOSSIP\n", "GOSSIP"},
       {"", "agents"},
+      {agents + "faults { loss { probability: 1.5 } }\n", "faults.loss[0].probability"},
+      {agents + "faults { cut { a: 1 b: 7 start_s: 1 end_s: 2 } }\n", "faults.cut[0].b"},
+      {agents + "faults { partition { group: 1 start_s: 5 end_s: 3 } }\n",
+       "faults.partition[0].end_s"},
+      {agents + "faults { kill { agent: 2 at_s: 5 restart_at_s: 4 } }\n",
+       "faults.kill[0].restart_at_s"},
   };
   int k = 0;
   for (const Case& c : cases) {
@@ -224,6 +230,12 @@ TEST(SwarmRun, MalformedScenariosExit2NamingTheProblem) {
   EXPECT_EQ(none.code, 2);
   EXPECT_NE(none.output.find("--agents"), std::string::npos) << none.output;
   EXPECT_EQ(run({bin("swarm"), "run", "/nonexistent.txtpb"}).code, 2);
+  const Result bad_cut = run({bin("swarm"), "run", scenario("demo"), "--cut", "1to2@5:15"});
+  EXPECT_EQ(bad_cut.code, 2);
+  EXPECT_NE(bad_cut.output.find("--cut '1to2@5:15': expected A-B@START:END"), std::string::npos)
+      << bad_cut.output;
+  EXPECT_EQ(run({bin("swarm"), "run", scenario("demo"), "--loss", "2"}).code, 2);
+  EXPECT_EQ(run({bin("swarm"), "run", scenario("demo"), "--law", "gossip"}).code, 2);
   const Result wrong_id = run({bin("swarm-agent"), "--scenario", scenario("demo"), "--id", "77"});
   EXPECT_EQ(wrong_id.code, 2);
   EXPECT_NE(wrong_id.output.find("--id"), std::string::npos) << wrong_id.output;
