@@ -388,7 +388,9 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0, 100))
       ->allow_extra_args(false)
       ->group("Faults");
-  run_cmd->add_option("--random-cuts", ro.random_cuts, "fault: N seeded random link cuts of 1-5 s")
+  run_cmd
+      ->add_option("--random-cuts", ro.random_cuts,
+                   "fault: N seeded random link cuts of 1-5 s, in the first 75% of the run")
       ->check(CLI::Range(0, 10000))
       ->allow_extra_args(false)
       ->group("Faults");

@@ -489,7 +489,8 @@ void add_kill_shortcut(scenario::Scenario& s, const std::string& spec) {
 void add_random_cuts(scenario::Scenario& s, int n, int agents, double end_s, std::uint64_t seed) {
   std::mt19937_64 rng(link_seed(seed, 0xC0, 0xC7));
   std::uniform_int_distribution<int> pick(1, std::max(2, agents));
-  std::uniform_real_distribution<double> start(2.0, std::max(3.0, end_s - 6.0)), len(1.0, 5.0);
+  std::uniform_real_distribution<double> start(2.0, std::max(3.0, 0.75 * end_s - 5.0)),
+      len(1.0, 5.0);
   for (int i = 0; i < n; ++i) {
     const int a = pick(rng);
     int b = pick(rng);

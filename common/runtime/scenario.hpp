@@ -76,8 +76,8 @@ void add_partition_shortcut(scenario::Scenario& s,
                             const std::string& spec);                     // --partition 1,2@5:15
 void add_delay_shortcut(scenario::Scenario& s, const std::string& spec);  // --delay 0.05:0.02
 void add_kill_shortcut(scenario::Scenario& s, const std::string& spec);   // --kill 3@10:20
-// --random-cuts N: N cuts of random links (ids 1..agents) lasting 1-5 s inside [2 s, end_s),
-// seeded.
+// --random-cuts N: N cuts of random links (ids 1..agents) lasting 1-5 s, starting in [2 s, 75% of
+// end_s) so that the swarm has the rest of the run to agree again; seeded.
 void add_random_cuts(scenario::Scenario& s, int n, int agents, double end_s, std::uint64_t seed);
 
 // n agents uniformly in a cube of side box_m, ids 1..n, from the seed (same as the in-process

@@ -115,6 +115,29 @@ TEST(Faults, KilledAndRestartedAgentRejoinsWithoutMovingTheAgreedValue) {
   EXPECT_NE(log.find("flows recovered at restart 3"), std::string::npos) << log;
 }
 
+TEST(Faults, LateJoinerBringsItsStartIntoTheAverage) {
+  // Agent 6 joins at t = 3 s (silent until then): the others agree among themselves first, then
+  // everyone meets at the average of all six starts.
+  const auto dir = fresh_dir("late-join");
+  std::filesystem::create_directories(dir);
+  const auto scen = dir / "late.txtpb";
+  std::ofstream(scen) << read_file(scenario("faults_six"))
+                      << "faults { late_join { agent: 6 at_s: 3 } }\n";
+  const Result r = run({bin("swarm"), "run", scen.string(), "--out", (dir / "run").string(),
+                        "--domain", "86", "--time-scale", "4", "--quiet"},
+                       300.0);
+  ASSERT_EQ(r.code, 0) << r.output;
+  const records::Summary s = read_summary(dir / "run");
+  EXPECT_TRUE(s.converged());
+  EXPECT_LT(s.average_relative_error(), 1e-9);
+  EXPECT_EQ(s.faults().late_joins(), 1u);
+  bool joined_late = false;
+  for (const auto& row : read_csv(dir / "run" / "events.csv"))
+    if (row.at("kind") == "join" && row.at("agent") == "6")
+      joined_late = std::stod(row.at("t_s")) >= 2.9;
+  EXPECT_TRUE(joined_late);
+}
+
 TEST(Faults, LossBelowTheApplicationThroughFastDdsTestTransport) {
   // 30% of data messages dropped by Fast DDS's test transport on every sender (data-sharing and
   // shared memory are off, so nothing bypasses it); the app-level fault filter injects nothing.

@@ -1,0 +1,36 @@
+#!/usr/bin/env bash
+# Soak: 16 agent processes for 5 minutes (real time) under 30% message loss, 24 random link cuts
+# and two kill/restart cycles. Passes when the swarm ends converged with the agreed value within
+# 1e-6 m of the initial average, no process crashed (only the two planned SIGKILLs) or outlived
+# the run, and the run record is complete.   Usage: tools/soak.sh [run-dir]
+set -euo pipefail
+cd "$(dirname "$0")/.."
+tools/setup.sh build >/dev/null
+DIR="${1:-build/soak-$(date +%Y%m%d-%H%M%S)}"
+rm -rf "$DIR"
+set +e
+build/bin/swarm run scenarios/soak.txtpb --out "$DIR" --domain 120 --time-scale 1 \
+  --loss 0.3 --random-cuts 24 --kill 5@60:90 --kill 11@180:210 2>&1 | tee "$DIR.log"
+code=${PIPESTATUS[0]}
+set -e
+fail=0
+check() { if eval "$2"; then echo "soak: ok   - $1"; else echo "soak: FAIL - $1"; fail=1; fi; }
+check "swarm run exited 0 (converged)" '[[ $code -eq 0 ]]'
+for f in summary.json telemetry.csv graph.csv events.csv records.pb scenario.txtpb processes.csv; do
+  check "run record has $f" '[[ -s $DIR/$f ]]'
+done
+check "events.csv ends the run" 'grep -q ",end," "$DIR/events.csv"'
+drift=$(grep -o '"average_drift_m": [0-9.e+-]*' "$DIR/summary.json" | awk '{print $2}')
+check "agreed value within 1e-6 m of the initial average (drift $drift m)" "awk -v d=$drift 'BEGIN{exit !(d < 1e-6)}'"
+kills=$(grep -c "killed by signal Killed" "$DIR.log" || true)
+check "exactly the two planned SIGKILLs ($kills)" '[[ $kills -eq 2 ]]'
+check "two restarts" '[[ $(grep -c "restarting agent" "$DIR.log") -eq 2 ]]'
+check "no other abnormal exit" '! grep -E "agent [0-9]+ (killed by signal [^K]|exited with code [1-9])" "$DIR.log"'
+orphans=0
+while IFS=, read -r role id pid; do
+  [[ $role == role ]] && continue
+  if [[ -e /proc/$pid ]] && ! grep -q '^State:.*Z' "/proc/$pid/status" 2>/dev/null; then orphans=$((orphans + 1)); fi
+done < "$DIR/processes.csv"
+check "no orphaned process ($orphans alive)" '[[ $orphans -eq 0 ]]'
+grep -E '"(converged|convergence_time_s|average_drift_m|average_relative_error|detect_s|reconverge_s|loss|cut|kills|restarts|dropped)"' "$DIR/summary.json" | tr -d ' ,' | paste -sd' '
+exit $fail
