@@ -16,6 +16,7 @@
 
 #include "common/runtime/agent_runtime.hpp"
 #include "common/runtime/faults.hpp"
+#include "common/runtime/process_setup.hpp"
 #include "common/runtime/scenario.hpp"
 #include "common/transport/dds_bus.hpp"
 
@@ -39,6 +40,7 @@ int main(int argc, char** argv) {
   bool ignore_sigterm = false;
   double join_at_s = -1.0;
   bool restarted = false;
+  bool wait_supervisor = false;
   std::int64_t seed = -1;
   std::string interface;
   app.add_option("--scenario", scenario_path, "scenario file (Protobuf text format)")->required();
@@ -60,6 +62,8 @@ int main(int argc, char** argv) {
                  "join late: wait silently until the swarm's clock reaches this simulated time");
   app.add_flag("--restart", restarted,
                "this is a restart: recover the flows this agent owned from its neighbours' copies");
+  app.add_flag("--wait-supervisor", wait_supervisor,
+               "start only once a supervisor's reader has matched this agent's writer");
   app.add_flag("--ignore-sigterm", ignore_sigterm,
                "(tests) ignore SIGTERM to exercise the launcher's SIGKILL")
       ->group("");
@@ -69,16 +73,10 @@ int main(int argc, char** argv) {
     return app.exit(e) == 0 ? 0 : 2;
   }
 
-  RunConfig rc;
-  try {
-    ScenarioOverrides o;
-    o.domain_id = domain;
-    o.seed = seed;
-    rc = load_scenario(scenario_path, o);
-  } catch (const ScenarioError& e) {
-    std::fprintf(stderr, "swarm-agent: %s\n", e.what());
-    return 2;
-  }
+  const std::optional<RunConfig> loaded =
+      load_for_process("swarm-agent", scenario_path, domain, seed);
+  if (!loaded) return 2;
+  const RunConfig& rc = *loaded;
   const AgentSpec* spec = rc.agent(id);
   if (!spec) {
     std::fprintf(stderr, "swarm-agent: --id %u: expected the id of an agent listed in %s\n", id,
@@ -104,38 +102,12 @@ int main(int argc, char** argv) {
   std::signal(SIGTERM, ignore_sigterm ? SIG_IGN : on_signal);
 
   try {
-    DdsOptions dopt;
-    dopt.domain_id = rc.domain_id;
-    dopt.participant_name = "swarm-agent-" + std::to_string(id);
-    dopt.interface = interface.empty() ? rc.interface : interface;
-    dopt.shared_memory = rc.shared_memory;
-    dopt.max_agents = static_cast<int>(std::max<std::size_t>(rc.agents.size(), 16));
-    dopt.test_drop_data_percent = static_cast<std::uint8_t>(rc.faults.transport_drop_percent);
-    DdsBus bus(dopt);
+    DdsBus bus(dds_options(rc, "swarm-agent-" + std::to_string(id), interface));
     // Faults belong to links: every sample this agent receives passes the plan (seeded per link).
     FaultyBus faulty(bus, LinkFaults(rc.faults, id, rc.seed), id);
     bus.set_sample_callback([&faulty](const StateMessage& m, std::int64_t) { faulty.deliver(m); });
 
-    AgentParams p;
-    p.id = id;
-    p.p0_W = spec->position_W;
-    p.yaw0_rad = spec->yaw_rad;
-    p.mode = rc.mode;
-    p.law = rc.law;
-    p.physics_hz = rc.physics_hz;
-    p.consensus_hz = rc.consensus_hz;
-    p.airframe = rc.airframe;
-    p.gains = rc.gains;
-    p.reference_speed_mps = rc.reference_speed_mps;
-    p.reference_accel_mps2 = rc.reference_accel_mps2;
-    p.neighbor_timeout_s = rc.neighbor_timeout_s;
-    p.incarnation = wall_now_ns();
-    p.expected_peers = rc.agents.size() - 1;
-    if (rc.law.topology.policy == TopologyPolicy::kFixed) {
-      p.expected_peers = 0;  // only its listed neighbours count
-      for (const auto& [a, b] : rc.law.topology.edges)
-        p.expected_peers += (a == id || b == id) ? 1 : 0;
-    }
+    AgentParams p = make_agent_params(rc, *spec);
     std::set<AgentId> late;
     for (const auto& j : rc.faults.late_join) late.insert(j.agent);
     if (late.count(id) && join_at_s < 0) {
@@ -184,7 +156,11 @@ int main(int argc, char** argv) {
         ++heard;
         ready += (m.phase == kReady || m.phase == kRunning) ? 1 : 0;
       }
-      const bool all_heard = heard >= expected;
+      // With a supervisor, its reader must be matched too (one more than the peers'), so it records
+      // the start (the paper's initial graph lasts about two ticks).
+      const bool supervised =
+          !wait_supervisor || bus.matched_readers() >= static_cast<int>(expected) + 1;
+      const bool all_heard = heard >= expected && supervised;
       if (all_heard && ready >= expected) break;
       if (Clock::now() - wall_start > std::chrono::duration<double>(start_timeout_s)) {
         logger->warn("start timeout: {} of {} peers ready, starting anyway", ready, expected);

@@ -9,9 +9,11 @@
 #include <chrono>
 #include <csignal>
 #include <cstdio>
+#include <fstream>
 #include <mutex>
 #include <thread>
 
+#include "common/runtime/process_setup.hpp"
 #include "common/runtime/scenario.hpp"
 #include "common/transport/dds_bus.hpp"
 #include "supervisor/recorder.hpp"
@@ -47,16 +49,10 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     return app.exit(e) == 0 ? 0 : 2;
   }
-  RunConfig rc;
-  try {
-    ScenarioOverrides o;
-    o.domain_id = domain;
-    o.seed = seed;
-    rc = load_scenario(scenario_path, o);
-  } catch (const ScenarioError& e) {
-    std::fprintf(stderr, "swarm-supervisor: %s\n", e.what());
-    return 2;
-  }
+  const std::optional<RunConfig> loaded =
+      load_for_process("swarm-supervisor", scenario_path, domain, seed);
+  if (!loaded) return 2;
+  const RunConfig& rc = *loaded;
   auto logger = spdlog::basic_logger_mt("supervisor", run_dir + "/supervisor.log", true);
   logger->flush_on(spdlog::level::info);
   spdlog::set_default_logger(logger);
@@ -70,19 +66,16 @@ int main(int argc, char** argv) {
   try {
     Recorder rec(rc, run_dir, time_scale);
     std::mutex mu;
-    DdsOptions dopt;
-    dopt.domain_id = rc.domain_id;
-    dopt.participant_name = "swarm-supervisor";
-    dopt.interface = interface.empty() ? rc.interface : interface;
-    dopt.shared_memory = rc.shared_memory;
-    dopt.max_agents = static_cast<int>(std::max<std::size_t>(rc.agents.size(), 16));
-    dopt.publish = false;
+    DdsOptions dopt = dds_options(rc, "swarm-supervisor", interface);
+    dopt.publish = false;  // a read-only participant: it publishes nothing an agent acts on
+    dopt.test_drop_data_percent = 0;
     DdsBus bus(dopt);
     bus.set_sample_callback([&](const StateMessage& m, std::int64_t recv_ns) {
       std::lock_guard<std::mutex> lock(mu);
       rec.on_sample(m, recv_ns);
     });
     logger->info("supervisor up on domain {}, expecting {} agents", rc.domain_id, rc.agents.size());
+    std::ofstream(run_dir + "/supervisor.ready") << "reader up\n";  // the launcher waits for this
     std::string reason;
     double last_print = -1.0;
     int last_edges = 0;

@@ -237,6 +237,7 @@ int run(const RunOptions& opt) {
       args.push_back(std::to_string(join_at));
     }
     if (restart) args.push_back("--restart");
+    args.push_back("--wait-supervisor");
     for (unsigned ign : opt.ignore_sigterm)
       if (ign == id) args.push_back("--ignore-sigterm");
     return args;
@@ -261,6 +262,12 @@ int run(const RunOptions& opt) {
                                     ts};
     if (!opt.quiet) sup.push_back("--progress");
     procs.spawn("supervisor", 0, sup, opt.quiet ? (dir / "supervisor.out").string() : "");
+    // The supervisor's reader first, so that it records the start.
+    const auto ready_by = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+    while (!fs::exists(dir / "supervisor.ready") && std::chrono::steady_clock::now() < ready_by &&
+           procs.any_running() && procs.reap().empty()) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
     for (const AgentSpec& a : rc.agents) {
       procs.spawn("agent", a.id, agent_args(a.id, -1.0, false), agent_log(a.id, 0));
     }
@@ -300,6 +307,9 @@ int run(const RunOptions& opt) {
           why = "agent " + std::to_string(c.id) + " exited";
         }
       }
+    }
+    for (const auto& c : procs.children()) {
+      if (c.role == "supervisor" && !c.running && supervisor_status < 0) supervisor_status = c.status;
     }
     if (supervisor_status >= 0) break;
     if (g_signal) {

@@ -7,6 +7,7 @@
 #include <fastdds/dds/domain/DomainParticipant.hpp>
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
 #include <fastdds/dds/publisher/DataWriter.hpp>
+#include <fastdds/dds/publisher/DataWriterListener.hpp>
 #include <fastdds/dds/publisher/Publisher.hpp>
 #include <fastdds/dds/subscriber/DataReader.hpp>
 #include <fastdds/dds/subscriber/DataReaderListener.hpp>
@@ -139,6 +140,13 @@ struct DdsBus::Impl : public dds::DataReaderListener {
   BusCounters counters;
   SampleCallback callback;
   std::atomic<int> matched{0};
+  struct WriterListener : public dds::DataWriterListener {
+    std::atomic<int> matched{0};
+    void on_publication_matched(dds::DataWriter*,
+                                const dds::PublicationMatchedStatus& st) override {
+      matched = st.current_count;
+    }
+  } writer_listener;
   qswarm_msgs::AgentState out_sample;  // reused: publishing allocates nothing in steady state
 
   void on_data_available(dds::DataReader* r) override {
@@ -235,7 +243,7 @@ DdsBus::DdsBus(const DdsOptions& opts) : impl_(std::make_unique<Impl>()) {
     wq.data_sharing().off();
     wq.endpoint().history_memory_policy =
         eprosima::fastrtps::rtps::PREALLOCATED_WITH_REALLOC_MEMORY_MODE;
-    d.writer = d.publisher->create_datawriter(d.topic, wq);
+    d.writer = d.publisher->create_datawriter(d.topic, wq, &d.writer_listener);
     if (!d.writer) throw std::runtime_error("dds: cannot create the state writer");
   }
 
@@ -305,5 +313,6 @@ void DdsBus::forget(AgentId id) {
 }
 
 int DdsBus::matched_writers() const { return impl_->matched; }
+int DdsBus::matched_readers() const { return impl_->writer_listener.matched; }
 
 }  // namespace qswarm

@@ -54,8 +54,9 @@ class DdsBus final : public NeighborBus {
   std::map<AgentId, std::int64_t> last_heard_wall_ns() const;
   // Forget an agent (e.g. after its timeout), so a later sample is taken as a rejoin.
   void forget(AgentId id);
-  // Number of writers currently matched to our reader (DDS discovery).
+  // Number of writers matched to our reader, and of readers matched to our writer (discovery).
   int matched_writers() const;
+  int matched_readers() const;
 
   struct Impl;
 

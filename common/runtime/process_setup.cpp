@@ -1,0 +1,57 @@
+#include "common/runtime/process_setup.hpp"
+
+#include <algorithm>
+#include <cstdio>
+
+namespace qswarm {
+
+std::optional<RunConfig> load_for_process(const char* prog, const std::string& path, int domain,
+                                          std::int64_t seed) {
+  try {
+    ScenarioOverrides o;
+    o.domain_id = domain;
+    o.seed = seed;
+    return load_scenario(path, o);
+  } catch (const ScenarioError& e) {
+    std::fprintf(stderr, "%s: %s\n", prog, e.what());
+    return std::nullopt;
+  }
+}
+
+DdsOptions dds_options(const RunConfig& rc, const std::string& participant_name,
+                       const std::string& interface_override) {
+  DdsOptions d;
+  d.domain_id = rc.domain_id;
+  d.participant_name = participant_name;
+  d.interface = interface_override.empty() ? rc.interface : interface_override;
+  d.shared_memory = rc.shared_memory;
+  d.max_agents = static_cast<int>(std::max<std::size_t>(rc.agents.size(), 16));
+  d.test_drop_data_percent = static_cast<std::uint8_t>(rc.faults.transport_drop_percent);
+  return d;
+}
+
+AgentParams make_agent_params(const RunConfig& rc, const AgentSpec& spec) {
+  AgentParams p;
+  p.id = spec.id;
+  p.p0_W = spec.position_W;
+  p.yaw0_rad = spec.yaw_rad;
+  p.mode = rc.mode;
+  p.law = rc.law;
+  p.physics_hz = rc.physics_hz;
+  p.consensus_hz = rc.consensus_hz;
+  p.airframe = rc.airframe;
+  p.gains = rc.gains;
+  p.reference_speed_mps = rc.reference_speed_mps;
+  p.reference_accel_mps2 = rc.reference_accel_mps2;
+  p.neighbor_timeout_s = rc.neighbor_timeout_s;
+  p.incarnation = wall_now_ns();
+  p.expected_peers = rc.agents.size() - 1;
+  if (rc.law.topology.policy == TopologyPolicy::kFixed) {
+    p.expected_peers = 0;  // only its listed neighbours count
+    for (const auto& [a, b] : rc.law.topology.edges)
+      p.expected_peers += (a == spec.id || b == spec.id) ? 1 : 0;
+  }
+  return p;
+}
+
+}  // namespace qswarm

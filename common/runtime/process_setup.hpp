@@ -1,0 +1,28 @@
+#pragma once
+
+#include <optional>
+#include <string>
+
+#include "common/runtime/agent_runtime.hpp"
+#include "common/runtime/scenario.hpp"
+#include "common/transport/dds_bus.hpp"
+
+namespace qswarm {
+
+// What swarm-agent and swarm-supervisor share when they start.
+
+// Loads the scenario with the process's --domain/--seed overrides; on bad input prints
+// "PROG: message" to stderr and returns nothing (the caller exits 2).
+std::optional<RunConfig> load_for_process(const char* prog, const std::string& path, int domain,
+                                          std::int64_t seed);
+
+// The participant settings a run implies (domain, interface unless overridden, shared memory,
+// reader sizing for the swarm, the test transport's drop rate).
+DdsOptions dds_options(const RunConfig& rc, const std::string& participant_name,
+                       const std::string& interface_override);
+
+// One agent's parameters from the run: its start, the run's law, rates, airframe, gains and limits;
+// the peers its law waits for (all others, or only its listed neighbours on a FIXED graph).
+AgentParams make_agent_params(const RunConfig& rc, const AgentSpec& spec);
+
+}  // namespace qswarm
