@@ -241,9 +241,24 @@ void Recorder::snapshot() {
 
   // Converged: every agent of the scenario has joined, the present ones agree (consensus states and
   // physical positions within tolerance of their mean), and this holds for hold_s.
-  // Not before the last planned fault is over (a kill's restart, a partition's heal, ...).
-  const bool agree = n > 0 && joined + rc_.faults.late_join.size() >= rc_.agents.size() &&
-                     t_s_ >= rc_.faults.last_fault_end_s() &&
+  // Converged only when every agent the plan says is alive now is back and running (a restarted or
+  // late agent must have joined), not before the last planned fault is over, and when they agree.
+  bool all_back = joined + rc_.faults.late_join.size() >= rc_.agents.size();
+  for (const AgentSpec& spec : rc_.agents) {
+    // Agents the plan brings back (a due restart or late join) must be here; an unplanned
+    // departure (a crash, an outside SIGKILL) is allowed: the others go on.
+    bool due_back = false;
+    for (const auto& k : rc_.faults.kill) {
+      if (k.agent == spec.id && k.at_s <= t_s_)
+        due_back = k.restart_at_s > k.at_s && k.restart_at_s <= t_s_;
+    }
+    for (const auto& j : rc_.faults.late_join) {
+      if (j.agent == spec.id && j.at_s <= t_s_) due_back = true;
+    }
+    const AgentTrack& tr = agents_.at(spec.id);
+    if (due_back && !(tr.present && tr.last.phase == kRunning)) all_back = false;
+  }
+  const bool agree = n > 0 && all_back && t_s_ >= rc_.faults.last_fault_end_s() &&
                      g.disagreement_m() < rc_.tolerance_m && g.spread_m() < rc_.tolerance_m;
   if (agree) {
     if (hold_start_s_ < 0.0) hold_start_s_ = t_s_;
