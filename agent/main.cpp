@@ -147,8 +147,8 @@ int main(int argc, char** argv) {
     // Start barrier: kWaiting until every other agent is heard, then kReady; run once all are
     // ready or running. Publishing every 5 ms meanwhile keeps the start skew to a few ms. The
     // barrier reads the raw transport: faults apply to the run, which starts once everyone is up.
-    std::size_t expected = rc.agents.size() - 1 - (late.count(id) ? late.size() - 1 : late.size());
-    if (join_at_s >= 0) expected = 0;
+    // (A late or restarted agent has join_at_s set and skips the barrier.)
+    const std::size_t expected = join_at_s >= 0 ? 0 : rc.agents.size() - 1 - late.size();
     while (!g_stop) {
       std::size_t heard = 0, ready = 0;
       for (const StateMessage& m : bus.latest(id)) {

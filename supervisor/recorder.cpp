@@ -239,8 +239,6 @@ void Recorder::snapshot() {
   for (const auto& [id, a] : agents_) joined += a.seen ? 1 : 0;
   if (!first_full_ && n == static_cast<int>(rc_.agents.size())) first_full_ = g;
 
-  // Converged: every agent of the scenario has joined, the present ones agree (consensus states and
-  // physical positions within tolerance of their mean), and this holds for hold_s.
   // Converged only when every agent the plan says is alive now is back and running (a restarted or
   // late agent must have joined), not before the last planned fault is over, and when they agree.
   bool all_back = joined + rc_.faults.late_join.size() >= rc_.agents.size();

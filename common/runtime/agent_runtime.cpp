@@ -40,19 +40,6 @@ Vec3 AgentRuntime::position() const {
   return p_.mode == AgentMode::kQuadcopter ? quad_.p_W : law_->state();
 }
 
-std::set<AgentId> AgentRuntime::heard_peers() {
-  std::set<AgentId> out;
-  for (const StateMessage& m : bus_.latest(p_.id)) out.insert(m.view.id);
-  return out;
-}
-
-std::set<AgentId> AgentRuntime::ready_peers() {
-  std::set<AgentId> out;
-  for (const StateMessage& m : bus_.latest(p_.id))
-    if (m.phase == kReady || m.phase == kRunning) out.insert(m.view.id);
-  return out;
-}
-
 void AgentRuntime::publish(std::uint8_t phase) {
   StateMessage m;
   m.view = law_->message();

@@ -68,11 +68,7 @@ class AgentRuntime {
   const AgentParams& params() const { return p_; }
   std::uint64_t published() const { return seq_; }
   int steps_per_tick() const { return steps_per_tick_; }
-  std::size_t live_neighbors() const { return live_.size(); }
 
-  // Peers heard in any phase, and those ready or running (the start barrier).
-  std::set<AgentId> heard_peers();
-  std::set<AgentId> ready_peers();
   // Stamps for publication: the process injects wall time and its counters.
   void set_wall_clock(std::function<std::int64_t()> f) { wall_clock_ = std::move(f); }
   void set_fault_counters(std::uint64_t loss, std::uint64_t burst, std::uint64_t cut,

@@ -135,11 +135,9 @@ struct DdsBus::Impl : public dds::DataReaderListener {
 
   mutable std::mutex mu;
   std::map<AgentId, StateMessage> latest;
-  std::map<AgentId, std::int64_t> heard_ns;
   std::set<AgentId> warned;
   BusCounters counters;
   SampleCallback callback;
-  std::atomic<int> matched{0};
   struct WriterListener : public dds::DataWriterListener {
     std::atomic<int> matched{0};
     void on_publication_matched(dds::DataWriter*,
@@ -162,11 +160,6 @@ struct DdsBus::Impl : public dds::DataReaderListener {
     } catch (...) {
       spdlog::error("dds: listener caught an unknown exception");
     }
-  }
-
-  void on_subscription_matched(dds::DataReader*,
-                               const dds::SubscriptionMatchedStatus& st) override {
-    matched = st.current_count;
   }
 
   void accept(const StateMessage& m) {
@@ -193,7 +186,6 @@ struct DdsBus::Impl : public dds::DataReaderListener {
         }
       }
       latest[m.view.id] = m;
-      heard_ns[m.view.id] = now;
       ++counters.received;
       cb = callback;
     }
@@ -301,18 +293,6 @@ BusCounters DdsBus::counters() const {
   return impl_->counters;
 }
 
-std::map<AgentId, std::int64_t> DdsBus::last_heard_wall_ns() const {
-  std::lock_guard<std::mutex> lock(impl_->mu);
-  return impl_->heard_ns;
-}
-
-void DdsBus::forget(AgentId id) {
-  std::lock_guard<std::mutex> lock(impl_->mu);
-  impl_->latest.erase(id);
-  impl_->heard_ns.erase(id);
-}
-
-int DdsBus::matched_writers() const { return impl_->matched; }
 int DdsBus::matched_readers() const { return impl_->writer_listener.matched; }
 
 }  // namespace qswarm

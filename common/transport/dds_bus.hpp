@@ -50,12 +50,7 @@ class DdsBus final : public NeighborBus {
   // Called for every accepted sample, on a DDS thread (set before samples flow).
   void set_sample_callback(SampleCallback cb);
   BusCounters counters() const;
-  // Wall time (CLOCK_REALTIME ns) a new sample from each agent last arrived.
-  std::map<AgentId, std::int64_t> last_heard_wall_ns() const;
-  // Forget an agent (e.g. after its timeout), so a later sample is taken as a rejoin.
-  void forget(AgentId id);
-  // Number of writers matched to our reader, and of readers matched to our writer (discovery).
-  int matched_writers() const;
+  // Number of readers matched to our writer (DDS discovery; the start barrier waits on it).
   int matched_readers() const;
 
   struct Impl;

@@ -28,7 +28,6 @@ class InMemoryBus final : public NeighborBus {
       if (id != self) out.push_back(m);
     return out;
   }
-  void remove(AgentId id) { latest_.erase(id); }
 
  private:
   std::map<AgentId, StateMessage> latest_;
