@@ -197,8 +197,7 @@ int main(int argc, char** argv) {
       }
       const BusCounters c = bus.counters();
       agent.set_counters(c.received, c.dropped + c.stale, overruns);
-      const FaultCounters fc = faulty.counters();
-      agent.set_fault_counters(fc.loss, fc.burst, fc.cut, fc.partition, fc.delayed);
+      agent.set_fault_counters(faulty.counters());
       faulty.set_time(agent.time_s());
       for (double at : kills) {
         if (agent.time_s() >= at) {

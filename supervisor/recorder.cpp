@@ -190,26 +190,16 @@ void Recorder::snapshot() {
   records::GraphSnapshot& g = *r.mutable_graph();
   g.set_t_s(t_s_);
   g.set_agents(static_cast<std::uint32_t>(ids.size()));
-  std::map<AgentId, int> index;
-  for (int i = 0; i < static_cast<int>(ids.size()); ++i) index[ids[i]] = i;
-  std::map<std::pair<int, int>, double> found;
-  for (int i = 0; i < static_cast<int>(ids.size()); ++i) {
-    for (const auto& [peer, w] : agents_.at(ids[i]).last.links) {
-      auto j = index.find(peer);
-      if (j == index.end()) continue;
-      const auto key = std::minmax(i, j->second);
-      if (ids[i] < peer || !found.count(key)) found[key] = w;  // the owner's weight wins
-    }
-  }
-  std::vector<Edge> edges;
+  const std::vector<Edge> edges = edges_from_links(
+      ids, [&](int i) -> const auto& { return agents_.at(ids[i]).last.links; });
   std::ostringstream list;
-  for (const auto& [key, w] : found) {
-    edges.push_back({key.first, key.second, w});
+  for (const Edge& edge : edges) {
     records::GraphEdge* e = g.add_edges();
-    e->set_a(ids[key.first]);
-    e->set_b(ids[key.second]);
-    e->set_weight(w);
-    list << (list.tellp() > 0 ? ";" : "") << ids[key.first] << '-' << ids[key.second] << ':' << w;
+    e->set_a(ids[edge.i]);
+    e->set_b(ids[edge.j]);
+    e->set_weight(edge.weight);
+    list << (list.tellp() > 0 ? ";" : "") << ids[edge.i] << '-' << ids[edge.j] << ':'
+         << edge.weight;
   }
   const int n = static_cast<int>(ids.size());
   if (n > 0) {
@@ -358,14 +348,20 @@ std::string Recorder::finish(const std::string& end_reason, double wall_time_s) 
     edges_of(*last_, s.mutable_edges_final());
   }
   records::FaultSummary& fs = *s.mutable_faults();
+  FaultCounters total;
   for (const auto& [key, c] : fault_counts_) {
-    fs.set_loss(fs.loss() + static_cast<std::uint32_t>(c[0]));
-    fs.set_burst(fs.burst() + static_cast<std::uint32_t>(c[1]));
-    fs.set_cut(fs.cut() + static_cast<std::uint32_t>(c[2]));
-    fs.set_partition(fs.partition() + static_cast<std::uint32_t>(c[3]));
-    fs.set_delayed(fs.delayed() + static_cast<std::uint32_t>(c[4]));
+    total.loss += c.loss;
+    total.burst += c.burst;
+    total.cut += c.cut;
+    total.partition += c.partition;
+    total.delayed += c.delayed;
   }
-  fs.set_dropped(fs.loss() + fs.burst() + fs.cut() + fs.partition());
+  fs.set_loss(static_cast<std::uint32_t>(total.loss));
+  fs.set_burst(static_cast<std::uint32_t>(total.burst));
+  fs.set_cut(static_cast<std::uint32_t>(total.cut));
+  fs.set_partition(static_cast<std::uint32_t>(total.partition));
+  fs.set_delayed(static_cast<std::uint32_t>(total.delayed));
+  fs.set_dropped(static_cast<std::uint32_t>(total.dropped()));
   for (const auto& k : rc_.faults.kill) {
     if (k.at_s <= t_s_) fs.set_kills(fs.kills() + 1);
     if (k.restart_at_s > k.at_s && k.restart_at_s <= t_s_) fs.set_restarts(fs.restarts() + 1);

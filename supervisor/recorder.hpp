@@ -1,6 +1,5 @@
 #pragma once
 
-#include <array>
 #include <cstdint>
 #include <fstream>
 #include <map>
@@ -69,7 +68,7 @@ class Recorder {
   std::vector<double> detect_s_;
   std::uint32_t fault_events_ = 0;
   // Fault counters per agent incarnation (an incarnation's counters only grow).
-  std::map<std::pair<AgentId, std::int64_t>, std::array<std::uint64_t, 5>> fault_counts_;
+  std::map<std::pair<AgentId, std::int64_t>, FaultCounters> fault_counts_;
   records::Summary summary_;
 };
 

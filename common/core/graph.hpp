@@ -1,11 +1,15 @@
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
+#include <map>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Dense>
 
 #include "common/core/math.hpp"
+#include "common/core/topology.hpp"
 
 namespace qswarm {
 
@@ -35,6 +39,28 @@ std::vector<int> connected_components(int n, const std::vector<Edge>& edges, int
 
 // The exact solution of the agreement protocol on a fixed graph: Q(t) = U exp(-Lambda t) U^T Q0.
 Positions agreement_solution(const Eigen::MatrixXd& L, const Positions& q0, double t_s);
+
+// The undirected graph the agents hold, by index into `ids`, from each agent's own links:
+// links_of(i) yields (peer id, weight) pairs for agent ids[i]. An edge exists when either end holds
+// it (peers not in `ids` are ignored); where both report one, the lower id's (the owner's) weight
+// wins.
+template <typename LinksOf>
+std::vector<Edge> edges_from_links(const std::vector<AgentId>& ids, LinksOf&& links_of) {
+  std::map<AgentId, int> index;
+  for (int i = 0; i < static_cast<int>(ids.size()); ++i) index[ids[i]] = i;
+  std::map<std::pair<int, int>, double> found;
+  for (int i = 0; i < static_cast<int>(ids.size()); ++i) {
+    for (const auto& [peer, w] : links_of(i)) {
+      const auto j = index.find(peer);
+      if (j == index.end()) continue;
+      const auto key = std::minmax(i, j->second);
+      if (ids[i] < peer || !found.count(key)) found[key] = w;
+    }
+  }
+  std::vector<Edge> out;
+  for (const auto& [key, w] : found) out.push_back({key.first, key.second, w});
+  return out;
+}
 
 Vec3 average(const Positions& q);
 // Largest distance of any point from the mean (the disagreement the supervisor reports).

@@ -64,6 +64,15 @@ TopologyPolicy parse_topology_policy(const std::string& s) {
                               "': expected fixed, proximity or sticky_proximity");
 }
 
+std::set<AgentId> listed_peers(const TopologyConfig& cfg, AgentId self) {
+  std::set<AgentId> out;
+  for (const auto& [a, b] : cfg.edges) {
+    if (a == self) out.insert(b);
+    if (b == self) out.insert(a);
+  }
+  return out;
+}
+
 LinkTracker::LinkTracker(AgentId self, TopologyConfig cfg) : self_(self), cfg_(std::move(cfg)) {
   if (cfg_.policy != TopologyPolicy::kFixed &&
       (!std::isfinite(cfg_.threshold_m) || cfg_.threshold_m <= 0.0)) {
@@ -72,10 +81,7 @@ LinkTracker::LinkTracker(AgentId self, TopologyConfig cfg) : self_(self), cfg_(s
   if (!std::isfinite(cfg_.hysteresis_m) || cfg_.hysteresis_m < 0.0) {
     throw std::invalid_argument("topology.hysteresis_m: expected a finite value >= 0");
   }
-  for (const auto& [a, b] : cfg_.edges) {
-    if (a == self_) listed_.insert(b);
-    if (b == self_) listed_.insert(a);
-  }
+  listed_ = listed_peers(cfg_, self_);
 }
 
 bool LinkTracker::update(AgentId peer, double d) {

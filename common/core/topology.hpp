@@ -48,6 +48,9 @@ std::string to_string(TopologyPolicy p);
 WeightPolicy parse_weight_policy(const std::string& s);
 TopologyPolicy parse_topology_policy(const std::string& s);
 
+// The peers the configured edge list names for `self` (its whole graph under kFixed).
+std::set<AgentId> listed_peers(const TopologyConfig& cfg, AgentId self);
+
 // One agent's view of its own links: decides, from distances it observes, whether it is linked to
 // each peer it hears. Pure state machine; no clock.
 class LinkTracker {

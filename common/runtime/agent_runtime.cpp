@@ -25,10 +25,7 @@ AgentRuntime::AgentRuntime(AgentParams p, NeighborBus& bus)
   p_.gains.validate();
   steps_per_tick_ = std::max(1, static_cast<int>(std::lround(p_.physics_hz / p_.consensus_hz)));
   if (p_.law.topology.policy == TopologyPolicy::kFixed) {
-    for (const auto& [a, b] : p_.law.topology.edges) {
-      if (a == p_.id) listen_to_.insert(b);
-      if (b == p_.id) listen_to_.insert(a);
-    }
+    listen_to_ = listed_peers(p_.law.topology, p_.id);
   }
   quad_.p_W = p_.p0_W;
   quad_.R_WB = rotation_from_tait_bryan({0.0, 0.0, p_.yaw0_rad});
@@ -57,11 +54,11 @@ void AgentRuntime::publish(std::uint8_t phase) {
   m.received = received_;
   m.dropped = dropped_;
   m.overruns = overruns_;
-  m.fault_loss = faults_[0];
-  m.fault_burst = faults_[1];
-  m.fault_cut = faults_[2];
-  m.fault_partition = faults_[3];
-  m.fault_delayed = faults_[4];
+  m.fault_loss = faults_.loss;
+  m.fault_burst = faults_.burst;
+  m.fault_cut = faults_.cut;
+  m.fault_partition = faults_.partition;
+  m.fault_delayed = faults_.delayed;
   bus_.publish(m);
 }
 

@@ -1,6 +1,5 @@
 #pragma once
 
-#include <array>
 #include <cstdint>
 #include <functional>
 #include <map>
@@ -13,6 +12,7 @@
 #include "common/core/dynamics.hpp"
 #include "common/core/tracking_controller.hpp"
 #include "common/core/update_law.hpp"
+#include "common/runtime/faults.hpp"
 #include "common/transport/neighbor_bus.hpp"
 
 namespace qswarm {
@@ -71,10 +71,7 @@ class AgentRuntime {
 
   // Stamps for publication: the process injects wall time and its counters.
   void set_wall_clock(std::function<std::int64_t()> f) { wall_clock_ = std::move(f); }
-  void set_fault_counters(std::uint64_t loss, std::uint64_t burst, std::uint64_t cut,
-                          std::uint64_t partition, std::uint64_t delayed) {
-    faults_ = {loss, burst, cut, partition, delayed};
-  }
+  void set_fault_counters(const FaultCounters& c) { faults_ = c; }
   int recovered_flows() const { return law_->recovered_count(); }
   void set_counters(std::uint64_t received, std::uint64_t dropped, std::uint64_t overruns) {
     received_ = received;
@@ -107,7 +104,7 @@ class AgentRuntime {
   std::set<AgentId> live_;
   std::function<std::int64_t()> wall_clock_;
   std::uint64_t received_ = 0, dropped_ = 0, overruns_ = 0;
-  std::array<std::uint64_t, 5> faults_{};
+  FaultCounters faults_;
 };
 
 }  // namespace qswarm

@@ -45,12 +45,10 @@ AgentParams make_agent_params(const RunConfig& rc, const AgentSpec& spec) {
   p.reference_accel_mps2 = rc.reference_accel_mps2;
   p.neighbor_timeout_s = rc.neighbor_timeout_s;
   p.incarnation = wall_now_ns();
-  p.expected_peers = rc.agents.size() - 1;
-  if (rc.law.topology.policy == TopologyPolicy::kFixed) {
-    p.expected_peers = 0;  // only its listed neighbours count
-    for (const auto& [a, b] : rc.law.topology.edges)
-      p.expected_peers += (a == spec.id || b == spec.id) ? 1 : 0;
-  }
+  // On a FIXED graph only its listed neighbours count.
+  p.expected_peers = rc.law.topology.policy == TopologyPolicy::kFixed
+                         ? listed_peers(rc.law.topology, spec.id).size()
+                         : rc.agents.size() - 1;
   return p;
 }
 

@@ -70,20 +70,10 @@ Positions InProcessSwarm::initial_states() const {
 }
 
 std::vector<Edge> InProcessSwarm::edges() const {
-  std::map<AgentId, int> index;
-  for (int i = 0; i < size(); ++i) index[laws_[i]->id()] = i;
-  std::map<std::pair<int, int>, double> found;
-  for (int i = 0; i < size(); ++i) {
-    for (const auto& [peer, w] : laws_[i]->links()) {
-      const int j = index.at(peer);
-      const auto key = std::minmax(i, j);
-      // The owner's (lower id's) weight wins; otherwise the first seen.
-      if (laws_[i]->id() < peer || !found.count(key)) found[key] = w;
-    }
-  }
-  std::vector<Edge> out;
-  for (const auto& [key, w] : found) out.push_back({key.first, key.second, w});
-  return out;
+  std::vector<AgentId> ids;
+  for (const auto& law : laws_) ids.push_back(law->id());
+  return edges_from_links(
+      ids, [&](int i) -> const auto& { return laws_[i]->links(); });
 }
 
 std::vector<SwarmAgentSpec> InProcessSwarm::random_agents(int n, std::uint64_t seed, double box_m) {
