@@ -66,11 +66,10 @@ std::vector<double> UpdateLaw::update_links(const std::vector<NeighborView>& nei
     if (n.id == self_) continue;
     const double d = (q - n.q).norm();
     if (!tracker_.update(n.id, d)) continue;
-    double w = weight_for_distance(cfg_.weight, d);
-    if (cfg_.weight.policy == WeightPolicy::kInitialDistance) {
-      // The paper's "weights due to initial distance": |q_i(0) - q_j(0)|, whenever the link forms.
-      w = weight_for_distance(cfg_.weight, (q0_ - n.q0).norm());
-    }
+    // The paper's "weights due to initial distance" use |q_i(0) - q_j(0)|, whenever the link forms.
+    const double w = weight_for_distance(
+        cfg_.weight,
+        cfg_.weight.policy == WeightPolicy::kInitialDistance ? (q0_ - n.q0).norm() : d);
     next[n.id] = w;
     weights[k] = w;
   }

@@ -95,7 +95,8 @@ LinkFaults::Verdict LinkFaults::on_receive(AgentId from, double t) {
   std::uniform_real_distribution<double> u(0.0, 1.0);
   // Draw every random number for this message first, in a fixed order, so the stream of a link
   // does not depend on which fault happens to decide.
-  std::vector<double> draws(plan_.loss.size() + 2 * plan_.burst.size() + plan_.delay.size());
+  std::vector<double>& draws = draws_;  // reused: no allocation per received sample
+  draws.resize(plan_.loss.size() + 2 * plan_.burst.size() + plan_.delay.size());
   for (double& d : draws) d = u(l.rng);
   size_t k = 0;
   Verdict v;

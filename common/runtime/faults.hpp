@@ -97,6 +97,7 @@ class LinkFaults {
   std::uint64_t seed_;
   std::map<AgentId, Link> links_;
   FaultCounters counters_;
+  std::vector<double> draws_;
 };
 
 // The fault-injecting NeighborBus: samples from an inner bus's delivery pass through LinkFaults
