@@ -31,28 +31,18 @@ int main(int argc, char** argv) {
   using namespace qswarm;
   using Clock = std::chrono::steady_clock;
   CLI::App app{"swarm-agent: one quadcopter of the swarm, over DDS"};
-  std::string scenario_path, run_dir;
+  ProcessOptions opts;
+  std::string run_dir;
   unsigned id = 0;
-  double time_scale = 1.0;
-  int domain = -1;
   double start_timeout_s = 30.0;
   double max_wall_s = -1.0;
   bool ignore_sigterm = false;
   double join_at_s = -1.0;
   bool restarted = false;
   bool wait_supervisor = false;
-  std::int64_t seed = -1;
-  std::string interface;
-  app.add_option("--scenario", scenario_path, "scenario file (Protobuf text format)")->required();
+  add_process_options(app, opts);
   app.add_option("--id", id, "this agent's id (must be listed in the scenario)")->required();
   app.add_option("--run-dir", run_dir, "directory for this agent's log");
-  app.add_option("--time-scale", time_scale, "simulated seconds per wall second")
-      ->check(CLI::PositiveNumber);
-  app.add_option("--domain", domain, "DDS domain id (overrides the scenario)")
-      ->check(CLI::Range(0, 232));
-  app.add_option("--interface", interface,
-                 "IPv4 address DDS binds to (overrides the scenario; e.g. a test host's address)");
-  app.add_option("--seed", seed, "run seed (overrides the scenario)");
   app.add_option("--start-timeout", start_timeout_s,
                  "wall seconds to wait for all peers before starting")
       ->check(CLI::NonNegativeNumber);
@@ -73,14 +63,13 @@ int main(int argc, char** argv) {
     return app.exit(e) == 0 ? 0 : 2;
   }
 
-  const std::optional<RunConfig> loaded =
-      load_for_process("swarm-agent", scenario_path, domain, seed);
+  const std::optional<RunConfig> loaded = load_for_process("swarm-agent", opts);
   if (!loaded) return 2;
   const RunConfig& rc = *loaded;
   const AgentSpec* spec = rc.agent(id);
   if (!spec) {
     std::fprintf(stderr, "swarm-agent: --id %u: expected the id of an agent listed in %s\n", id,
-                 scenario_path.c_str());
+                 opts.scenario.c_str());
     return 2;
   }
 
@@ -102,7 +91,7 @@ int main(int argc, char** argv) {
   std::signal(SIGTERM, ignore_sigterm ? SIG_IGN : on_signal);
 
   try {
-    DdsBus bus(dds_options(rc, "swarm-agent-" + std::to_string(id), interface));
+    DdsBus bus(dds_options(rc, "swarm-agent-" + std::to_string(id), opts.interface));
     // Faults belong to links: every sample this agent receives passes the plan (seeded per link).
     FaultyBus faulty(bus, LinkFaults(rc.faults, id, rc.seed), id);
     bus.set_sample_callback([&faulty](const StateMessage& m, std::int64_t) { faulty.deliver(m); });
@@ -119,7 +108,7 @@ int main(int argc, char** argv) {
       // Late join or restart: stay silent until the swarm's clock (the newest running peer's stamp)
       // reaches join_at_s, then start on that clock without a barrier.
       double swarm_t = -1.0;
-      const double wait_s = join_at_s / time_scale + start_timeout_s + 10.0;
+      const double wait_s = join_at_s / opts.time_scale + start_timeout_s + 10.0;
       while (!g_stop && swarm_t < join_at_s) {
         for (const StateMessage& m : bus.latest(id))
           if (m.phase == kRunning) swarm_t = std::max(swarm_t, m.stamp_s);
@@ -142,7 +131,7 @@ int main(int argc, char** argv) {
     logger->info(
         "agent {} up: domain {}, {} mode, {} law, start ({:.3f}, {:.3f}, {:.3f}), time scale {}",
         id, rc.domain_id, rc.mode == AgentMode::kQuadcopter ? "quadcopter" : "particle",
-        to_string(rc.law.kind), p.p0_W.x(), p.p0_W.y(), p.p0_W.z(), time_scale);
+        to_string(rc.law.kind), p.p0_W.x(), p.p0_W.y(), p.p0_W.z(), opts.time_scale);
 
     // Start barrier: kWaiting until every other agent is heard, then kReady; run once all are
     // ready or running. Publishing every 5 ms meanwhile keeps the start skew to a few ms. The
@@ -172,13 +161,13 @@ int main(int argc, char** argv) {
     const double discovery_s = std::chrono::duration<double>(Clock::now() - wall_start).count();
     logger->info("running after {:.2f} s of discovery", discovery_s);
 
-    if (max_wall_s < 0) max_wall_s = 2.0 * rc.duration_s / time_scale + 30.0;
+    if (max_wall_s < 0) max_wall_s = 2.0 * rc.duration_s / opts.time_scale + 30.0;
     // Real-time pacing per consensus tick: each tick's physics (physics_hz/consensus_hz RK4 steps
     // of 1/physics_hz simulated seconds) runs as one batch when the tick is due. Nothing outside
     // the agent can see between ticks (it publishes at ticks and its reference changes at ticks),
     // and 32 processes waking every 2 ms on two cores overran 9.5% of their deadlines.
     const int batch = agent.steps_per_tick();
-    const double tick_wall_s = batch / (rc.physics_hz * time_scale);
+    const double tick_wall_s = batch / (rc.physics_hz * opts.time_scale);
     const auto t0 = Clock::now();
     std::uint64_t k = 0, ticks = 0, overruns = 0;
     // Planned kills of this agent (not those before this process started: it is their restart).

@@ -26,22 +26,12 @@ void on_signal(int) { g_stop = true; }
 int main(int argc, char** argv) {
   using namespace qswarm;
   CLI::App app{"swarm-supervisor: records a swarm run (telemetry, graph, events, summary)"};
-  std::string scenario_path, run_dir;
-  double time_scale = 1.0;
-  int domain = -1;
-  std::int64_t seed = -1;
-  std::string interface;
+  ProcessOptions opts;
+  std::string run_dir;
   bool progress = false;
   double start_timeout_s = 30.0;
-  app.add_option("--scenario", scenario_path, "scenario file")->required();
+  add_process_options(app, opts);
   app.add_option("--run-dir", run_dir, "run directory to write")->required();
-  app.add_option("--time-scale", time_scale, "simulated seconds per wall second")
-      ->check(CLI::PositiveNumber);
-  app.add_option("--domain", domain, "DDS domain id (overrides the scenario)")
-      ->check(CLI::Range(0, 232));
-  app.add_option("--interface", interface,
-                 "IPv4 address DDS binds to (overrides the scenario; e.g. a test host's address)");
-  app.add_option("--seed", seed, "run seed (overrides the scenario)");
   app.add_option("--start-timeout", start_timeout_s, "wall seconds to wait for the first agent");
   app.add_flag("--progress", progress, "print a live progress line");
   try {
@@ -49,8 +39,7 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     return app.exit(e) == 0 ? 0 : 2;
   }
-  const std::optional<RunConfig> loaded =
-      load_for_process("swarm-supervisor", scenario_path, domain, seed);
+  const std::optional<RunConfig> loaded = load_for_process("swarm-supervisor", opts);
   if (!loaded) return 2;
   const RunConfig& rc = *loaded;
   auto logger = spdlog::basic_logger_mt("supervisor", run_dir + "/supervisor.log", true);
@@ -64,9 +53,9 @@ int main(int argc, char** argv) {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
   };
   try {
-    Recorder rec(rc, run_dir, time_scale);
+    Recorder rec(rc, run_dir, opts.time_scale);
     std::mutex mu;
-    DdsOptions dopt = dds_options(rc, "swarm-supervisor", interface);
+    DdsOptions dopt = dds_options(rc, "swarm-supervisor", opts.interface);
     dopt.publish = false;  // a read-only participant: it publishes nothing an agent acts on
     dopt.test_drop_data_percent = 0;
     DdsBus bus(dopt);
@@ -102,7 +91,7 @@ int main(int argc, char** argv) {
         reason = "interrupted";
         break;
       }
-      if (rec.time_s() == 0.0 && wall_s() > start_timeout_s + rc.duration_s / time_scale) {
+      if (rec.time_s() == 0.0 && wall_s() > start_timeout_s + rc.duration_s / opts.time_scale) {
         reason = "no agents running";
         break;
       }

@@ -1,17 +1,29 @@
 #include "common/runtime/process_setup.hpp"
 
+#include <CLI/CLI.hpp>
+
 #include <algorithm>
 #include <cstdio>
 
 namespace qswarm {
 
-std::optional<RunConfig> load_for_process(const char* prog, const std::string& path, int domain,
-                                          std::int64_t seed) {
+void add_process_options(CLI::App& app, ProcessOptions& o) {
+  app.add_option("--scenario", o.scenario, "scenario file (Protobuf text format)")->required();
+  app.add_option("--time-scale", o.time_scale, "simulated seconds per wall second")
+      ->check(CLI::PositiveNumber);
+  app.add_option("--domain", o.domain, "DDS domain id (overrides the scenario)")
+      ->check(CLI::Range(0, 232));
+  app.add_option("--interface", o.interface,
+                 "IPv4 address DDS binds to (overrides the scenario; e.g. a test host's address)");
+  app.add_option("--seed", o.seed, "run seed (overrides the scenario)");
+}
+
+std::optional<RunConfig> load_for_process(const char* prog, const ProcessOptions& opts) {
   try {
     ScenarioOverrides o;
-    o.domain_id = domain;
-    o.seed = seed;
-    return load_scenario(path, o);
+    o.domain_id = opts.domain;
+    o.seed = opts.seed;
+    return load_scenario(opts.scenario, o);
   } catch (const ScenarioError& e) {
     std::fprintf(stderr, "%s: %s\n", prog, e.what());
     return std::nullopt;

@@ -7,14 +7,27 @@
 #include "common/runtime/scenario.hpp"
 #include "common/transport/dds_bus.hpp"
 
+namespace CLI {
+class App;
+}
+
 namespace qswarm {
 
 // What swarm-agent and swarm-supervisor share when they start.
 
+// The flags `swarm run` passes to both processes, declared once so that they mean the same.
+struct ProcessOptions {
+  std::string scenario;     // --scenario (required)
+  double time_scale = 1.0;  // --time-scale
+  int domain = -1;          // --domain (overrides the scenario)
+  std::int64_t seed = -1;   // --seed (overrides the scenario)
+  std::string interface;    // --interface (overrides the scenario)
+};
+void add_process_options(CLI::App& app, ProcessOptions& o);
+
 // Loads the scenario with the process's --domain/--seed overrides; on bad input prints
 // "PROG: message" to stderr and returns nothing (the caller exits 2).
-std::optional<RunConfig> load_for_process(const char* prog, const std::string& path, int domain,
-                                          std::int64_t seed);
+std::optional<RunConfig> load_for_process(const char* prog, const ProcessOptions& o);
 
 // The participant settings a run implies (domain, interface unless overridden, shared memory,
 // reader sizing for the swarm, the test transport's drop rate).
