@@ -282,15 +282,14 @@ int run(const RunOptions& opt) {
     for (const auto& c : procs.children()) pids << c.role << ',' << c.id << ',' << c.pid << '\n';
   }
 
-  int supervisor_status = -1;
+  // The supervisor is the first child; its state (running, exit status) lives in the group.
+  const auto supervisor = [&procs] { return procs.children().front(); };
   std::string why;
   const auto wall0 = std::chrono::steady_clock::now();
   const double wall_limit = rc.duration_s / opt.time_scale + 120.0;
   while (true) {
     for (const auto& c : procs.reap()) {
-      if (c.role == "supervisor") {
-        supervisor_status = c.status;
-      } else {
+      if (c.role == "agent") {
         std::cerr << "swarm run: agent " << c.id << " " << describe_status(c.status) << "\n";
         auto& planned = restarts[c.id];
         const int life = lives[c.id];
@@ -308,10 +307,7 @@ int run(const RunOptions& opt) {
         }
       }
     }
-    for (const auto& c : procs.children()) {
-      if (c.role == "supervisor" && !c.running && supervisor_status < 0) supervisor_status = c.status;
-    }
-    if (supervisor_status >= 0) break;
+    if (!supervisor().running) break;
     if (g_signal) {
       why = "interrupted";
       break;
@@ -325,9 +321,7 @@ int run(const RunOptions& opt) {
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
   const int killed = procs.terminate_all(opt.grace_s);
-  for (const auto& c : procs.children()) {
-    if (c.role == "supervisor" && supervisor_status < 0) supervisor_status = c.status;
-  }
+  const int supervisor_status = supervisor().status;
   if (!opt.quiet || killed > 0) {
     std::cout << "swarm run: stopped " << procs.children().size() << " processes"
               << (killed ? " (" + std::to_string(killed) + " needed SIGKILL)" : std::string())
