@@ -81,10 +81,11 @@ void Recorder::on_sample(const StateMessage& m, std::int64_t recv_ns) {
   const AgentId id = m.view.id;
   auto it = agents_.find(id);
   if (it == agents_.end()) {
-    // Not an agent of this scenario (e.g. a stray participant on the domain): note it once.
-    agents_[id];
-    it = agents_.find(id);
-    event("unknown_agent", id, "sample from an agent not in the scenario");
+    // Not an agent of this scenario (e.g. a stray participant on the domain): note it once and
+    // keep it out of the swarm's graph, agreement and summary.
+    if (unknown_.insert(id).second)
+      event("unknown_agent", id, "sample from an agent not in the scenario");
+    return;
   }
   AgentTrack& a = it->second;
   if (m.phase == kRunning) t_s_ = std::max(t_s_, m.stamp_s);

@@ -5,6 +5,7 @@
 #include <map>
 #include <memory>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -52,7 +53,8 @@ class Recorder {
   std::string dir_;
   double time_scale_;
   std::ofstream telemetry_, graph_, events_, records_;
-  std::map<AgentId, AgentTrack> agents_;
+  std::map<AgentId, AgentTrack> agents_;  // the scenario's agents only
+  std::set<AgentId> unknown_;
   std::vector<double> ages_ms_;
   double t_s_ = 0.0;
   double next_snapshot_s_ = 0.0;

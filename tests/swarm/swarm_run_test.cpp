@@ -269,6 +269,14 @@ TEST(SwarmRun, BadSamplesFromATestParticipantAreDroppedByEveryAgentAndChangeNoth
     absurd.seq = ++seq;
     absurd.incarnation = life;
     saboteur.publish(absurd);
+    StateMessage stranger;  // well-formed, but not an agent of the scenario
+    stranger.view.id = 77;
+    stranger.view.q = Vec3(100, 100, 100);
+    stranger.p_W = stranger.view.q;
+    stranger.phase = kRunning;
+    stranger.seq = ++seq;
+    stranger.incarnation = life;
+    saboteur.publish(stranger);
     ++published;
     wait_for([&] { return !launcher.running(); }, 0.05);
   }
@@ -278,6 +286,12 @@ TEST(SwarmRun, BadSamplesFromATestParticipantAreDroppedByEveryAgentAndChangeNoth
   const records::Summary s = read_summary(dir);
   EXPECT_TRUE(s.converged());
   for (const auto& a : s.agents()) EXPECT_GE(a.dropped_by_agent(), 1u) << "agent " << a.id();
+  // The stranger is noted once and kept out of the swarm's record.
+  EXPECT_EQ(s.agents_size(), 4);
+  int noted = 0;
+  for (const auto& row : read_csv(dir / "events.csv"))
+    noted += (row.at("kind") == "unknown_agent" && row.at("agent") == "77") ? 1 : 0;
+  EXPECT_EQ(noted, 1);
   expect_met_at(s, Vec3(10.25, 9.75, 29.25), 0.01, true);
   EXPECT_LT(s.average_drift_m(), 1e-3);
 }
