@@ -268,6 +268,16 @@ int run(const RunOptions& opt) {
            procs.any_running() && procs.reap().empty()) {
       std::this_thread::sleep_for(std::chrono::milliseconds(5));
     }
+    if (!procs.children().front().running || !fs::exists(dir / "supervisor.ready")) {
+      // Without a recorder there is no run: start no agent.
+      procs.reap();
+      const auto sup_child = procs.children().front();
+      throw std::runtime_error("the supervisor did not come up (" +
+                               (sup_child.running ? std::string("no reader after 20 s")
+                                                  : describe_status(sup_child.status)) +
+                               ")" +
+                               (opt.quiet ? "; see " + (dir / "supervisor.out").string() : ""));
+    }
     for (const AgentSpec& a : rc.agents) {
       procs.spawn("agent", a.id, agent_args(a.id, -1.0, false), agent_log(a.id, 0));
     }
