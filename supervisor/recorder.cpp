@@ -107,7 +107,6 @@ void Recorder::on_sample(const StateMessage& m, std::int64_t recv_ns) {
     event("depart", id, "agent stopped");
   }
   a.present = m.phase != kStopping;
-  const bool was_running_law = a.last.phase == kRunning && a.last.view.seq >= 1 && a.samples > 0;
   a.last = m;
   a.last_recv_ns = recv_ns;
   fault_counts_[{id, m.incarnation}] = {m.fault_loss, m.fault_burst, m.fault_cut, m.fault_partition,
@@ -140,13 +139,12 @@ void Recorder::on_sample(const StateMessage& m, std::int64_t recv_ns) {
   for (int i = 0; i < 4; ++i) s->add_rotors(m.rotors_radps[i]);
   s->set_mode(static_cast<std::uint32_t>(m.mode));
   write_record(r);
-  // The initial graph: snapshot the moment every agent of the scenario has made its first law tick
-  // (view seq 1: links found, nobody moved yet).
-  if (!first_full_ && m.phase == kRunning && m.view.seq >= 1 && !was_running_law) {
-    std::size_t started = 0;
-    for (const auto& [aid, t] : agents_)
-      started += (t.present && t.last.phase == kRunning && t.last.view.seq >= 1) ? 1 : 0;
-    if (started == rc_.agents.size()) snapshot();
+  // The initial graph, once every agent of the scenario has reported the links its law started
+  // with (view seq >= 1), however late its first samples reached us.
+  if (!first_full_ && m.phase == kRunning && m.view.seq >= 1) {
+    bool all = true;
+    for (const auto& [aid, t] : agents_) all &= t.seen && t.last.view.seq >= 1;
+    if (all) initial_snapshot();
   }
 }
 
@@ -177,22 +175,14 @@ void Recorder::tick(std::int64_t now_ns) {
   }
 }
 
-void Recorder::snapshot() {
-  std::vector<AgentId> ids;
-  Positions q, p;
-  for (const auto& [id, a] : agents_) {
-    if (a.present && a.last.phase == kRunning) {
-      ids.push_back(id);
-      q.push_back(a.last.view.q);
-      p.push_back(a.last.p_W);
-    }
-  }
+records::GraphSnapshot Recorder::graph_of(
+    double t_s, const std::vector<AgentId>& ids, const Positions& q, const Positions& p,
+    const std::function<const std::vector<std::pair<AgentId, double>>&(int)>& links_of) {
   records::Record r;
   records::GraphSnapshot& g = *r.mutable_graph();
-  g.set_t_s(t_s_);
+  g.set_t_s(t_s);
   g.set_agents(static_cast<std::uint32_t>(ids.size()));
-  const std::vector<Edge> edges = edges_from_links(
-      ids, [&](int i) -> const auto& { return agents_.at(ids[i]).last.links; });
+  const std::vector<Edge> edges = edges_from_links(ids, links_of);
   std::ostringstream list;
   for (const Edge& edge : edges) {
     records::GraphEdge* e = g.add_edges();
@@ -207,8 +197,9 @@ void Recorder::snapshot() {
     const Spectrum s = analyze(laplacian(n, edges));
     g.set_lambda2(s.lambda2);
     g.set_components(static_cast<std::uint32_t>(s.components));
+    const Vec3 qbar = average(q);
     g.set_disagreement_m(disagreement(q));
-    g.set_mean_drift_m((average(q) - rc_.initial_average()).norm());
+    g.set_mean_drift_m((qbar - rc_.initial_average()).norm());
     double min_sep = 1e300;
     for (int i = 0; i < n; ++i)
       for (int j = i + 1; j < n; ++j) min_sep = std::min(min_sep, (p[i] - p[j]).norm());
@@ -216,7 +207,6 @@ void Recorder::snapshot() {
       g.set_min_separation_m(min_sep);
       min_separation_ = std::min(min_separation_, min_sep);
     }
-    const Vec3 qbar = average(q);
     double spread = 0.0;
     for (const Vec3& x : p) spread = std::max(spread, (x - qbar).norm());
     g.set_spread_m(spread);
@@ -225,10 +215,47 @@ void Recorder::snapshot() {
          << g.components() << ',' << g.disagreement_m() << ',' << g.mean_drift_m() << ','
          << g.min_separation_m() << ',' << g.spread_m() << ",\"" << list.str() << "\"\n";
   write_record(r);
+  return g;
+}
+
+void Recorder::initial_snapshot() {
+  std::vector<AgentId> ids;
+  Positions q0;
+  for (const auto& [id, a] : agents_) {
+    ids.push_back(id);
+    q0.push_back(a.last.view.q0);
+  }
+  // The swarm at t = 0: the links each agent's law started with, weighed at q(0) by the run's
+  // weight policy (an agent whose law started a tick after a peer's saw that peer already moved).
+  std::vector<std::vector<std::pair<AgentId, double>>> links(ids.size());
+  for (size_t i = 0; i < ids.size(); ++i) {
+    for (const auto& [peer, w] : agents_.at(ids[i]).last.initial_links) {
+      const auto other = agents_.find(peer);
+      if (other == agents_.end()) continue;
+      const double d = (q0[i] - other->second.last.view.q0).norm();
+      links[i].emplace_back(peer, weight_for_distance(rc_.law.weight, d));
+    }
+  }
+  first_full_ = graph_of(
+      0.0, ids, q0, q0, [&](int i) -> const auto& { return links[static_cast<size_t>(i)]; });
+}
+
+void Recorder::snapshot() {
+  std::vector<AgentId> ids;
+  Positions q, p;
+  for (const auto& [id, a] : agents_) {
+    if (a.present && a.last.phase == kRunning) {
+      ids.push_back(id);
+      q.push_back(a.last.view.q);
+      p.push_back(a.last.p_W);
+    }
+  }
+  const records::GraphSnapshot g = graph_of(
+      t_s_, ids, q, p, [&](int i) -> const auto& { return agents_.at(ids[i]).last.links; });
+  const int n = static_cast<int>(ids.size());
   last_ = g;
   std::size_t joined = 0;
   for (const auto& [id, a] : agents_) joined += a.seen ? 1 : 0;
-  if (!first_full_ && n == static_cast<int>(rc_.agents.size())) first_full_ = g;
 
   // Converged only when every agent the plan says is alive now is back and running (a restarted or
   // late agent must have joined), not before the last planned fault is over, and when they agree.

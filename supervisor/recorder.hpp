@@ -2,6 +2,7 @@
 
 #include <cstdint>
 #include <fstream>
+#include <functional>
 #include <map>
 #include <memory>
 #include <optional>
@@ -9,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "common/core/graph.hpp"
 #include "common/runtime/scenario.hpp"
 #include "common/transport/state_message.hpp"
 #include "proto/records.pb.h"
@@ -46,7 +48,12 @@ class Recorder {
     double first_stamp = 0.0;
   };
   void event(const std::string& kind, AgentId agent, const std::string& detail);
-  void snapshot();
+  // One graph snapshot (graph.csv row and record) from the given agents, states and links.
+  records::GraphSnapshot graph_of(
+      double t_s, const std::vector<AgentId>& ids, const Positions& q, const Positions& p,
+      const std::function<const std::vector<std::pair<AgentId, double>>&(int)>& links_of);
+  void snapshot();          // the swarm now, from the latest samples; checks convergence
+  void initial_snapshot();  // the swarm at t = 0, from q(0) and each agent's initial links
   void write_record(const records::Record& r);
 
   RunConfig rc_;

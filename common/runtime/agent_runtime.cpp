@@ -49,6 +49,7 @@ void AgentRuntime::publish(std::uint8_t phase) {
   m.q_WB = Eigen::Quaterniond(quad_.R_WB);
   m.rotors_radps = rotors_;
   for (const auto& [peer, w] : law_->links()) m.links.emplace_back(peer, w);
+  m.initial_links = initial_links_;
   m.wall_ns = wall_clock_ ? wall_clock_() : 0;
   m.incarnation = p_.incarnation;
   m.received = received_;
@@ -90,6 +91,7 @@ void AgentRuntime::consensus_tick(std::vector<AgentEvent>& events) {
     }
     if (p_.recover_flows) law_->recover(views);
     law_->observe(views);
+    for (const auto& [peer, w] : law_->links()) initial_links_.emplace_back(peer, w);
     started_ = true;
   } else {
     law_->step(static_cast<double>(steps_per_tick_) / p_.physics_hz, views);

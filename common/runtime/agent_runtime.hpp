@@ -102,6 +102,7 @@ class AgentRuntime {
   };
   std::map<AgentId, Peer> peers_;
   std::set<AgentId> live_;
+  std::vector<std::pair<AgentId, double>> initial_links_;  // links at the law's first tick
   std::function<std::int64_t()> wall_clock_;
   std::uint64_t received_ = 0, dropped_ = 0, overruns_ = 0;
   FaultCounters faults_;

@@ -60,14 +60,19 @@ void to_idl(const StateMessage& m, qswarm_msgs::AgentState& s) {
   s.fault_cut(m.fault_cut);
   s.fault_partition(m.fault_partition);
   s.fault_delayed(m.fault_delayed);
-  s.links().clear();
-  for (const auto& [peer, w] : m.links) {
-    if (s.links().size() >= 256) break;
-    qswarm_msgs::LinkEntry e;
-    e.peer(peer);
-    e.weight(w);
-    s.links().push_back(e);
-  }
+  const auto put_links = [](const std::vector<std::pair<AgentId, double>>& in,
+                            std::vector<qswarm_msgs::LinkEntry>& out) {
+    out.clear();
+    for (const auto& [peer, w] : in) {
+      if (out.size() >= 256) break;
+      qswarm_msgs::LinkEntry e;
+      e.peer(peer);
+      e.weight(w);
+      out.push_back(e);
+    }
+  };
+  put_links(m.links, s.links());
+  put_links(m.initial_links, s.initial_links());
   s.flows().clear();
   for (const FlowEntry& f : m.view.flows) {
     if (s.flows().size() >= 256) break;
@@ -115,6 +120,7 @@ StateMessage from_idl(const qswarm_msgs::AgentState& s) {
   m.fault_partition = s.fault_partition();
   m.fault_delayed = s.fault_delayed();
   for (const auto& e : s.links()) m.links.emplace_back(e.peer(), e.weight());
+  for (const auto& e : s.initial_links()) m.initial_links.emplace_back(e.peer(), e.weight());
   for (const auto& e : s.copies()) m.view.copies.push_back({e.peer(), vec(e.flow()), 0.0, false});
   for (const auto& e : s.flows())
     m.view.flows.push_back({e.peer(), vec(e.flow()), e.weight(), e.active()});

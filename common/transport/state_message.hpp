@@ -26,7 +26,10 @@ struct StateMessage {
   Eigen::Quaterniond q_WB = Eigen::Quaterniond::Identity();
   RotorSpeeds rotors_radps = RotorSpeeds::Zero();
   std::vector<std::pair<AgentId, double>> links;  // edges the sender holds, with weights
-  std::int64_t wall_ns = 0;                       // sender's CLOCK_REALTIME at publication
+  // The links its law started with: the swarm's initial graph survives a recorder that matched
+  // this agent's writer a few ticks late (discovery is per side; samples are best-effort).
+  std::vector<std::pair<AgentId, double>> initial_links;
+  std::int64_t wall_ns = 0;      // sender's CLOCK_REALTIME at publication
   std::int64_t incarnation = 0;  // sender's start time: a restarted agent has a newer one
   std::uint8_t phase = 0;        // see Phase
   std::uint64_t received = 0;    // samples the sender accepted
