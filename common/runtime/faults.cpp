@@ -160,9 +160,8 @@ void FaultyBus::release_due_locked() {
   while (!held_.empty() && held_.begin()->first <= t_s_) {
     const StateMessage& m = held_.begin()->second;
     auto it = latest_.find(m.view.id);
-    // Jitter can reorder: keep the newest (a newer life, or a larger sequence number).
-    if (it == latest_.end() || m.incarnation > it->second.incarnation ||
-        (m.incarnation == it->second.incarnation && m.seq > it->second.seq)) {
+    // Jitter can reorder: keep the newest.
+    if (it == latest_.end() || is_newer(m, it->second)) {
       latest_[m.view.id] = m;
     }
     held_.erase(held_.begin());

@@ -170,10 +170,11 @@ struct DdsBus::Impl : public dds::DataReaderListener {
 
   void accept(const StateMessage& m) {
     const std::int64_t now = wall_now_ns();
+    const std::string why = check_message(m);  // pure: outside the lock the agent's tick takes
     SampleCallback cb;
     {
       std::lock_guard<std::mutex> lock(mu);
-      if (const std::string why = check_message(m); !why.empty()) {
+      if (!why.empty()) {
         ++counters.dropped;
         if (warned.insert(m.view.id).second) {
           spdlog::warn(
@@ -183,13 +184,9 @@ struct DdsBus::Impl : public dds::DataReaderListener {
         return;
       }
       auto it = latest.find(m.view.id);
-      if (it != latest.end()) {
-        const StateMessage& held = it->second;
-        const bool same_life = m.incarnation == held.incarnation;
-        if ((same_life && m.seq <= held.seq) || m.incarnation < held.incarnation) {
-          ++counters.stale;
-          return;
-        }
+      if (it != latest.end() && !is_newer(m, it->second)) {
+        ++counters.stale;
+        return;
       }
       latest[m.view.id] = m;
       ++counters.received;

@@ -48,4 +48,11 @@ enum Phase : std::uint8_t { kWaiting = 0, kRunning = 1, kStopping = 2, kReady = 
 // Empty if a received message is usable, else why not. Anything non-finite or absurd is refused.
 std::string check_message(const StateMessage& m);
 
+// Whether `m` supersedes `held` from the same agent: a newer life (restart), or a larger sequence
+// number in the same life. Older or repeated samples (reordering, duplicates) are stale.
+inline bool is_newer(const StateMessage& m, const StateMessage& held) {
+  return m.incarnation > held.incarnation ||
+         (m.incarnation == held.incarnation && m.seq > held.seq);
+}
+
 }  // namespace qswarm
