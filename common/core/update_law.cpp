@@ -166,11 +166,10 @@ void EdgeFlowLaw::adopt(const NeighborView& v) {
   }
 }
 
-int EdgeFlowLaw::recover(const std::vector<NeighborView>& neighbors) {
+void EdgeFlowLaw::recover(const std::vector<NeighborView>& neighbors) {
   recovering_ = true;
   for (const NeighborView& v : neighbors)
     if (owns(v.id)) adopt(v);
-  return recovered_;
 }
 
 void EdgeFlowLaw::integrate(const std::vector<NeighborView>& neighbors,

@@ -86,9 +86,9 @@ class UpdateLaw {
   virtual std::vector<FlowEntry> owned_flows() const { return {}; }
   virtual std::vector<FlowEntry> held_copies() const { return {}; }
   // After a restart: take back the flows this agent owned from its neighbours' copies, so that
-  // its state, and the swarm's total, are what they were. Returns how many flows were recovered.
+  // its state, and the swarm's total, are what they were (recovered_count() says how many flows).
   // Recovery continues lazily: an owned neighbour first heard later is recovered then.
-  virtual int recover(const std::vector<NeighborView>&) { return 0; }
+  virtual void recover(const std::vector<NeighborView>&) {}
   virtual int recovered_count() const { return 0; }
 
  protected:
@@ -133,7 +133,7 @@ class EdgeFlowLaw final : public UpdateLaw {
   Vec3 state() const override;
   std::vector<FlowEntry> owned_flows() const override;
   std::vector<FlowEntry> held_copies() const override;
-  int recover(const std::vector<NeighborView>& neighbors) override;
+  void recover(const std::vector<NeighborView>& neighbors) override;
   int recovered_count() const override { return recovered_; }
   bool owns(AgentId peer) const { return self_ < peer; }
 
