@@ -238,6 +238,7 @@ void Recorder::initial_snapshot() {
   }
   first_full_ = graph_of(
       0.0, ids, q0, q0, [&](int i) -> const auto& { return links[static_cast<size_t>(i)]; });
+  last_ = first_full_;  // so that the live line shows the initial graph too
 }
 
 void Recorder::snapshot() {
