@@ -13,10 +13,8 @@
 #include <mutex>
 #include <thread>
 
-#include "common/runtime/process_setup.hpp"
-#include "common/runtime/scenario.hpp"
-#include "common/transport/dds_bus.hpp"
-#include "supervisor/recorder.hpp"
+#include "common/app/process_setup.hpp"
+#include "common/record/recorder.hpp"
 
 namespace {
 std::atomic<bool> g_stop{false};
@@ -59,7 +57,8 @@ int main(int argc, char** argv) {
     dopt.publish = false;  // a read-only participant: it publishes nothing an agent acts on
     dopt.test_drop_data_percent = 0;
     DdsBus bus(dopt);
-    bus.set_sample_callback([&](const StateMessage& m, std::int64_t recv_ns) {
+    bus.set_listener([&](const StateMessage& m) {
+      const std::int64_t recv_ns = wall_now_ns();
       std::lock_guard<std::mutex> lock(mu);
       rec.on_sample(m, recv_ns);
     });
@@ -96,7 +95,7 @@ int main(int argc, char** argv) {
         break;
       }
     }
-    bus.set_sample_callback(nullptr);
+    bus.set_listener(nullptr);
     std::lock_guard<std::mutex> lock(mu);
     const std::string text = rec.finish(reason, wall_s());
     std::printf("%s", text.c_str());

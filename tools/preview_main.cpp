@@ -6,7 +6,7 @@
 #include <string>
 
 #include "common/core/graph.hpp"
-#include "common/sim/in_process_swarm.hpp"
+#include "common/sim/lockstep_laws.hpp"
 
 int main(int argc, char** argv) {
   using namespace qswarm;
@@ -32,14 +32,14 @@ int main(int argc, char** argv) {
       return 2;
     }
   }
-  InProcessSwarmConfig cfg;
+  LockstepConfig cfg;
   cfg.agents = {{1, {16, 5, 36}}, {2, {19, 19, 29}}, {3, {12, 16, 33}}, {4, {14, 1, 26}}};
   cfg.law.kind = kind;
   cfg.law.weight.policy = WeightPolicy::kDistance;
   cfg.law.topology.policy = TopologyPolicy::kStickyProximity;
   cfg.law.topology.threshold_m = 12.5;
   cfg.consensus_rate_hz = rate_hz;
-  InProcessSwarm swarm(cfg);
+  LockstepLaws swarm(cfg);
 
   const Vec3 paper(15.25, 10.25, 31.0);
   std::printf(

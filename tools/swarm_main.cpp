@@ -16,6 +16,7 @@
 #include <thread>
 
 #include "common/core/graph.hpp"
+#include "common/runtime/fault_flags.hpp"
 #include "common/runtime/scenario.hpp"
 #include "tools/process_group.hpp"
 

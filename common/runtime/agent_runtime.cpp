@@ -33,6 +33,11 @@ AgentRuntime::AgentRuntime(AgentParams p, NeighborBus& bus)
   if (p_.mode == AgentMode::kQuadcopter) rotors_ = hover_rotors(p_.airframe);
 }
 
+void AgentRuntime::set_start_time(double t_s) {
+  if (steps_ != 0) throw std::logic_error("set_start_time after the first step");
+  p_.start_time_s = t_s;
+}
+
 Vec3 AgentRuntime::position() const {
   return p_.mode == AgentMode::kQuadcopter ? quad_.p_W : law_->state();
 }
@@ -93,6 +98,7 @@ void AgentRuntime::consensus_tick(std::vector<AgentEvent>& events) {
     law_->observe(views);
     for (const auto& [peer, w] : law_->links()) initial_links_.emplace_back(peer, w);
     started_ = true;
+    law_start_s_ = t;
   } else {
     law_->step(static_cast<double>(steps_per_tick_) / p_.physics_hz, views);
   }

@@ -12,7 +12,7 @@
 #include "common/core/dynamics.hpp"
 #include "common/core/tracking_controller.hpp"
 #include "common/core/update_law.hpp"
-#include "common/runtime/faults.hpp"
+#include "common/runtime/link_faults.hpp"
 #include "common/transport/neighbor_bus.hpp"
 
 namespace qswarm {
@@ -49,7 +49,8 @@ struct AgentEvent {
 };
 
 // One agent: its quadcopter (or particle), its tracking controller and its agreement law, stepped
-// in simulated time. No clock, no I/O: the agent process paces it in real time, tests step it.
+// in simulated time. No clock, no I/O: AgentLoop paces it (in real time in swarm-agent, on a
+// manual clock in the in-process swarm).
 class AgentRuntime {
  public:
   AgentRuntime(AgentParams p, NeighborBus& bus);
@@ -59,6 +60,9 @@ class AgentRuntime {
   std::vector<AgentEvent> step();
   // Publish the current state (the process calls this while waiting for peers, with kWaiting).
   void publish(std::uint8_t phase);
+
+  // A late or restarted agent starts on the swarm's clock: set before the first step.
+  void set_start_time(double t_s);
 
   double time_s() const { return p_.start_time_s + static_cast<double>(steps_) / p_.physics_hz; }
   const QuadState& quad() const { return quad_; }
@@ -73,6 +77,9 @@ class AgentRuntime {
   void set_wall_clock(std::function<std::int64_t()> f) { wall_clock_ = std::move(f); }
   void set_fault_counters(const FaultCounters& c) { faults_ = c; }
   int recovered_flows() const { return law_->recovered_count(); }
+  // Simulated time of the law's first tick (-1 before): the start barrier's first tick, or up to
+  // start_grace_s later if some expected peer never ran.
+  double law_start_s() const { return law_start_s_; }
   void set_counters(std::uint64_t received, std::uint64_t dropped, std::uint64_t overruns) {
     received_ = received;
     dropped_ = dropped;
@@ -91,6 +98,7 @@ class AgentRuntime {
   std::uint64_t steps_ = 0;
   std::uint64_t seq_ = 0;
   bool started_ = false;
+  double law_start_s_ = -1.0;
   QuadState quad_;
   RotorSpeeds rotors_ = RotorSpeeds::Zero();
   Vec3 ref_p_W_ = Vec3::Zero();  // rate-limited reference that the quadcopter tracks

@@ -1,90 +1,105 @@
 #include "common/sim/in_process_swarm.hpp"
 
-#include <map>
-#include <random>
-#include <set>
-#include <stdexcept>
+#include <algorithm>
+#include <cstdio>
+#include <limits>
 
 namespace qswarm {
-namespace {
 
-std::vector<NeighborView> views(const std::vector<StateMessage>& msgs) {
-  std::vector<NeighborView> out;
-  out.reserve(msgs.size());
-  for (const StateMessage& m : msgs) out.push_back(m.view);
-  return out;
+InProcessSwarm::InProcessSwarm(RunConfig rc, double time_scale)
+    : rc_(std::move(rc)), time_scale_(time_scale) {
+  for (const AgentSpec& a : rc_.agents) spawn(a.id, slots_[a.id]);
 }
 
-StateMessage to_message(const UpdateLaw& law, double t) {
-  StateMessage m;
-  m.view = law.message();
-  m.stamp_s = t;
-  m.p_W = m.view.q;
-  for (const auto& [peer, w] : law.links()) m.links.emplace_back(peer, w);
-  return m;
+InProcessSwarm::~InProcessSwarm() {
+  // Each loop unregisters from its endpoint before the endpoint goes.
+  for (auto& [id, s] : slots_) s.loop.reset();
 }
 
-}  // namespace
-
-InProcessSwarm::InProcessSwarm(InProcessSwarmConfig cfg) : cfg_(std::move(cfg)) {
-  if (!(cfg_.consensus_rate_hz > 0.0)) throw std::invalid_argument("consensus_rate_hz must be > 0");
-  std::set<AgentId> ids;
-  for (const SwarmAgentSpec& a : cfg_.agents) {
-    if (!ids.insert(a.id).second) throw std::invalid_argument("duplicate agent id");
-    laws_.push_back(make_law(a.id, a.q0, cfg_.law));
+void InProcessSwarm::spawn(AgentId id, Slot& slot) {
+  AgentLoopOptions o;
+  o.time_scale = time_scale_;
+  o.incarnation = slot.life + 1;  // a respawn is a newer life
+  if (slot.life > 0) {
+    // Like the launcher: the n-th respawn joins at the n-th planned restart and recovers flows.
+    o.join_at_s = rc_.faults.restarts_of(id).at(static_cast<std::size_t>(slot.life - 1));
+    o.restarted = true;
   }
-  for (const auto& law : laws_) bus_.publish(to_message(*law, 0.0));
-  // Links are found from the first messages before anyone moves, so every published total weight
-  // is known at the first tick.
-  for (auto& law : laws_) law->observe(views(bus_.latest(law->id())));
-  for (const auto& law : laws_) bus_.publish(to_message(*law, 0.0));
+  slot.loop.reset();
+  slot.bus = std::make_unique<InMemoryBus>(net_);  // a new process has a new transport
+  slot.loop = std::make_unique<AgentLoop>(rc_, id, o, *slot.bus, clock_);
+  slot.wake_at_s = clock_.now_s();
+}
+
+void InProcessSwarm::note(AgentId id, const std::string& text) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.3f ", clock_.now_s());
+  log_.push_back(buf + std::to_string(id) + " " + text);
 }
 
 void InProcessSwarm::step() {
-  std::vector<std::vector<NeighborView>> inbox;
-  inbox.reserve(laws_.size());
-  for (const auto& law : laws_) inbox.push_back(views(bus_.latest(law->id())));
-  for (size_t i = 0; i < laws_.size(); ++i) laws_[i]->step(dt_s(), inbox[i]);
-  time_s_ += dt_s();
-  for (const auto& law : laws_) bus_.publish(to_message(*law, time_s_));
+  const double now = clock_.now_s();
+  for (auto& [id, s] : slots_) {
+    if (!s.loop || s.finished || s.wake_at_s > now) continue;
+    const AgentLoop::Poll p = s.loop->poll();
+    for (const AgentLoop::Note& n : p.notes) note(id, n.text);
+    if (p.kill) {
+      note(id, "planned kill");
+      ++s.life;
+      const bool restarts = s.life <= static_cast<int>(rc_.faults.restarts_of(id).size());
+      s.loop.reset();  // dies silently, like SIGKILL
+      s.bus.reset();
+      if (restarts) {
+        spawn(id, s);
+        note(id, "respawned");
+      }
+      continue;
+    }
+    if (p.done) {
+      s.loop->stop();
+      s.finished = true;
+      continue;
+    }
+    s.wake_at_s = p.wake_at_s;
+  }
+  net_.deliver();
+  double next = std::numeric_limits<double>::infinity();
+  for (const auto& [id, s] : slots_)
+    if (s.loop && !s.finished) next = std::min(next, s.wake_at_s);
+  if (next < std::numeric_limits<double>::infinity()) clock_.set(next);
 }
 
-bool InProcessSwarm::run_until_converged(double tol_m, double max_time_s) {
-  while (time_s_ < max_time_s) {
-    if (disagreement(states()) < tol_m) return true;
+void InProcessSwarm::run_until_wall(double wall_s) {
+  run_until([] { return false; }, wall_s);
+}
+
+bool InProcessSwarm::run_until(const std::function<bool()>& pred, double max_wall_s) {
+  while (clock_.now_s() < max_wall_s) {
+    if (pred()) return true;
     step();
+    bool any = false;
+    for (const auto& [id, s] : slots_) any |= s.loop && !s.finished;
+    if (!any) break;
   }
-  return disagreement(states()) < tol_m;
+  return pred();
 }
 
-Positions InProcessSwarm::states() const {
+const AgentLoop* InProcessSwarm::agent(AgentId id) const {
+  const auto it = slots_.find(id);
+  return it == slots_.end() ? nullptr : it->second.loop.get();
+}
+
+Positions InProcessSwarm::running_states() const {
   Positions q;
-  for (const auto& law : laws_) q.push_back(law->state());
+  for (const auto& [id, s] : slots_)
+    if (s.loop && s.loop->phase() == LifePhase::kRunning)
+      q.push_back(s.loop->runtime().consensus());
   return q;
 }
 
-Positions InProcessSwarm::initial_states() const {
-  Positions q;
-  for (const auto& law : laws_) q.push_back(law->initial_state());
-  return q;
-}
-
-std::vector<Edge> InProcessSwarm::edges() const {
-  std::vector<AgentId> ids;
-  for (const auto& law : laws_) ids.push_back(law->id());
-  return edges_from_links(
-      ids, [&](int i) -> const auto& { return laws_[i]->links(); });
-}
-
-std::vector<SwarmAgentSpec> InProcessSwarm::random_agents(int n, std::uint64_t seed, double box_m) {
-  std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<double> u(0.0, box_m);
-  std::vector<SwarmAgentSpec> out;
-  for (int i = 0; i < n; ++i) {
-    const double x = u(rng), y = u(rng), z = u(rng);
-    out.push_back({static_cast<AgentId>(i + 1), Vec3(x, y, z)});
-  }
-  return out;
+double InProcessSwarm::disagreement_running() const {
+  const Positions q = running_states();
+  return q.empty() ? 0.0 : disagreement(q);
 }
 
 }  // namespace qswarm

@@ -1,54 +1,67 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
+#include <map>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "common/core/graph.hpp"
-#include "common/core/update_law.hpp"
-#include "common/transport/neighbor_bus.hpp"
+#include "common/runtime/agent_loop.hpp"
+#include "common/runtime/clock.hpp"
+#include "common/runtime/run_config.hpp"
+#include "common/transport/in_memory_bus.hpp"
 
 namespace qswarm {
 
-struct SwarmAgentSpec {
-  AgentId id = 0;
-  Vec3 q0 = Vec3::Zero();
-};
-
-struct InProcessSwarmConfig {
-  std::vector<SwarmAgentSpec> agents;
-  LawConfig law;
-  double consensus_rate_hz = 50.0;
-};
-
-// N agents running the per-agent law over an in-memory bus in lockstep: every tick each agent reads
-// the others' messages from the previous tick, all step, then all publish. Deterministic.
+// A whole run in one process: one AgentLoop per agent of the RunConfig (the object swarm-agent
+// runs), each on its own endpoint of an InMemoryNetwork, all on one ManualClock. Like `swarm run`
+// it starts every agent at once (late joiners wait silently), and respawns an agent killed by the
+// plan so that it rejoins at its restart time. Deterministic: agents are polled in id order and a
+// round's messages are delivered after the round.
 class InProcessSwarm {
  public:
-  explicit InProcessSwarm(InProcessSwarmConfig cfg);
+  explicit InProcessSwarm(RunConfig rc, double time_scale = 1.0);
+  ~InProcessSwarm();
 
+  // One round: poll every agent that is due, deliver, move the clock to the next wake-up.
   void step();
-  // Steps until the disagreement is below tol_m or max_time_s passes; returns whether it converged.
-  bool run_until_converged(double tol_m, double max_time_s);
+  // Steps until the wall clock (time-scaled seconds since the start) reaches wall_s.
+  void run_until_wall(double wall_s);
+  // Steps until pred() holds or the wall clock passes max_wall_s; returns whether pred held.
+  bool run_until(const std::function<bool()>& pred, double max_wall_s);
 
-  double time_s() const { return time_s_; }
-  double dt_s() const { return 1.0 / cfg_.consensus_rate_hz; }
-  int size() const { return static_cast<int>(laws_.size()); }
-  Positions states() const;
-  Positions initial_states() const;
-  // The graph as the agents currently see it: an edge when either endpoint holds the link
-  // (weight as the lower id computes it), by index into agents.
-  std::vector<Edge> edges() const;
-  const UpdateLaw& law(int index) const { return *laws_[index]; }
-
-  // n agents uniformly in a cube of side box_m from a seeded generator (ids 1..n).
-  static std::vector<SwarmAgentSpec> random_agents(int n, std::uint64_t seed, double box_m);
+  double wall_s() const { return clock_.now_s(); }
+  const RunConfig& config() const { return rc_; }
+  // The agent's current life, or nullptr while it is dead.
+  const AgentLoop* agent(AgentId id) const;
+  // Consensus states of the agents alive and running, in id order.
+  Positions running_states() const;
+  // Largest distance of a running agent's consensus state from their mean (0 if none).
+  double disagreement_running() const;
+  // Notes the agents logged, kills and respawns, in order: "wall_s agent text".
+  const std::vector<std::string>& log() const { return log_; }
+  // The network, for tests that act as a stranger on it.
+  InMemoryNetwork& network() { return net_; }
 
  private:
-  InProcessSwarmConfig cfg_;
-  std::vector<std::unique_ptr<UpdateLaw>> laws_;
-  InMemoryBus bus_;
-  double time_s_ = 0.0;
+  struct Slot {
+    std::unique_ptr<InMemoryBus> bus;
+    std::unique_ptr<AgentLoop> loop;
+    double wake_at_s = 0.0;
+    int life = 0;
+    bool finished = false;
+  };
+  void spawn(AgentId id, Slot& slot);
+  void note(AgentId id, const std::string& text);
+
+  RunConfig rc_;
+  double time_scale_;
+  ManualClock clock_;
+  InMemoryNetwork net_;
+  std::map<AgentId, Slot> slots_;
+  std::vector<std::string> log_;
 };
 
 }  // namespace qswarm

@@ -1,36 +1,39 @@
 #pragma once
 
-#include <map>
+#include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "common/transport/state_message.hpp"
 
 namespace qswarm {
 
-// The one narrow interface an agent uses to talk: publish its own state, read the newest state of
-// every other agent it hears. DDS implements it for the product; InMemoryBus for tests.
-class NeighborBus {
- public:
-  virtual ~NeighborBus() = default;
-  virtual void publish(const StateMessage& msg) = 0;
-  // Newest message of every agent other than `self` (one per agent).
-  virtual std::vector<StateMessage> latest(AgentId self) = 0;
+struct BusCounters {
+  std::uint64_t published = 0;
+  std::uint64_t received = 0;  // accepted samples
+  std::uint64_t dropped = 0;   // refused: invalid content
+  std::uint64_t stale = 0;     // refused: not newer than what we hold
 };
 
-// All agents in one process share one table of newest messages.
-class InMemoryBus final : public NeighborBus {
+// The one narrow interface an agent uses to talk: publish its own state, read the newest state of
+// every other agent it hears. DDS implements it for the product (common/dds), InMemoryBus for
+// tests and the in-process swarm, FaultyBus (common/runtime) decorates either with link faults.
+class NeighborBus {
  public:
-  void publish(const StateMessage& msg) override { latest_[msg.view.id] = msg; }
-  std::vector<StateMessage> latest(AgentId self) override {
-    std::vector<StateMessage> out;
-    out.reserve(latest_.size());
-    for (const auto& [id, m] : latest_)
-      if (id != self) out.push_back(m);
-    return out;
-  }
+  using Listener = std::function<void(const StateMessage&)>;
 
- private:
-  std::map<AgentId, StateMessage> latest_;
+  virtual ~NeighborBus() = default;
+  virtual void publish(const StateMessage& msg) = 0;
+  // Newest accepted message of every agent other than `self` (one per agent).
+  virtual std::vector<StateMessage> latest(AgentId self) = 0;
+  // Called for every accepted sample, possibly on a transport thread. When set_listener returns,
+  // the previous listener is not running and is never called again: a decorator that registers
+  // itself can unregister in its destructor and be destroyed safely while samples still flow.
+  virtual void set_listener(Listener listener) = 0;
+  // What the transport accepted and refused (SampleGate).
+  virtual BusCounters counters() const = 0;
+  // Readers matched to our writer (DDS discovery: the start barrier waits for the supervisor's).
+  virtual int matched_readers() const { return 0; }
 };
 
 }  // namespace qswarm

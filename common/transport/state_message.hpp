@@ -1,5 +1,6 @@
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <string>
 #include <utility>
@@ -11,6 +12,10 @@
 #include "common/core/update_law.hpp"
 
 namespace qswarm {
+
+// The largest swarm a run may have (the scenario refuses more): every list in a state message
+// (links, flows, copies) has at most kMaxSwarmAgents - 1 entries, and the wire carries them all.
+inline constexpr std::size_t kMaxSwarmAgents = 512;
 
 enum class AgentMode : std::uint8_t { kParticle = 0, kQuadcopter = 1 };
 

@@ -5,16 +5,16 @@
 #include <random>
 
 #include "common/core/graph.hpp"
-#include "common/sim/in_process_swarm.hpp"
+#include "common/sim/lockstep_laws.hpp"
 #include "tests/core/paper_data.hpp"
 
 namespace qswarm {
 namespace {
 
-InProcessSwarmConfig fixed_graph(const Positions& q0, LawKind kind, WeightPolicy w,
+LockstepConfig fixed_graph(const Positions& q0, LawKind kind, WeightPolicy w,
                                  std::vector<std::pair<AgentId, AgentId>> edges,
                                  double rate_hz = 50.0) {
-  InProcessSwarmConfig cfg;
+  LockstepConfig cfg;
   for (size_t i = 0; i < q0.size(); ++i) cfg.agents.push_back({static_cast<AgentId>(i + 1), q0[i]});
   cfg.law.kind = kind;
   cfg.law.weight.policy = w;
@@ -31,7 +31,7 @@ std::string law_name(const ::testing::TestParamInfo<LawKind>& p) {
 class BothLaws : public ::testing::TestWithParam<LawKind> {};
 
 // Max over a 10 s run of max_i |q_i(t) - [exp(-L t) q0]_i|.
-double max_deviation_from_exact(InProcessSwarm& swarm, const Eigen::MatrixXd& L,
+double max_deviation_from_exact(LockstepLaws& swarm, const Eigen::MatrixXd& L,
                                 const Positions& q0) {
   double worst = 0.0;
   while (swarm.time_s() < 10.0) {
@@ -46,7 +46,7 @@ double max_deviation_from_exact(InProcessSwarm& swarm, const Eigen::MatrixXd& L,
 TEST_P(BothLaws, FullyConnectedVertexMovesOnAStraightLine) {
   // Paper, Theorem (fully connected vertex): in scenario 1 agent 2 is linked to all others, so
   // q^2(t) - alpha = (q^2(0) - alpha) e^{-n t}: a straight segment toward the agreement point.
-  InProcessSwarm swarm(
+  LockstepLaws swarm(
       fixed_graph(paper::kUnweightedQ0, GetParam(), WeightPolicy::kUnweighted, paper::kGraph1));
   const Vec3 start = paper::kUnweightedQ0[1];
   const Vec3 dir = (paper::kUnweightedAgreement - start).normalized();
@@ -61,7 +61,7 @@ TEST_P(BothLaws, FullyConnectedVertexMovesOnAStraightLine) {
   }
   EXPECT_LT(off_line, 1e-9);
   // Agent 1 (degree 1) does not move on a straight line: the test can tell the difference.
-  InProcessSwarm other(
+  LockstepLaws other(
       fixed_graph(paper::kUnweightedQ0, GetParam(), WeightPolicy::kUnweighted, paper::kGraph1));
   const Vec3 s1 = paper::kUnweightedQ0[0];
   const Vec3 d1 = (paper::kUnweightedAgreement - s1).normalized();
@@ -89,9 +89,9 @@ TEST_P(BothLaws, AverageIsInvariantOnWeightedAndTimeVaryingGraphs) {
       {paper::kTimeVaryingQ0, WeightPolicy::kInverseDistance, TopologyPolicy::kProximity, {}},
   };
   for (const Case& c : cases) {
-    InProcessSwarmConfig cfg = fixed_graph(c.q0, GetParam(), c.w, c.edges);
+    LockstepConfig cfg = fixed_graph(c.q0, GetParam(), c.w, c.edges);
     cfg.law.topology.policy = c.topo;
-    InProcessSwarm swarm(cfg);
+    LockstepLaws swarm(cfg);
     const Vec3 avg0 = average(c.q0);
     double drift = 0.0;
     while (swarm.time_s() < 20.0) {
@@ -103,13 +103,13 @@ TEST_P(BothLaws, AverageIsInvariantOnWeightedAndTimeVaryingGraphs) {
 }
 
 TEST_P(BothLaws, TwelveRandomAgentsMeetAtTheirAverage) {
-  InProcessSwarmConfig cfg;
-  cfg.agents = InProcessSwarm::random_agents(12, /*seed=*/42, /*box_m=*/30.0);
+  LockstepConfig cfg;
+  cfg.agents = LockstepLaws::random_agents(12, /*seed=*/42, /*box_m=*/30.0);
   cfg.law.kind = GetParam();
   cfg.law.weight.policy = WeightPolicy::kUnweighted;
   cfg.law.topology.policy = TopologyPolicy::kStickyProximity;
   cfg.law.topology.threshold_m = 20.0;
-  InProcessSwarm swarm(cfg);
+  LockstepLaws swarm(cfg);
   const Vec3 avg0 = average(swarm.initial_states());
   ASSERT_EQ(analyze(laplacian(12, swarm.edges())).components, 1) << "seed 42 must start connected";
   ASSERT_TRUE(swarm.run_until_converged(1e-6, 60.0));
@@ -138,8 +138,8 @@ TEST_P(BothLaws, FixedGraphsTrackTheExactSolution) {
     const Eigen::MatrixXd L =
         laplacian(4, paper::to_index_edges(c.edges, weighted ? &c.q0 : nullptr));
     const double spread = disagreement(c.q0);
-    InProcessSwarm at50(fixed_graph(c.q0, GetParam(), c.w, c.edges, 50.0));
-    InProcessSwarm at500(fixed_graph(c.q0, GetParam(), c.w, c.edges, 500.0));
+    LockstepLaws at50(fixed_graph(c.q0, GetParam(), c.w, c.edges, 50.0));
+    LockstepLaws at500(fixed_graph(c.q0, GetParam(), c.w, c.edges, 500.0));
     const double e50 = max_deviation_from_exact(at50, L, c.q0);
     const double e500 = max_deviation_from_exact(at500, L, c.q0);
     EXPECT_LT(e50, c.tol_50hz * spread) << to_string(c.w);
@@ -154,10 +154,10 @@ TEST_P(BothLaws, FixedGraphsTrackTheExactSolution) {
 TEST_P(BothLaws, StableForLargeWeightsAtLowRates) {
   // Distance weights scaled by 100 (lambda_max dt = 125 at 50 Hz): plain Euler would blow up; the
   // bounded step keeps every agent inside the initial convex hull's bounding box and converges.
-  InProcessSwarmConfig cfg =
+  LockstepConfig cfg =
       fixed_graph(paper::kWeightedQ0, GetParam(), WeightPolicy::kInitialDistance, paper::kGraph1);
   cfg.law.weight.scale = 100.0;
-  InProcessSwarm swarm(cfg);
+  LockstepLaws swarm(cfg);
   Vec3 lo = paper::kWeightedQ0[0], hi = lo;
   for (const Vec3& q : paper::kWeightedQ0) {
     lo = lo.cwiseMin(q);

@@ -2,7 +2,7 @@
 #include <gtest/gtest.h>
 
 #include "common/core/graph.hpp"
-#include "common/sim/in_process_swarm.hpp"
+#include "common/sim/lockstep_laws.hpp"
 #include "tests/core/paper_data.hpp"
 
 namespace qswarm {
@@ -20,10 +20,10 @@ void expect_spectrum(const Eigen::MatrixXd& L, const std::vector<double>& expect
   for (size_t k = 0; k < expected.size(); ++k) EXPECT_NEAR(s.eigenvalues[k], expected[k], tol) << k;
 }
 
-InProcessSwarmConfig paper_swarm(const Positions& q0, LawKind kind, WeightPolicy w,
+LockstepConfig paper_swarm(const Positions& q0, LawKind kind, WeightPolicy w,
                                  TopologyPolicy topo,
                                  std::vector<std::pair<AgentId, AgentId>> edges) {
-  InProcessSwarmConfig cfg;
+  LockstepConfig cfg;
   for (size_t i = 0; i < q0.size(); ++i) cfg.agents.push_back({static_cast<AgentId>(i + 1), q0[i]});
   cfg.law.kind = kind;
   cfg.law.weight.policy = w;
@@ -82,7 +82,7 @@ class TimeVaryingRun : public ::testing::TestWithParam<LawKind> {};
 TEST_P(TimeVaryingRun, AddsEdgesEndsFullyConnectedAndMeetsAtTheAverage) {
   // Given the paper's time-varying example: distance weights, sticky proximity (threshold 12.5 m:
   // the paper does not state one; any value in [12.083, 15.937) gives its initial graph).
-  InProcessSwarm swarm(paper_swarm(paper::kTimeVaryingQ0, GetParam(), WeightPolicy::kDistance,
+  LockstepLaws swarm(paper_swarm(paper::kTimeVaryingQ0, GetParam(), WeightPolicy::kDistance,
                                    TopologyPolicy::kStickyProximity, {}));
   ASSERT_EQ(swarm.edges().size(), 3u);  // the initial graph is the paper's: 1-3, 1-4, 2-3
   size_t max_edges = 3;

@@ -12,6 +12,7 @@
 
 #include "common/core/graph.hpp"
 #include "common/runtime/scenario.hpp"
+#include "tests/swarm/domain_lease.hpp"
 #include "tests/swarm/harness.hpp"
 
 namespace qswarm::test {
@@ -23,7 +24,7 @@ Vec3 vec(const google::protobuf::RepeatedField<double>& f) {
 
 const Vec3 kAverage(14, 9, 20);  // scenarios/faults_six.txtpb
 
-records::Summary fly(const std::string& name, int domain, std::vector<std::string> faults,
+records::Summary fly(const std::string& name, std::vector<std::string> faults,
                      const std::string& law = "edge-flow", double time_scale = 4.0) {
   const auto dir = fresh_dir(name);
   std::vector<std::string> argv = {bin("swarm"),
@@ -32,7 +33,7 @@ records::Summary fly(const std::string& name, int domain, std::vector<std::strin
                                    "--out",
                                    dir.string(),
                                    "--domain",
-                                   std::to_string(domain),
+                                   test_domain().str(),
                                    "--time-scale",
                                    std::to_string(time_scale),
                                    "--law",
@@ -53,7 +54,7 @@ bool has_event(const std::string& name, const std::string& kind, const std::stri
 TEST(Faults, EdgeFlowKeepsTheAverageUnderLossJitterAndCutsAndLaplacianDrifts) {
   const std::vector<std::string> faults = {"--loss", "0.3",     "--delay", "0.02:0.02",
                                            "--cut",  "1-2@2:6", "--cut",   "3-5@3:8"};
-  const records::Summary ef = fly("loss-edge-flow", 81, faults);
+  const records::Summary ef = fly("loss-edge-flow", faults);
   EXPECT_TRUE(ef.converged());
   EXPECT_LT(ef.average_relative_error(), 1e-9);
   EXPECT_GT(ef.faults().loss(), 1000u);
@@ -63,7 +64,7 @@ TEST(Faults, EdgeFlowKeepsTheAverageUnderLossJitterAndCutsAndLaplacianDrifts) {
   EXPECT_TRUE(has_event("loss-edge-flow", "cut", "1"));
   EXPECT_TRUE(has_event("loss-edge-flow", "cut_end", "3"));
   // The paper's law under the same faults: it still agrees, but not on the average.
-  const records::Summary lp = fly("loss-laplacian", 82, faults, "laplacian");
+  const records::Summary lp = fly("loss-laplacian", faults, "laplacian");
   std::printf(
       "30%% loss, 20+-20 ms delay, two cuts: edge-flow relative error %.3e, laplacian %.3e (%.3f "
       "m)\n",
@@ -73,7 +74,7 @@ TEST(Faults, EdgeFlowKeepsTheAverageUnderLossJitterAndCutsAndLaplacianDrifts) {
 }
 
 TEST(Faults, PartitionAgreesPerSideThenGloballyAfterHealing) {
-  const records::Summary s = fly("partition", 83, {"--partition", "1,2,3@0:8", "--loss", "0.3"});
+  const records::Summary s = fly("partition", {"--partition", "1,2,3@0:8", "--loss", "0.3"});
   EXPECT_TRUE(s.converged());
   EXPECT_LT(s.average_relative_error(), 1e-9);
   EXPECT_GT(s.faults().partition(), 0u);
@@ -98,7 +99,7 @@ TEST(Faults, PartitionAgreesPerSideThenGloballyAfterHealing) {
 }
 
 TEST(Faults, KilledAndRestartedAgentRejoinsWithoutMovingTheAgreedValue) {
-  const records::Summary s = fly("kill-restart", 84, {"--kill", "3@3:6", "--loss", "0.3"});
+  const records::Summary s = fly("kill-restart", {"--kill", "3@3:6", "--loss", "0.3"});
   EXPECT_TRUE(s.converged());
   EXPECT_LT(s.average_relative_error(), 1e-9);
   EXPECT_EQ(s.faults().kills(), 1u);
@@ -124,7 +125,7 @@ TEST(Faults, LateJoinerBringsItsStartIntoTheAverage) {
   std::ofstream(scen) << read_file(scenario("faults_six"))
                       << "faults { late_join { agent: 6 at_s: 3 } }\n";
   const Result r = run({bin("swarm"), "run", scen.string(), "--out", (dir / "run").string(),
-                        "--domain", "86", "--time-scale", "4", "--quiet"},
+                        "--domain", test_domain().str(), "--time-scale", "4", "--quiet"},
                        300.0);
   ASSERT_EQ(r.code, 0) << r.output;
   const records::Summary s = read_summary(dir / "run");
@@ -141,7 +142,7 @@ TEST(Faults, LateJoinerBringsItsStartIntoTheAverage) {
 TEST(Faults, LossBelowTheApplicationThroughFastDdsTestTransport) {
   // 30% of data messages dropped by Fast DDS's test transport on every sender (data-sharing and
   // shared memory are off, so nothing bypasses it); the app-level fault filter injects nothing.
-  const records::Summary s = fly("transport-loss", 85, {"--transport-loss", "30"});
+  const records::Summary s = fly("transport-loss", {"--transport-loss", "30"});
   EXPECT_TRUE(s.converged());
   EXPECT_LT(s.average_relative_error(), 1e-9);
   EXPECT_EQ(s.faults().dropped(), 0u);

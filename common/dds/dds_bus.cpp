@@ -1,4 +1,4 @@
-#include "common/transport/dds_bus.hpp"
+#include "common/dds/dds_bus.hpp"
 
 #include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
 #include <fastdds/rtps/transport/shared_mem/SharedMemTransportDescriptor.h>
@@ -15,8 +15,13 @@
 #include <fastdds/dds/subscriber/Subscriber.hpp>
 #include <fastdds/dds/topic/TypeSupport.hpp>
 
+#include <atomic>
 #include <chrono>
+#include <mutex>
 #include <stdexcept>
+
+#include "common/dds/idl_convert.hpp"
+#include "common/transport/sample_gate.hpp"
 
 #include "swarm_statePubSubTypes.h"
 
@@ -31,104 +36,6 @@ std::int64_t wall_now_ns() {
       .count();
 }
 
-namespace {
-
-Vec3 vec(const std::array<double, 3>& a) { return Vec3(a[0], a[1], a[2]); }
-std::array<double, 3> arr(const Vec3& v) { return {v.x(), v.y(), v.z()}; }
-
-void to_idl(const StateMessage& m, qswarm_msgs::AgentState& s) {
-  s.id(m.view.id);
-  s.seq(m.seq);
-  s.view_seq(m.view.seq);
-  s.stamp_s(m.stamp_s);
-  s.wall_ns(m.wall_ns);
-  s.incarnation(m.incarnation);
-  s.mode(static_cast<uint8_t>(m.mode));
-  s.phase(m.phase);
-  s.consensus(arr(m.view.q));
-  s.initial(arr(m.view.q0));
-  s.total_weight(m.view.total_weight);
-  s.position(arr(m.p_W));
-  s.velocity(arr(m.v_W));
-  s.orientation({m.q_WB.w(), m.q_WB.x(), m.q_WB.y(), m.q_WB.z()});
-  s.rotors({m.rotors_radps[0], m.rotors_radps[1], m.rotors_radps[2], m.rotors_radps[3]});
-  s.received(m.received);
-  s.dropped(m.dropped);
-  s.overruns(m.overruns);
-  s.fault_loss(m.fault_loss);
-  s.fault_burst(m.fault_burst);
-  s.fault_cut(m.fault_cut);
-  s.fault_partition(m.fault_partition);
-  s.fault_delayed(m.fault_delayed);
-  const auto put_links = [](const std::vector<std::pair<AgentId, double>>& in,
-                            std::vector<qswarm_msgs::LinkEntry>& out) {
-    out.clear();
-    for (const auto& [peer, w] : in) {
-      if (out.size() >= 256) break;
-      qswarm_msgs::LinkEntry e;
-      e.peer(peer);
-      e.weight(w);
-      out.push_back(e);
-    }
-  };
-  put_links(m.links, s.links());
-  put_links(m.initial_links, s.initial_links());
-  s.flows().clear();
-  for (const FlowEntry& f : m.view.flows) {
-    if (s.flows().size() >= 256) break;
-    qswarm_msgs::FlowEntry e;
-    e.peer(f.peer);
-    e.flow(arr(f.flow));
-    e.weight(f.weight);
-    e.active(f.active);
-    s.flows().push_back(e);
-  }
-  s.copies().clear();
-  for (const FlowEntry& f : m.view.copies) {
-    if (s.copies().size() >= 256) break;
-    qswarm_msgs::FlowEntry e;
-    e.peer(f.peer);
-    e.flow(arr(f.flow));
-    s.copies().push_back(e);
-  }
-}
-
-StateMessage from_idl(const qswarm_msgs::AgentState& s) {
-  StateMessage m;
-  m.view.id = s.id();
-  m.seq = s.seq();
-  m.view.seq = s.view_seq();
-  m.stamp_s = s.stamp_s();
-  m.wall_ns = s.wall_ns();
-  m.incarnation = s.incarnation();
-  m.mode = static_cast<AgentMode>(s.mode());
-  m.phase = s.phase();
-  m.view.q = vec(s.consensus());
-  m.view.q0 = vec(s.initial());
-  m.view.total_weight = s.total_weight();
-  m.p_W = vec(s.position());
-  m.v_W = vec(s.velocity());
-  m.q_WB = Eigen::Quaterniond(s.orientation()[0], s.orientation()[1], s.orientation()[2],
-                              s.orientation()[3]);
-  m.rotors_radps = RotorSpeeds(s.rotors()[0], s.rotors()[1], s.rotors()[2], s.rotors()[3]);
-  m.received = s.received();
-  m.dropped = s.dropped();
-  m.overruns = s.overruns();
-  m.fault_loss = s.fault_loss();
-  m.fault_burst = s.fault_burst();
-  m.fault_cut = s.fault_cut();
-  m.fault_partition = s.fault_partition();
-  m.fault_delayed = s.fault_delayed();
-  for (const auto& e : s.links()) m.links.emplace_back(e.peer(), e.weight());
-  for (const auto& e : s.initial_links()) m.initial_links.emplace_back(e.peer(), e.weight());
-  for (const auto& e : s.copies()) m.view.copies.push_back({e.peer(), vec(e.flow()), 0.0, false});
-  for (const auto& e : s.flows())
-    m.view.flows.push_back({e.peer(), vec(e.flow()), e.weight(), e.active()});
-  return m;
-}
-
-}  // namespace
-
 struct DdsBus::Impl : public dds::DataReaderListener {
   DdsOptions opts;
   dds::DomainParticipant* participant = nullptr;
@@ -139,11 +46,13 @@ struct DdsBus::Impl : public dds::DataReaderListener {
   dds::DataReader* reader = nullptr;
   dds::TypeSupport type{new qswarm_msgs::AgentStatePubSubType()};
 
-  mutable std::mutex mu;
-  std::map<AgentId, StateMessage> latest;
-  std::set<AgentId> warned;
-  BusCounters counters;
-  SampleCallback callback;
+  mutable std::mutex mu;  // the gate
+  SampleGate gate;
+  // Held while the listener runs and while it is replaced: once set_listener returns, the old
+  // listener is neither running nor called again (the agent's decorator unregisters this way
+  // before it is destroyed, while DDS threads still deliver).
+  std::mutex listener_mu;
+  Listener listener;
   struct WriterListener : public dds::DataWriterListener {
     std::atomic<int> matched{0};
     void on_publication_matched(dds::DataWriter*,
@@ -169,30 +78,20 @@ struct DdsBus::Impl : public dds::DataReaderListener {
   }
 
   void accept(const StateMessage& m) {
-    const std::int64_t now = wall_now_ns();
     const std::string why = check_message(m);  // pure: outside the lock the agent's tick takes
-    SampleCallback cb;
+    SampleGate::Result r;
     {
       std::lock_guard<std::mutex> lock(mu);
-      if (!why.empty()) {
-        ++counters.dropped;
-        if (warned.insert(m.view.id).second) {
-          spdlog::warn(
-              "dropped a sample from agent {}: {} (further drops from it are counted, not logged)",
-              m.view.id, why);
-        }
-        return;
-      }
-      auto it = latest.find(m.view.id);
-      if (it != latest.end() && !is_newer(m, it->second)) {
-        ++counters.stale;
-        return;
-      }
-      latest[m.view.id] = m;
-      ++counters.received;
-      cb = callback;
+      r = gate.admit(m, why);
     }
-    if (cb) cb(m, now);
+    if (r.verdict == SampleGate::Verdict::kInvalid && r.first_from) {
+      spdlog::warn(
+          "dropped a sample from agent {}: {} (further drops from it are counted, not logged)",
+          m.view.id, r.why);
+    }
+    if (r.verdict != SampleGate::Verdict::kAccepted) return;
+    std::lock_guard<std::mutex> lock(listener_mu);
+    if (listener) listener(m);
   }
 };
 
@@ -261,6 +160,8 @@ DdsBus::DdsBus(const DdsOptions& opts) : impl_(std::make_unique<Impl>()) {
 
 DdsBus::~DdsBus() {
   Impl& d = *impl_;
+  set_listener(nullptr);
+  if (d.reader) d.reader->set_listener(nullptr);
   if (d.participant) {
     d.participant->delete_contained_entities();
     dds::DomainParticipantFactory::get_instance()->delete_participant(d.participant);
@@ -273,27 +174,23 @@ void DdsBus::publish(const StateMessage& msg) {
   to_idl(msg, d.out_sample);
   if (d.writer->write(&d.out_sample)) {
     std::lock_guard<std::mutex> lock(d.mu);
-    ++d.counters.published;
+    ++d.gate.counters().published;
   }
 }
 
 std::vector<StateMessage> DdsBus::latest(AgentId self) {
   std::lock_guard<std::mutex> lock(impl_->mu);
-  std::vector<StateMessage> out;
-  out.reserve(impl_->latest.size());
-  for (const auto& [id, m] : impl_->latest)
-    if (id != self) out.push_back(m);
-  return out;
+  return impl_->gate.latest(self);
 }
 
-void DdsBus::set_sample_callback(SampleCallback cb) {
-  std::lock_guard<std::mutex> lock(impl_->mu);
-  impl_->callback = std::move(cb);
+void DdsBus::set_listener(Listener listener) {
+  std::lock_guard<std::mutex> lock(impl_->listener_mu);
+  impl_->listener = std::move(listener);
 }
 
 BusCounters DdsBus::counters() const {
   std::lock_guard<std::mutex> lock(impl_->mu);
-  return impl_->counters;
+  return impl_->gate.counters();
 }
 
 int DdsBus::matched_readers() const { return impl_->writer_listener.matched; }

@@ -3,7 +3,9 @@
 
 #include <algorithm>
 
-#include "common/runtime/faults.hpp"
+#include "common/runtime/fault_plan.hpp"
+#include "common/runtime/faulty_bus.hpp"
+#include "common/transport/in_memory_bus.hpp"
 
 namespace qswarm {
 namespace {
@@ -64,7 +66,9 @@ TEST(LinkFaults, CutsAndPartitionsHoldOnlyInsideTheirWindows) {
 }
 
 TEST(FaultyBus, DelayHoldsMessagesAndKeepsTheNewest) {
-  InMemoryBus inner;
+  // Given agent 1's endpoint decorated with a 0.1 +- 0.05 s delay, and agent 2 sending to it
+  InMemoryNetwork net;
+  InMemoryBus inner(net), sender(net);
   FaultPlan plan;
   plan.delay.push_back({0.1, 0.05, 0, 0});
   FaultyBus bus(inner, LinkFaults(plan, 1, 5), 1);
@@ -72,16 +76,18 @@ TEST(FaultyBus, DelayHoldsMessagesAndKeepsTheNewest) {
   m.view.id = 2;
   m.seq = 1;
   bus.set_time(0.0);
-  bus.deliver(m);
+  sender.publish(m);
+  net.deliver();
   EXPECT_TRUE(bus.latest(1).empty());  // still held
   m.seq = 2;
   bus.set_time(0.01);
-  bus.deliver(m);
+  sender.publish(m);
+  net.deliver();
   bus.set_time(0.5);
   const auto got = bus.latest(1);
   ASSERT_EQ(got.size(), 1u);
   EXPECT_EQ(got[0].seq, 2u);  // a reordered older one never replaces the newest
-  EXPECT_EQ(bus.counters().delayed, 2u);
+  EXPECT_EQ(bus.fault_counters().delayed, 2u);
 }
 
 TEST(FaultPlan, TimelineAndLastFaultEnd) {

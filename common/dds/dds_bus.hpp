@@ -1,12 +1,7 @@
 #pragma once
 
-#include <atomic>
 #include <cstdint>
-#include <functional>
-#include <map>
 #include <memory>
-#include <mutex>
-#include <set>
 #include <string>
 
 #include "common/transport/neighbor_bus.hpp"
@@ -26,20 +21,12 @@ struct DdsOptions {
   std::uint8_t test_drop_data_percent = 0;
 };
 
-struct BusCounters {
-  std::uint64_t published = 0;
-  std::uint64_t received = 0;  // accepted samples
-  std::uint64_t dropped = 0;   // refused: invalid content
-  std::uint64_t stale = 0;     // refused: not newer than what we hold
-};
-
 // The product's NeighborBus: one DomainParticipant, the keyed best-effort state topic
 // "qswarm/agent_state", a keep-last-1 writer and reader. Incoming samples are checked in the
-// listener: bad ones are dropped, counted and logged once per peer; nothing throws out of it.
+// listener through the SampleGate: bad ones are dropped, counted and logged once per peer;
+// nothing throws out of it.
 class DdsBus final : public NeighborBus {
  public:
-  using SampleCallback = std::function<void(const StateMessage&, std::int64_t recv_wall_ns)>;
-
   explicit DdsBus(const DdsOptions& opts);
   ~DdsBus() override;
   DdsBus(const DdsBus&) = delete;
@@ -47,11 +34,12 @@ class DdsBus final : public NeighborBus {
 
   void publish(const StateMessage& msg) override;
   std::vector<StateMessage> latest(AgentId self) override;
-  // Called for every accepted sample, on a DDS thread (set before samples flow).
-  void set_sample_callback(SampleCallback cb);
-  BusCounters counters() const;
+  // Called for every accepted sample, on a DDS thread. set_listener(nullptr) waits for a call in
+  // progress to finish.
+  void set_listener(Listener listener) override;
+  BusCounters counters() const override;
   // Number of readers matched to our writer (DDS discovery; the start barrier waits on it).
-  int matched_readers() const;
+  int matched_readers() const override;
 
   struct Impl;
 

@@ -1,4 +1,4 @@
-#include "supervisor/recorder.hpp"
+#include "common/record/recorder.hpp"
 
 #include <google/protobuf/io/coded_stream.h>
 #include <google/protobuf/io/zero_copy_stream_impl.h>

@@ -11,7 +11,8 @@
 #include <vector>
 
 #include "common/core/graph.hpp"
-#include "common/runtime/scenario.hpp"
+#include "common/runtime/link_faults.hpp"
+#include "common/runtime/run_config.hpp"
 #include "common/transport/state_message.hpp"
 #include "proto/records.pb.h"
 

@@ -1,5 +1,8 @@
-#include "common/runtime/process_setup.hpp"
+#include "common/app/process_setup.hpp"
 
+#include <spdlog/sinks/basic_file_sink.h>
+#include <spdlog/sinks/stdout_color_sinks.h>
+#include <spdlog/spdlog.h>
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
@@ -10,12 +13,13 @@ namespace qswarm {
 void add_process_options(CLI::App& app, ProcessOptions& o) {
   app.add_option("--scenario", o.scenario, "scenario file (Protobuf text format)")->required();
   app.add_option("--time-scale", o.time_scale, "simulated seconds per wall second")
-      ->check(CLI::PositiveNumber);
+      ->check(CLI::Range(0.01, 100.0));
   app.add_option("--domain", o.domain, "DDS domain id (overrides the scenario)")
       ->check(CLI::Range(0, 232));
   app.add_option("--interface", o.interface,
                  "IPv4 address DDS binds to (overrides the scenario; e.g. a test host's address)");
-  app.add_option("--seed", o.seed, "run seed (overrides the scenario)");
+  app.add_option("--seed", o.seed, "run seed (overrides the scenario)")
+      ->check(CLI::Range(std::int64_t{0}, std::int64_t{4294967295}));
 }
 
 std::optional<RunConfig> load_for_process(const char* prog, const ProcessOptions& opts) {
@@ -42,26 +46,19 @@ DdsOptions dds_options(const RunConfig& rc, const std::string& participant_name,
   return d;
 }
 
-AgentParams make_agent_params(const RunConfig& rc, const AgentSpec& spec) {
-  AgentParams p;
-  p.id = spec.id;
-  p.p0_W = spec.position_W;
-  p.yaw0_rad = spec.yaw_rad;
-  p.mode = rc.mode;
-  p.law = rc.law;
-  p.physics_hz = rc.physics_hz;
-  p.consensus_hz = rc.consensus_hz;
-  p.airframe = rc.airframe;
-  p.gains = rc.gains;
-  p.reference_speed_mps = rc.reference_speed_mps;
-  p.reference_accel_mps2 = rc.reference_accel_mps2;
-  p.neighbor_timeout_s = rc.neighbor_timeout_s;
-  p.incarnation = wall_now_ns();
-  // On a FIXED graph only its listed neighbours count.
-  p.expected_peers = rc.law.topology.policy == TopologyPolicy::kFixed
-                         ? listed_peers(rc.law.topology, spec.id).size()
-                         : rc.agents.size() - 1;
-  return p;
+std::shared_ptr<spdlog::logger> make_process_logger(const std::string& name,
+                                                    const std::string& log_path) {
+  std::vector<spdlog::sink_ptr> sinks;
+  auto console = std::make_shared<spdlog::sinks::stderr_color_sink_mt>();
+  console->set_level(spdlog::level::warn);
+  sinks.push_back(console);
+  if (!log_path.empty())
+    sinks.push_back(std::make_shared<spdlog::sinks::basic_file_sink_mt>(log_path, false));
+  auto logger = std::make_shared<spdlog::logger>(name, sinks.begin(), sinks.end());
+  logger->set_level(spdlog::level::info);
+  logger->flush_on(spdlog::level::info);
+  spdlog::set_default_logger(logger);
+  return logger;
 }
 
 }  // namespace qswarm

@@ -1,11 +1,13 @@
 #pragma once
 
+#include <spdlog/logger.h>
+
+#include <memory>
 #include <optional>
 #include <string>
 
-#include "common/runtime/agent_runtime.hpp"
+#include "common/dds/dds_bus.hpp"
 #include "common/runtime/scenario.hpp"
-#include "common/transport/dds_bus.hpp"
 
 namespace CLI {
 class App;
@@ -34,8 +36,9 @@ std::optional<RunConfig> load_for_process(const char* prog, const ProcessOptions
 DdsOptions dds_options(const RunConfig& rc, const std::string& participant_name,
                        const std::string& interface_override);
 
-// One agent's parameters from the run: its start, the run's law, rates, airframe, gains and limits;
-// the peers its law waits for (all others, or only its listed neighbours on a FIXED graph).
-AgentParams make_agent_params(const RunConfig& rc, const AgentSpec& spec);
+// The process's default logger: warnings and worse to stderr, everything from info up to
+// `log_path` (appended: a restarted agent adds to its log) unless it is empty.
+std::shared_ptr<spdlog::logger> make_process_logger(const std::string& name,
+                                                    const std::string& log_path);
 
 }  // namespace qswarm

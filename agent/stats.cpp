@@ -1,0 +1,43 @@
+#include "agent/stats.hpp"
+
+#include <sys/resource.h>
+
+#include <cstdio>
+#include <fstream>
+
+namespace qswarm {
+
+std::string final_report(const AgentLoop& loop, const BusCounters& c) {
+  const AgentRuntime& a = loop.runtime();
+  const Vec3 q = a.consensus(), x = a.position();
+  char buf[512];
+  std::snprintf(buf, sizeof buf,
+                "stopping at t=%.3f s: consensus (%.6f, %.6f, %.6f) position (%.6f, %.6f, %.6f); "
+                "published %llu, received %llu, dropped %llu, stale %llu, late ticks %llu of %llu "
+                "(%llu physics steps); flows recovered at restart %d",
+                a.time_s(), q.x(), q.y(), q.z(), x.x(), x.y(), x.z(),
+                static_cast<unsigned long long>(c.published),
+                static_cast<unsigned long long>(c.received),
+                static_cast<unsigned long long>(c.dropped),
+                static_cast<unsigned long long>(c.stale),
+                static_cast<unsigned long long>(loop.overruns()),
+                static_cast<unsigned long long>(loop.ticks()),
+                static_cast<unsigned long long>(loop.physics_steps()), a.recovered_flows());
+  return buf;
+}
+
+void write_stats(const std::string& path, const AgentLoop& loop, const BusCounters& c,
+                 double wall_now_s) {
+  rusage ru{};
+  getrusage(RUSAGE_SELF, &ru);
+  const double cpu_s = static_cast<double>(ru.ru_utime.tv_sec + ru.ru_stime.tv_sec) +
+                       static_cast<double>(ru.ru_utime.tv_usec + ru.ru_stime.tv_usec) * 1e-6;
+  const double since = loop.running_since_s();
+  std::ofstream(path) << "cpu_s " << cpu_s << "\nwall_s " << (since >= 0 ? wall_now_s - since : 0.0)
+                      << "\nsteps " << loop.ticks() << "\nphysics_steps " << loop.physics_steps()
+                      << "\noverruns " << loop.overruns() << "\ndiscovery_s "
+                      << loop.lifecycle().discovery_s() << "\nmax_rss_kb " << ru.ru_maxrss
+                      << "\nreceived " << c.received << "\ndropped " << c.dropped << "\n";
+}
+
+}  // namespace qswarm

@@ -1,0 +1,112 @@
+#include "common/dds/idl_convert.hpp"
+
+#include <stdexcept>
+#include <string>
+
+namespace qswarm {
+namespace {
+
+Vec3 vec(const std::array<double, 3>& a) { return Vec3(a[0], a[1], a[2]); }
+std::array<double, 3> arr(const Vec3& v) { return {v.x(), v.y(), v.z()}; }
+
+}  // namespace
+
+void to_idl(const StateMessage& m, qswarm_msgs::AgentState& s) {
+  // The wire carries every entry or the sample is not sent: a silently cut flow list would break
+  // edge-flow's conservation. The scenario refuses swarms larger than kMaxSwarmAgents.
+  for (const std::size_t n : {m.links.size(), m.initial_links.size(), m.view.flows.size(),
+                              m.view.copies.size()}) {
+    if (n > kMaxWireEntries) {
+      throw std::length_error("state sample of agent " + std::to_string(m.view.id) + " has " +
+                              std::to_string(n) + " entries in a list the wire bounds at " +
+                              std::to_string(kMaxWireEntries));
+    }
+  }
+  s.id(m.view.id);
+  s.seq(m.seq);
+  s.view_seq(m.view.seq);
+  s.stamp_s(m.stamp_s);
+  s.wall_ns(m.wall_ns);
+  s.incarnation(m.incarnation);
+  s.mode(static_cast<uint8_t>(m.mode));
+  s.phase(m.phase);
+  s.consensus(arr(m.view.q));
+  s.initial(arr(m.view.q0));
+  s.total_weight(m.view.total_weight);
+  s.position(arr(m.p_W));
+  s.velocity(arr(m.v_W));
+  s.orientation({m.q_WB.w(), m.q_WB.x(), m.q_WB.y(), m.q_WB.z()});
+  s.rotors({m.rotors_radps[0], m.rotors_radps[1], m.rotors_radps[2], m.rotors_radps[3]});
+  s.received(m.received);
+  s.dropped(m.dropped);
+  s.overruns(m.overruns);
+  s.fault_loss(m.fault_loss);
+  s.fault_burst(m.fault_burst);
+  s.fault_cut(m.fault_cut);
+  s.fault_partition(m.fault_partition);
+  s.fault_delayed(m.fault_delayed);
+  const auto put_links = [](const std::vector<std::pair<AgentId, double>>& in,
+                            std::vector<qswarm_msgs::LinkEntry>& out) {
+    out.clear();
+    for (const auto& [peer, w] : in) {
+      qswarm_msgs::LinkEntry e;
+      e.peer(peer);
+      e.weight(w);
+      out.push_back(e);
+    }
+  };
+  put_links(m.links, s.links());
+  put_links(m.initial_links, s.initial_links());
+  s.flows().clear();
+  for (const FlowEntry& f : m.view.flows) {
+    qswarm_msgs::FlowEntry e;
+    e.peer(f.peer);
+    e.flow(arr(f.flow));
+    e.weight(f.weight);
+    e.active(f.active);
+    s.flows().push_back(e);
+  }
+  s.copies().clear();
+  for (const FlowEntry& f : m.view.copies) {
+    qswarm_msgs::FlowEntry e;
+    e.peer(f.peer);
+    e.flow(arr(f.flow));
+    s.copies().push_back(e);
+  }
+}
+
+StateMessage from_idl(const qswarm_msgs::AgentState& s) {
+  StateMessage m;
+  m.view.id = s.id();
+  m.seq = s.seq();
+  m.view.seq = s.view_seq();
+  m.stamp_s = s.stamp_s();
+  m.wall_ns = s.wall_ns();
+  m.incarnation = s.incarnation();
+  m.mode = static_cast<AgentMode>(s.mode());
+  m.phase = s.phase();
+  m.view.q = vec(s.consensus());
+  m.view.q0 = vec(s.initial());
+  m.view.total_weight = s.total_weight();
+  m.p_W = vec(s.position());
+  m.v_W = vec(s.velocity());
+  m.q_WB = Eigen::Quaterniond(s.orientation()[0], s.orientation()[1], s.orientation()[2],
+                              s.orientation()[3]);
+  m.rotors_radps = RotorSpeeds(s.rotors()[0], s.rotors()[1], s.rotors()[2], s.rotors()[3]);
+  m.received = s.received();
+  m.dropped = s.dropped();
+  m.overruns = s.overruns();
+  m.fault_loss = s.fault_loss();
+  m.fault_burst = s.fault_burst();
+  m.fault_cut = s.fault_cut();
+  m.fault_partition = s.fault_partition();
+  m.fault_delayed = s.fault_delayed();
+  for (const auto& e : s.links()) m.links.emplace_back(e.peer(), e.weight());
+  for (const auto& e : s.initial_links()) m.initial_links.emplace_back(e.peer(), e.weight());
+  for (const auto& e : s.copies()) m.view.copies.push_back({e.peer(), vec(e.flow()), 0.0, false});
+  for (const auto& e : s.flows())
+    m.view.flows.push_back({e.peer(), vec(e.flow()), e.weight(), e.active()});
+  return m;
+}
+
+}  // namespace qswarm

@@ -1,0 +1,139 @@
+#include "common/runtime/agent_lifecycle.hpp"
+
+#include <algorithm>
+#include <cstdio>
+
+#include "common/transport/state_message.hpp"
+
+namespace qswarm {
+
+const char* to_string(LifePhase p) {
+  switch (p) {
+    case LifePhase::kJoinWait:
+      return "join-wait";
+    case LifePhase::kWaiting:
+      return "waiting";
+    case LifePhase::kReady:
+      return "ready";
+    case LifePhase::kRunning:
+      return "running";
+    case LifePhase::kStopping:
+      return "stopping";
+  }
+  return "?";
+}
+
+AgentLifecycle::AgentLifecycle(LifecycleConfig cfg, double now_wall_s)
+    : cfg_(std::move(cfg)),
+      born_s_(now_wall_s),
+      phase_(cfg_.join_at_s ? LifePhase::kJoinWait : LifePhase::kWaiting) {
+  std::sort(cfg_.kill_at_s.begin(), cfg_.kill_at_s.end());
+}
+
+LifecycleStep AgentLifecycle::step(double now, const std::vector<PeerStatus>& peers,
+                                   int matched_readers, double agent_time_s) {
+  switch (phase_) {
+    case LifePhase::kJoinWait:
+      return join_wait(now, peers);
+    case LifePhase::kWaiting:
+    case LifePhase::kReady:
+      return barrier(now, peers, matched_readers);
+    case LifePhase::kRunning:
+      return running(now, agent_time_s);
+    case LifePhase::kStopping:
+      break;
+  }
+  LifecycleStep s;
+  s.stop = true;
+  s.wake_at_s = now;
+  return s;
+}
+
+void AgentLifecycle::enter_running(double now, LifecycleStep& s, double start_time_s) {
+  phase_ = LifePhase::kRunning;
+  discovery_s_ = now - born_s_;
+  pacer_.emplace(now, cfg_.tick_wall_s);
+  s.start = true;
+  s.start_time_s = start_time_s;
+  // Kills planned before this life began were its predecessors'.
+  while (next_kill_ < cfg_.kill_at_s.size() && cfg_.kill_at_s[next_kill_] < start_time_s)
+    ++next_kill_;
+  s.wake_at_s = now;  // the first tick is due at once
+}
+
+LifecycleStep AgentLifecycle::join_wait(double now, const std::vector<PeerStatus>& peers) {
+  LifecycleStep s;
+  double swarm_t = -1.0;
+  for (const PeerStatus& p : peers)
+    if (p.phase == kRunning) swarm_t = std::max(swarm_t, p.stamp_s);
+  s.swarm_time_s = swarm_t;
+  const double join_at = *cfg_.join_at_s;
+  const bool timed_out = now - born_s_ > join_at / cfg_.time_scale + cfg_.join_timeout_s;
+  if (swarm_t >= join_at || timed_out) {
+    if (timed_out && swarm_t < join_at) {
+      char buf[160];
+      std::snprintf(buf, sizeof buf,
+                    "join: the swarm's clock never reached %.2f s (at %.2f s), joining now",
+                    join_at, swarm_t);
+      s.warning = buf;
+    }
+    enter_running(now, s, std::max(0.0, swarm_t));
+    return s;
+  }
+  s.wake_at_s = now + cfg_.announce_period_s;
+  return s;
+}
+
+LifecycleStep AgentLifecycle::barrier(double now, const std::vector<PeerStatus>& peers,
+                                      int matched_readers) {
+  LifecycleStep s;
+  std::size_t heard = 0, ready = 0;
+  for (const PeerStatus& p : peers) {
+    if (!cfg_.barrier_peers.count(p.id)) continue;
+    ++heard;
+    ready += (p.phase == kReady || p.phase == kRunning) ? 1 : 0;
+  }
+  const std::size_t expected = cfg_.barrier_peers.size();
+  const bool all_heard = heard >= expected && matched_readers >= cfg_.min_matched_readers;
+  if (all_heard && ready >= expected) {
+    enter_running(now, s, 0.0);
+    return s;
+  }
+  if (now - born_s_ > cfg_.start_timeout_s) {
+    char buf[120];
+    std::snprintf(buf, sizeof buf, "start timeout: %zu of %zu peers ready, starting anyway",
+                  ready, expected);
+    s.warning = buf;
+    enter_running(now, s, 0.0);
+    return s;
+  }
+  phase_ = all_heard ? LifePhase::kReady : LifePhase::kWaiting;
+  s.announce = all_heard ? kReady : kWaiting;
+  s.wake_at_s = now + cfg_.announce_period_s;
+  return s;
+}
+
+LifecycleStep AgentLifecycle::running(double now, double agent_time_s) {
+  LifecycleStep s;
+  TickPacer& pacer = *pacer_;
+  if (now - pacer.start_s() > cfg_.max_wall_s) {
+    s.warning = "max wall time reached, stopping";
+    s.stop = true;
+    phase_ = LifePhase::kStopping;
+    s.wake_at_s = now;
+    return s;
+  }
+  if (pacer.due(now)) {
+    if (next_kill_ < cfg_.kill_at_s.size() && agent_time_s >= cfg_.kill_at_s[next_kill_]) {
+      s.kill = true;
+      s.wake_at_s = now;
+      return s;
+    }
+    pacer.on_tick(now);
+    s.ticks = 1;
+  }
+  s.wake_at_s = pacer.next_due_s();
+  return s;
+}
+
+}  // namespace qswarm

@@ -1,0 +1,88 @@
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "common/core/topology.hpp"
+#include "common/runtime/tick_pacer.hpp"
+
+namespace qswarm {
+
+// The phases of one agent process, in order. A late joiner or a restarted agent starts in
+// kJoinWait (silent until the swarm's clock reaches its join time); everyone else passes the start
+// barrier (kWaiting until every barrier peer is heard, kReady until they are all ready too).
+enum class LifePhase { kJoinWait, kWaiting, kReady, kRunning, kStopping };
+const char* to_string(LifePhase p);
+
+struct LifecycleConfig {
+  // The peers the start barrier waits for (start_peers(): FIXED-aware, late joiners left out).
+  std::set<AgentId> barrier_peers;
+  // With a supervisor: the start also waits until this many readers matched our writer (every
+  // other starting agent's plus the supervisor's), so that the recorder sees the start.
+  int min_matched_readers = 0;
+  // Late join or restart: wait silently until the swarm's clock reaches this simulated time.
+  std::optional<double> join_at_s;
+  double time_scale = 1.0;           // simulated seconds per wall second
+  double start_timeout_s = 30.0;     // wall: start anyway after this long at the barrier
+  double join_timeout_s = 40.0;      // wall: join anyway after this long in kJoinWait
+  double announce_period_s = 0.005;  // wall: waiting/ready announcements (start skew ~ this)
+  double tick_wall_s = 0.02;         // wall seconds per consensus tick
+  double max_wall_s = 150.0;         // wall: stop after running this long
+  std::vector<double> kill_at_s;     // planned self-kills (simulated time), ascending
+};
+
+// What one peer last said, as the lifecycle needs it.
+struct PeerStatus {
+  AgentId id = 0;
+  std::uint8_t phase = 0;  // Phase from state_message.hpp
+  double stamp_s = 0.0;
+};
+
+// What to do now, decided by AgentLifecycle::step().
+struct LifecycleStep {
+  std::optional<std::uint8_t> announce;  // publish a waiting/ready announcement with this phase
+  bool start = false;                    // enter kRunning now, on the swarm clock start_time_s
+  double start_time_s = 0.0;
+  double swarm_time_s = -1.0;  // kJoinWait: the swarm's clock as the newest running peer says
+  int ticks = 0;               // consensus ticks to run now (0 or 1: a late loop catches up)
+  bool kill = false;           // a planned kill is due: the process must die now, silently
+  bool stop = false;           // the wall limit is reached
+  double wake_at_s = 0.0;      // when to call step() next (wall)
+  std::string warning;         // something worth a log line (a timeout)
+};
+
+// The agent's phases as one state machine: it takes the wall time, the peers' latest states and the
+// agent's simulated time, and says what to publish, how many ticks to run and whether a planned
+// kill is due. No clock, no I/O: tests drive it with numbers.
+class AgentLifecycle {
+ public:
+  AgentLifecycle(LifecycleConfig cfg, double now_wall_s);
+
+  LifecycleStep step(double now_wall_s, const std::vector<PeerStatus>& peers,
+                     int matched_readers, double agent_time_s);
+  // The process is stopping (a signal, or the wall limit): no more ticks.
+  void stop() { phase_ = LifePhase::kStopping; }
+
+  LifePhase phase() const { return phase_; }
+  // Wall seconds from construction to kRunning (discovery and barrier), -1 before.
+  double discovery_s() const { return discovery_s_; }
+  const std::optional<TickPacer>& pacer() const { return pacer_; }
+
+ private:
+  LifecycleStep join_wait(double now, const std::vector<PeerStatus>& peers);
+  LifecycleStep barrier(double now, const std::vector<PeerStatus>& peers, int matched_readers);
+  LifecycleStep running(double now, double agent_time_s);
+  void enter_running(double now, LifecycleStep& s, double start_time_s);
+
+  LifecycleConfig cfg_;
+  double born_s_;
+  LifePhase phase_;
+  double discovery_s_ = -1.0;
+  std::optional<TickPacer> pacer_;
+  std::size_t next_kill_ = 0;
+};
+
+}  // namespace qswarm

@@ -1,0 +1,140 @@
+#include "common/runtime/agent_loop.hpp"
+
+#include <algorithm>
+#include <cstdio>
+
+namespace qswarm {
+namespace {
+
+// Whether this process starts on the swarm's clock instead of passing the barrier, and when.
+std::optional<double> join_time(const RunConfig& rc, AgentId id, const AgentLoopOptions& o) {
+  if (o.join_at_s >= 0.0) return o.join_at_s;
+  return rc.faults.late_join_at(id);
+}
+
+LifecycleConfig lifecycle_config(const RunConfig& rc, AgentId id, const AgentLoopOptions& o,
+                                 int steps_per_tick) {
+  LifecycleConfig c;
+  c.join_at_s = join_time(rc, id, o);
+  if (!c.join_at_s) {
+    c.barrier_peers = rc.start_peers(id);
+    // Every other starting agent's reader, and the supervisor's, match our writer (DDS matching
+    // does not follow the graph).
+    if (o.wait_supervisor) {
+      c.min_matched_readers =
+          static_cast<int>(rc.agents.size() - 1 - rc.faults.late_joiners().size()) + 1;
+    }
+  }
+  c.time_scale = o.time_scale;
+  c.start_timeout_s = o.start_timeout_s;
+  c.join_timeout_s = o.start_timeout_s + 10.0;
+  c.tick_wall_s = steps_per_tick / (rc.physics_hz * o.time_scale);
+  c.max_wall_s = o.max_wall_s >= 0.0 ? o.max_wall_s : 2.0 * rc.duration_s / o.time_scale + 30.0;
+  c.kill_at_s = rc.faults.kills_of(id);
+  return c;
+}
+
+AgentParams params_for(const RunConfig& rc, AgentId id, const AgentLoopOptions& o) {
+  const AgentSpec* spec = rc.agent(id);
+  if (!spec) throw std::invalid_argument("agent " + std::to_string(id) + " is not in the run");
+  AgentParams p = make_agent_params(rc, *spec);
+  p.incarnation = o.incarnation;
+  if (join_time(rc, id, o)) {
+    p.expected_peers = 0;  // joins a running swarm: no first-tick wait
+    p.recover_flows = o.restarted;
+  }
+  return p;
+}
+
+}  // namespace
+
+AgentParams make_agent_params(const RunConfig& rc, const AgentSpec& spec) {
+  AgentParams p;
+  p.id = spec.id;
+  p.p0_W = spec.position_W;
+  p.yaw0_rad = spec.yaw_rad;
+  p.mode = rc.mode;
+  p.law = rc.law;
+  p.physics_hz = rc.physics_hz;
+  p.consensus_hz = rc.consensus_hz;
+  p.airframe = rc.airframe;
+  p.gains = rc.gains;
+  p.reference_speed_mps = rc.reference_speed_mps;
+  p.reference_accel_mps2 = rc.reference_accel_mps2;
+  p.neighbor_timeout_s = rc.neighbor_timeout_s;
+  p.expected_peers = rc.start_peers(spec.id).size();
+  return p;
+}
+
+AgentLoop::AgentLoop(const RunConfig& rc, AgentId id, AgentLoopOptions opts,
+                     NeighborBus& transport, Clock& clock)
+    : rc_(rc),
+      id_(id),
+      clock_(clock),
+      transport_(transport),
+      faulty_(transport, LinkFaults(rc.faults, id, rc.seed), id),
+      runtime_(params_for(rc, id, opts), faulty_),
+      life_(lifecycle_config(rc, id, opts, runtime_.steps_per_tick()), clock.now_s()) {
+  if (opts.wall_clock_ns) runtime_.set_wall_clock(opts.wall_clock_ns);
+}
+
+std::uint64_t AgentLoop::ticks() const { return life_.pacer() ? life_.pacer()->ticks() : 0; }
+std::uint64_t AgentLoop::overruns() const {
+  return life_.pacer() ? life_.pacer()->overruns() : 0;
+}
+double AgentLoop::running_since_s() const {
+  return life_.pacer() ? life_.pacer()->start_s() : -1.0;
+}
+
+AgentLoop::Poll AgentLoop::poll() {
+  Poll r;
+  const double now = clock_.now_s();
+  std::vector<PeerStatus> peers;
+  if (life_.phase() != LifePhase::kRunning) {
+    // The barrier and the join wait read the raw transport: faults apply to the run, which
+    // starts once everyone is up.
+    for (const StateMessage& m : transport_.latest(id_))
+      peers.push_back({m.view.id, m.phase, m.stamp_s});
+  }
+  const LifecycleStep s = life_.step(now, peers, transport_.matched_readers(), runtime_.time_s());
+  if (!s.warning.empty()) r.notes.push_back({true, s.warning});
+  if (s.swarm_time_s >= 0.0) faulty_.set_time(s.swarm_time_s);
+  if (s.announce) runtime_.publish(*s.announce);
+  if (s.start) {
+    runtime_.set_start_time(s.start_time_s);
+    char buf[160];
+    std::snprintf(buf, sizeof buf, "%s at swarm time %.3f s after %.2f s of discovery",
+                  runtime_.params().recover_flows ? "restarting"
+                  : runtime_.params().expected_peers == 0 && s.start_time_s > 0.0
+                      ? "joining late"
+                      : "running",
+                  s.start_time_s, life_.discovery_s());
+    r.notes.push_back({false, buf});
+  }
+  r.kill = s.kill;
+  r.done = s.stop;
+  r.wake_at_s = s.wake_at_s;
+  if (s.ticks > 0) {
+    const BusCounters c = transport_.counters();
+    runtime_.set_counters(c.received, c.dropped + c.stale, overruns());
+    runtime_.set_fault_counters(faulty_.fault_counters());
+    faulty_.set_time(runtime_.time_s());
+    for (int i = 0; i < runtime_.steps_per_tick(); ++i, ++physics_steps_) {
+      for (const AgentEvent& e : runtime_.step()) {
+        char buf[120];
+        std::snprintf(buf, sizeof buf, "t=%.3f s: neighbour %u %s", e.t_s, e.peer,
+                      e.kind == AgentEvent::kNeighborHeard ? "heard"
+                                                           : "lost (silent past timeout)");
+        r.notes.push_back({false, buf});
+      }
+    }
+  }
+  return r;
+}
+
+void AgentLoop::stop() {
+  life_.stop();
+  runtime_.publish(kStopping);
+}
+
+}  // namespace qswarm

@@ -1,0 +1,78 @@
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "common/runtime/agent_lifecycle.hpp"
+#include "common/runtime/agent_runtime.hpp"
+#include "common/runtime/clock.hpp"
+#include "common/runtime/faulty_bus.hpp"
+#include "common/runtime/run_config.hpp"
+
+namespace qswarm {
+
+// How this process of the agent was started (the swarm-agent flags beyond the scenario).
+struct AgentLoopOptions {
+  double time_scale = 1.0;        // simulated seconds per wall second
+  double start_timeout_s = 30.0;  // wall seconds at the start barrier before starting anyway
+  double max_wall_s = -1.0;       // wall limit once running (default 2 x duration + 30 s)
+  double join_at_s = -1.0;        // join on the swarm's clock at this time (-1: the plan's)
+  bool restarted = false;         // recover the flows this agent owned from its neighbours
+  bool wait_supervisor = false;   // the barrier also waits for the supervisor's reader
+  std::int64_t incarnation = 0;   // this life's identity (the process uses its start time)
+  std::function<std::int64_t()> wall_clock_ns;  // stamps samples for age measurement (optional)
+};
+
+// One agent as the product runs it: its lifecycle (join wait, barrier, paced ticks, planned kills)
+// over a transport, the fault-injecting decorator, and the AgentRuntime (dynamics, control, law).
+// swarm-agent polls it on a SteadyClock over DDS; the in-process swarm polls the same object on a
+// ManualClock over the in-memory network. No I/O: what is worth logging comes back as notes.
+class AgentLoop {
+ public:
+  AgentLoop(const RunConfig& rc, AgentId id, AgentLoopOptions opts, NeighborBus& transport,
+            Clock& clock);
+
+  struct Note {
+    bool warning = false;
+    std::string text;
+  };
+  struct Poll {
+    std::vector<Note> notes;
+    bool kill = false;  // a planned kill is due: the process must die now (SIGKILL)
+    bool done = false;  // the wall limit is reached: stop
+    double wake_at_s = 0.0;
+  };
+  // Reads the clock and the transport, advances the lifecycle, runs what is due.
+  Poll poll();
+  // Announce kStopping (a signal or the end); no more ticks.
+  void stop();
+
+  LifePhase phase() const { return life_.phase(); }
+  const AgentRuntime& runtime() const { return runtime_; }
+  const AgentLifecycle& lifecycle() const { return life_; }
+  BusCounters transport_counters() const { return transport_.counters(); }
+  FaultCounters fault_counters() const { return faulty_.fault_counters(); }
+  std::uint64_t physics_steps() const { return physics_steps_; }
+  std::uint64_t ticks() const;
+  std::uint64_t overruns() const;
+  // Wall time when the law started running (-1 before).
+  double running_since_s() const;
+
+ private:
+  const RunConfig& rc_;
+  AgentId id_;
+  Clock& clock_;
+  NeighborBus& transport_;
+  FaultyBus faulty_;
+  AgentRuntime runtime_;
+  AgentLifecycle life_;
+  std::uint64_t physics_steps_ = 0;
+};
+
+// One agent's parameters from the run: its start, the run's law, rates, airframe, gains, limits and
+// the peers its law waits for (start_peers()).
+AgentParams make_agent_params(const RunConfig& rc, const AgentSpec& spec);
+
+}  // namespace qswarm

@@ -1,0 +1,71 @@
+#include "common/runtime/faulty_bus.hpp"
+
+namespace qswarm {
+
+FaultyBus::FaultyBus(NeighborBus& inner, LinkFaults faults, AgentId self)
+    : inner_(inner), faults_(std::move(faults)), self_(self) {
+  inner_.set_listener([this](const StateMessage& m) { deliver(m); });
+}
+
+FaultyBus::~FaultyBus() { inner_.set_listener(nullptr); }
+
+void FaultyBus::set_time(double t) {
+  std::vector<StateMessage> released;
+  Listener listener;
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    t_s_ = t;
+    release_due_locked(listener_ ? &released : nullptr);
+    listener = listener_;
+  }
+  for (const StateMessage& m : released) listener(m);
+}
+
+void FaultyBus::set_listener(Listener listener) {
+  std::lock_guard<std::mutex> lock(mu_);
+  listener_ = std::move(listener);
+}
+
+void FaultyBus::deliver(const StateMessage& m) {
+  std::vector<StateMessage> released;
+  Listener listener;
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    if (m.view.id == self_) return;
+    const LinkFaults::Verdict v = faults_.on_receive(m.view.id, t_s_);
+    if (v.drop) return;
+    held_.emplace(t_s_ + v.delay_s, m);
+    release_due_locked(listener_ ? &released : nullptr);
+    listener = listener_;
+  }
+  for (const StateMessage& r : released) listener(r);
+}
+
+void FaultyBus::release_due_locked(std::vector<StateMessage>* released) {
+  while (!held_.empty() && held_.begin()->first <= t_s_) {
+    const StateMessage& m = held_.begin()->second;
+    auto it = latest_.find(m.view.id);
+    // Jitter can reorder: keep the newest.
+    if (it == latest_.end() || is_newer(m, it->second)) {
+      latest_[m.view.id] = m;
+      if (released) released->push_back(m);
+    }
+    held_.erase(held_.begin());
+  }
+}
+
+std::vector<StateMessage> FaultyBus::latest(AgentId self) {
+  std::lock_guard<std::mutex> lock(mu_);
+  release_due_locked(nullptr);
+  std::vector<StateMessage> out;
+  for (const auto& [id, m] : latest_)
+    if (id != self) out.push_back(m);
+  return out;
+}
+
+FaultCounters FaultyBus::fault_counters() const {
+  std::lock_guard<std::mutex> lock(mu_);
+  return faults_.counters();
+}
+
+}  // namespace qswarm

@@ -1,0 +1,44 @@
+#pragma once
+
+#include <map>
+#include <mutex>
+
+#include "common/runtime/link_faults.hpp"
+#include "common/transport/neighbor_bus.hpp"
+
+namespace qswarm {
+
+// The fault-injecting decorator of a NeighborBus: it registers itself as the inner bus's listener,
+// passes every sample through LinkFaults (drop, or hold until a delay elapses) and serves latest()
+// from what survived. Publishing goes straight to the inner bus. Thread-safe: samples may arrive
+// on a transport thread. The destructor unregisters first, so no sample reaches a destroyed bus.
+class FaultyBus final : public NeighborBus {
+ public:
+  FaultyBus(NeighborBus& inner, LinkFaults faults, AgentId self);
+  ~FaultyBus() override;
+  FaultyBus(const FaultyBus&) = delete;
+  FaultyBus& operator=(const FaultyBus&) = delete;
+
+  // The simulated time that fault windows and delays are judged at.
+  void set_time(double t_s);
+  void publish(const StateMessage& msg) override { inner_.publish(msg); }
+  std::vector<StateMessage> latest(AgentId self) override;
+  void set_listener(Listener listener) override;
+  BusCounters counters() const override { return inner_.counters(); }
+  int matched_readers() const override { return inner_.matched_readers(); }
+  FaultCounters fault_counters() const;
+
+ private:
+  void deliver(const StateMessage& m);
+  void release_due_locked(std::vector<StateMessage>* released);
+  NeighborBus& inner_;
+  LinkFaults faults_;
+  AgentId self_;
+  mutable std::mutex mu_;
+  double t_s_ = 0.0;
+  std::multimap<double, StateMessage> held_;  // release time -> message
+  std::map<AgentId, StateMessage> latest_;
+  Listener listener_;
+};
+
+}  // namespace qswarm

@@ -1,0 +1,57 @@
+#pragma once
+
+#include <cstdint>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "common/core/airframe.hpp"
+#include "common/core/tracking_controller.hpp"
+#include "common/core/update_law.hpp"
+#include "common/runtime/fault_plan.hpp"
+#include "common/transport/state_message.hpp"
+#include "proto/scenario.pb.h"
+
+namespace qswarm {
+
+struct AgentSpec {
+  AgentId id = 0;
+  Vec3 position_W = Vec3::Zero();
+  double yaw_rad = 0.0;
+};
+
+// A scenario with every default filled in and random agents resolved: what a run actually uses.
+struct RunConfig {
+  std::string name;
+  std::vector<AgentSpec> agents;
+  AgentMode mode = AgentMode::kParticle;
+  LawConfig law;
+  double physics_hz = 500.0;
+  double consensus_hz = 50.0;
+  Airframe airframe;
+  TrackingGains gains;
+  double reference_speed_mps = 3.0;
+  double reference_accel_mps2 = 2.0;
+  double tolerance_m = 0.01;
+  double hold_s = 1.0;
+  double duration_s = 60.0;
+  std::uint64_t seed = 1;
+  std::uint32_t domain_id = 0;
+  std::string interface = "127.0.0.1";
+  bool shared_memory = false;
+  double neighbor_timeout_s = 1.0;
+  FaultPlan faults;
+  scenario::Scenario resolved;  // the scenario as run (agents listed, defaults explicit)
+
+  Vec3 initial_average() const;
+  const AgentSpec* agent(AgentId id) const;
+  // The one definition of the peers agent `id` waits for at the start (the barrier, and the law's
+  // first tick): its listed neighbours on a FIXED graph, every other agent otherwise, and never an
+  // agent that the fault plan has joining late.
+  std::set<AgentId> start_peers(AgentId id) const;
+};
+
+// n agents uniformly in a cube of side box_m, ids 1..n, from the seed.
+std::vector<AgentSpec> random_agent_specs(int n, std::uint64_t seed, double box_m);
+
+}  // namespace qswarm

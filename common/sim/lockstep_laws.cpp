@@ -1,0 +1,82 @@
+#include "common/sim/lockstep_laws.hpp"
+
+#include <map>
+#include <random>
+#include <set>
+#include <stdexcept>
+
+namespace qswarm {
+namespace {
+
+std::vector<NeighborView> others(const std::map<AgentId, NeighborView>& views, AgentId self) {
+  std::vector<NeighborView> out;
+  out.reserve(views.size());
+  for (const auto& [id, v] : views)
+    if (id != self) out.push_back(v);
+  return out;
+}
+
+}  // namespace
+
+LockstepLaws::LockstepLaws(LockstepConfig cfg) : cfg_(std::move(cfg)) {
+  if (!(cfg_.consensus_rate_hz > 0.0)) throw std::invalid_argument("consensus_rate_hz must be > 0");
+  std::set<AgentId> ids;
+  for (const SwarmAgentSpec& a : cfg_.agents) {
+    if (!ids.insert(a.id).second) throw std::invalid_argument("duplicate agent id");
+    laws_.push_back(make_law(a.id, a.q0, cfg_.law));
+  }
+  for (const auto& law : laws_) views_[law->id()] = law->message();
+  // Links are found from the first messages before anyone moves, so every published total weight
+  // is known at the first tick.
+  for (auto& law : laws_) law->observe(others(views_, law->id()));
+  for (const auto& law : laws_) views_[law->id()] = law->message();
+}
+
+void LockstepLaws::step() {
+  std::vector<std::vector<NeighborView>> inbox;
+  inbox.reserve(laws_.size());
+  for (const auto& law : laws_) inbox.push_back(others(views_, law->id()));
+  for (size_t i = 0; i < laws_.size(); ++i) laws_[i]->step(dt_s(), inbox[i]);
+  time_s_ += dt_s();
+  for (const auto& law : laws_) views_[law->id()] = law->message();
+}
+
+bool LockstepLaws::run_until_converged(double tol_m, double max_time_s) {
+  while (time_s_ < max_time_s) {
+    if (disagreement(states()) < tol_m) return true;
+    step();
+  }
+  return disagreement(states()) < tol_m;
+}
+
+Positions LockstepLaws::states() const {
+  Positions q;
+  for (const auto& law : laws_) q.push_back(law->state());
+  return q;
+}
+
+Positions LockstepLaws::initial_states() const {
+  Positions q;
+  for (const auto& law : laws_) q.push_back(law->initial_state());
+  return q;
+}
+
+std::vector<Edge> LockstepLaws::edges() const {
+  std::vector<AgentId> ids;
+  for (const auto& law : laws_) ids.push_back(law->id());
+  return edges_from_links(
+      ids, [&](int i) -> const auto& { return laws_[i]->links(); });
+}
+
+std::vector<SwarmAgentSpec> LockstepLaws::random_agents(int n, std::uint64_t seed, double box_m) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, box_m);
+  std::vector<SwarmAgentSpec> out;
+  for (int i = 0; i < n; ++i) {
+    const double x = u(rng), y = u(rng), z = u(rng);
+    out.push_back({static_cast<AgentId>(i + 1), Vec3(x, y, z)});
+  }
+  return out;
+}
+
+}  // namespace qswarm

@@ -1,0 +1,57 @@
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <vector>
+
+#include "common/core/graph.hpp"
+#include "common/core/update_law.hpp"
+#include "common/core/update_law.hpp"
+
+namespace qswarm {
+
+struct SwarmAgentSpec {
+  AgentId id = 0;
+  Vec3 q0 = Vec3::Zero();
+};
+
+struct LockstepConfig {
+  std::vector<SwarmAgentSpec> agents;
+  LawConfig law;
+  double consensus_rate_hz = 50.0;
+};
+
+// N bare agreement laws in exact lockstep: every tick each law reads the others' views from the
+// previous tick, all step, then all publish. The oracle for the law's discretisation (tests compare
+// it with exp(-L t) q0) and the preview tool. The product's loop (barrier, pacing, faults, dynamics)
+// runs in InProcessSwarm instead.
+class LockstepLaws {
+ public:
+  explicit LockstepLaws(LockstepConfig cfg);
+
+  void step();
+  // Steps until the disagreement is below tol_m or max_time_s passes; returns whether it converged.
+  bool run_until_converged(double tol_m, double max_time_s);
+
+  double time_s() const { return time_s_; }
+  double dt_s() const { return 1.0 / cfg_.consensus_rate_hz; }
+  int size() const { return static_cast<int>(laws_.size()); }
+  Positions states() const;
+  Positions initial_states() const;
+  // The graph as the agents currently see it: an edge when either endpoint holds the link
+  // (weight as the lower id computes it), by index into agents.
+  std::vector<Edge> edges() const;
+  const UpdateLaw& law(int index) const { return *laws_[index]; }
+
+  // n agents uniformly in a cube of side box_m from a seeded generator (ids 1..n).
+  static std::vector<SwarmAgentSpec> random_agents(int n, std::uint64_t seed, double box_m);
+
+ private:
+  LockstepConfig cfg_;
+  std::vector<std::unique_ptr<UpdateLaw>> laws_;
+  std::map<AgentId, NeighborView> views_;  // every law's newest view
+  double time_s_ = 0.0;
+};
+
+}  // namespace qswarm

@@ -1,0 +1,143 @@
+// The agent's lifecycle as a state machine: driven with numbers, no clock, no transport.
+#include <gtest/gtest.h>
+
+#include "common/runtime/agent_lifecycle.hpp"
+#include "common/runtime/tick_pacer.hpp"
+#include "common/transport/state_message.hpp"
+
+namespace qswarm {
+namespace {
+
+LifecycleConfig barrier_config() {
+  LifecycleConfig c;
+  c.barrier_peers = {2, 3};
+  c.start_timeout_s = 30.0;
+  c.tick_wall_s = 0.02;
+  c.max_wall_s = 100.0;
+  return c;
+}
+
+TEST(TickPacer, CountsTicksThatStartMoreThanOnePeriodLateAndNeverSkips) {
+  TickPacer p(10.0, 0.02);
+  EXPECT_DOUBLE_EQ(p.next_due_s(), 10.0);
+  p.on_tick(10.001);  // on time
+  EXPECT_DOUBLE_EQ(p.next_due_s(), 10.02);
+  p.on_tick(10.05);  // 30 ms late: an overrun
+  EXPECT_EQ(p.overruns(), 1u);
+  EXPECT_TRUE(p.due(10.05));  // the loop catches up without sleeping
+  p.on_tick(10.05);           // due 10.04, 10 ms late: not an overrun
+  EXPECT_EQ(p.overruns(), 1u);
+  EXPECT_EQ(p.ticks(), 3u);
+  EXPECT_THROW(TickPacer(0.0, 0.0), std::invalid_argument);
+}
+
+TEST(Lifecycle, BarrierWaitsForEveryPeerThenForEveryoneReady) {
+  // Given an agent that waits for peers 2 and 3
+  AgentLifecycle life(barrier_config(), 0.0);
+  // When it has heard only 2, it announces kWaiting every 5 ms
+  LifecycleStep s = life.step(0.0, {{2, kWaiting, 0.0}}, 0, 0.0);
+  EXPECT_EQ(life.phase(), LifePhase::kWaiting);
+  ASSERT_TRUE(s.announce);
+  EXPECT_EQ(*s.announce, kWaiting);
+  EXPECT_DOUBLE_EQ(s.wake_at_s, 0.005);
+  // Once it hears both it is ready, but runs only once both are ready too
+  s = life.step(0.005, {{2, kWaiting, 0.0}, {3, kWaiting, 0.0}}, 0, 0.0);
+  EXPECT_EQ(life.phase(), LifePhase::kReady);
+  EXPECT_EQ(*s.announce, kReady);
+  EXPECT_FALSE(s.start);
+  // A stranger being ready changes nothing
+  s = life.step(0.010, {{2, kReady, 0.0}, {3, kWaiting, 0.0}, {9, kReady, 0.0}}, 0, 0.0);
+  EXPECT_FALSE(s.start);
+  s = life.step(0.015, {{2, kReady, 0.0}, {3, kRunning, 0.0}}, 0, 0.0);
+  EXPECT_TRUE(s.start);
+  EXPECT_DOUBLE_EQ(s.start_time_s, 0.0);
+  EXPECT_EQ(life.phase(), LifePhase::kRunning);
+  EXPECT_DOUBLE_EQ(life.discovery_s(), 0.015);
+}
+
+TEST(Lifecycle, WithASupervisorTheBarrierAlsoWaitsForItsReader) {
+  LifecycleConfig c = barrier_config();
+  c.min_matched_readers = 3;  // peers 2 and 3, and the supervisor
+  AgentLifecycle life(c, 0.0);
+  const std::vector<PeerStatus> ready = {{2, kReady, 0.0}, {3, kReady, 0.0}};
+  EXPECT_FALSE(life.step(0.0, ready, 2, 0.0).start);
+  EXPECT_EQ(life.phase(), LifePhase::kWaiting);
+  EXPECT_TRUE(life.step(0.005, ready, 3, 0.0).start);
+}
+
+TEST(Lifecycle, StartsAnywayAfterTheStartTimeoutAndSaysSo) {
+  AgentLifecycle life(barrier_config(), 0.0);
+  EXPECT_FALSE(life.step(29.9, {{2, kReady, 0.0}}, 0, 0.0).start);
+  const LifecycleStep s = life.step(30.1, {{2, kReady, 0.0}}, 0, 0.0);
+  EXPECT_TRUE(s.start);
+  EXPECT_NE(s.warning.find("1 of 2 peers ready"), std::string::npos) << s.warning;
+}
+
+TEST(Lifecycle, RunningPacesOneTickPerPeriodAndCountsLateTicks) {
+  LifecycleConfig c = barrier_config();
+  c.barrier_peers = {};
+  AgentLifecycle life(c, 0.0);
+  ASSERT_TRUE(life.step(1.0, {}, 0, 0.0).start);
+  LifecycleStep s = life.step(1.0, {}, 0, 0.0);
+  EXPECT_EQ(s.ticks, 1);
+  EXPECT_DOUBLE_EQ(s.wake_at_s, 1.02);
+  s = life.step(1.01, {}, 0, 0.02);  // woken early: nothing due
+  EXPECT_EQ(s.ticks, 0);
+  s = life.step(1.07, {}, 0, 0.02);  // 50 ms late
+  EXPECT_EQ(s.ticks, 1);
+  EXPECT_EQ(life.pacer()->overruns(), 1u);
+  EXPECT_DOUBLE_EQ(s.wake_at_s, 1.04);  // catches up at once
+}
+
+TEST(Lifecycle, APlannedKillIsDueAtItsSimulatedTimeAndNotBefore) {
+  LifecycleConfig c = barrier_config();
+  c.barrier_peers = {};
+  c.kill_at_s = {0.5};
+  AgentLifecycle life(c, 0.0);
+  ASSERT_TRUE(life.step(0.0, {}, 0, 0.0).start);
+  EXPECT_FALSE(life.step(0.48, {}, 0, 0.48).kill);
+  EXPECT_TRUE(life.step(0.50, {}, 0, 0.50).kill);
+}
+
+TEST(Lifecycle, ALateJoinerStaysSilentUntilTheSwarmClockReachesItsTime) {
+  LifecycleConfig c = barrier_config();
+  c.join_at_s = 3.0;
+  c.kill_at_s = {1.0, 6.0};  // the kill at 1 s was a predecessor's
+  AgentLifecycle life(c, 0.0);
+  EXPECT_EQ(life.phase(), LifePhase::kJoinWait);
+  LifecycleStep s = life.step(0.1, {{2, kRunning, 2.5}, {3, kWaiting, 9.0}}, 0, 0.0);
+  EXPECT_FALSE(s.announce);  // silent
+  EXPECT_FALSE(s.start);
+  EXPECT_DOUBLE_EQ(s.swarm_time_s, 2.5);  // only running peers' stamps count
+  s = life.step(0.2, {{2, kRunning, 3.02}}, 0, 0.0);
+  EXPECT_TRUE(s.start);
+  EXPECT_DOUBLE_EQ(s.start_time_s, 3.02);
+  EXPECT_FALSE(life.step(0.2, {}, 0, 3.02).kill);
+  EXPECT_TRUE(life.step(3.2, {}, 0, 6.0).kill);
+}
+
+TEST(Lifecycle, AJoinerWhoseSwarmNeverRunsJoinsAfterItsTimeoutAndSaysSo) {
+  LifecycleConfig c = barrier_config();
+  c.join_at_s = 2.0;
+  c.join_timeout_s = 5.0;
+  AgentLifecycle life(c, 0.0);
+  EXPECT_FALSE(life.step(6.9, {}, 0, 0.0).start);
+  const LifecycleStep s = life.step(7.1, {}, 0, 0.0);
+  EXPECT_TRUE(s.start);
+  EXPECT_DOUBLE_EQ(s.start_time_s, 0.0);
+  EXPECT_NE(s.warning.find("never reached"), std::string::npos);
+}
+
+TEST(Lifecycle, StopsAtTheWallLimit) {
+  LifecycleConfig c = barrier_config();
+  c.barrier_peers = {};
+  c.max_wall_s = 1.0;
+  AgentLifecycle life(c, 0.0);
+  ASSERT_TRUE(life.step(0.0, {}, 0, 0.0).start);
+  EXPECT_FALSE(life.step(0.9, {}, 0, 0.9).stop);
+  EXPECT_TRUE(life.step(1.1, {}, 0, 1.1).stop);
+  EXPECT_EQ(life.phase(), LifePhase::kStopping);
+}
+
+}  // namespace
+}  // namespace qswarm
