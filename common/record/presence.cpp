@@ -1,0 +1,62 @@
+#include "common/record/presence.hpp"
+
+namespace qswarm {
+
+Presence::Presence(const std::vector<AgentId>& ids, double timeout_s) : timeout_s_(timeout_s) {
+  for (const AgentId id : ids) tracks_[id];
+}
+
+Presence::Change Presence::on_sample(const StateMessage& m, double now_s) {
+  const auto it = tracks_.find(m.view.id);
+  if (it == tracks_.end()) {
+    return strangers_.insert(m.view.id).second ? Change::kStranger : Change::kStrangerAgain;
+  }
+  Track& a = it->second;
+  Change change = Change::kNone;
+  if (!a.seen) {
+    a.seen = true;
+    a.first = m;
+    change = Change::kJoin;
+  } else if (!a.present && m.phase != kStopping) {
+    change = Change::kRejoin;
+  }
+  if (a.samples > 0 && m.incarnation == a.last.incarnation && m.seq > a.last.seq + 1) {
+    a.gaps += m.seq - a.last.seq - 1;
+  }
+  if (m.phase == kStopping && a.present) change = Change::kDepart;
+  a.present = m.phase != kStopping;
+  a.last = m;
+  a.last_heard_s = now_s;
+  ++a.samples;
+  return change;
+}
+
+std::vector<AgentId> Presence::expire(double now_s) {
+  std::vector<AgentId> gone;
+  for (auto& [id, a] : tracks_) {
+    if (a.present && a.seen && now_s - a.last_heard_s > timeout_s_) {
+      a.present = false;
+      gone.push_back(id);
+    }
+  }
+  return gone;
+}
+
+bool Presence::running(AgentId id) const {
+  const Track& t = tracks_.at(id);
+  return t.present && t.last.phase == kRunning;
+}
+
+std::size_t Presence::present_count() const {
+  std::size_t n = 0;
+  for (const auto& [id, a] : tracks_) n += a.present ? 1 : 0;
+  return n;
+}
+
+std::size_t Presence::seen_count() const {
+  std::size_t n = 0;
+  for (const auto& [id, a] : tracks_) n += a.seen ? 1 : 0;
+  return n;
+}
+
+}  // namespace qswarm

@@ -1,0 +1,41 @@
+#pragma once
+
+#include <fstream>
+#include <string>
+
+#include "common/core/math.hpp"
+#include "common/transport/state_message.hpp"
+#include "proto/records.pb.h"
+
+namespace qswarm {
+
+// The run record's files: telemetry.csv, graph.csv, events.csv (for people and plots) and
+// records.pb (length-delimited Record messages, for programs). Every write is checked: the first
+// file that could not be written is remembered, so that a run never reports success over a
+// record that is not complete.
+class RecordSinks {
+ public:
+  explicit RecordSinks(const std::string& dir);
+  void sample(const StateMessage& m, double age_ms);
+  void graph(const records::GraphSnapshot& g);
+  void event(double t_s, const std::string& kind, std::uint32_t agent, const std::string& detail);
+  // Flushes every file; returns whether everything written so far reached the files.
+  bool flush();
+  bool ok() const { return failed_.empty(); }
+  // Marks `path` as not written (a file the caller writes itself, like summary.json).
+  void fail(const std::string& path) {
+    if (failed_.empty()) failed_ = path;
+  }
+  // The first file that failed ("" if none).
+  const std::string& failed_file() const { return failed_; }
+  const std::string& dir() const { return dir_; }
+
+ private:
+  void write_record(const records::Record& r);
+  void check(std::ofstream& f, const char* name);
+  std::string dir_;
+  std::ofstream telemetry_, graph_, events_, records_;
+  std::string failed_;
+};
+
+}  // namespace qswarm

@@ -1,0 +1,186 @@
+#include "common/record/summary.hpp"
+
+#include <google/protobuf/struct.pb.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <sstream>
+
+#include "common/core/graph.hpp"
+
+namespace qswarm {
+namespace {
+
+void put(google::protobuf::RepeatedField<double>* f, const Vec3& v) {
+  f->Add(v.x());
+  f->Add(v.y());
+  f->Add(v.z());
+}
+
+double percentile(std::vector<double> v, double p) {
+  if (v.empty()) return 0.0;
+  const std::size_t k = static_cast<std::size_t>(p * static_cast<double>(v.size() - 1));
+  std::nth_element(v.begin(), v.begin() + static_cast<long>(k), v.end());
+  return v[k];
+}
+
+std::string fmt(const char* f, double x) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, f, x);
+  return buf;
+}
+
+}  // namespace
+
+records::Summary build_summary(const RunConfig& rc, const Presence& presence,
+                               const ConvergenceJudge& judge, const RunTally& tally,
+                               const std::optional<records::GraphSnapshot>& first,
+                               const std::optional<records::GraphSnapshot>& last,
+                               const RunEnd& end) {
+  records::Summary s;
+  s.set_scenario(rc.name);
+  s.set_converged(judge.converged());
+  s.set_convergence_time_s(judge.converged() ? judge.converged_at_s() : -1.0);
+  s.set_end_reason(end.reason);
+  s.set_wall_time_s(end.wall_time_s);
+  s.set_duration_s(end.t_s);
+  s.set_seed(static_cast<std::uint32_t>(rc.seed));
+  s.set_mode(rc.mode == AgentMode::kQuadcopter ? "quadcopter" : "particle");
+  s.set_law(to_string(rc.law.kind));
+  s.set_agents_expected(static_cast<std::uint32_t>(rc.agents.size()));
+  s.set_joins(tally.joins);
+  s.set_departures(tally.departures);
+  s.set_min_separation_m(tally.min_separation_m < 1e299 ? tally.min_separation_m : 0.0);
+  put(s.mutable_initial_average(), rc.initial_average());
+
+  Positions final_q, final_p;
+  records::Messages& msg = *s.mutable_messages();
+  double rate_sum = 0.0;
+  int rate_n = 0;
+  for (const auto& [id, a] : presence.tracks()) {
+    records::AgentSummary* as = s.add_agents();
+    as->set_id(id);
+    const AgentSpec* spec = rc.agent(id);
+    put(as->mutable_initial_position(), spec ? spec->position_W : a.first.view.q0);
+    if (!a.seen) continue;
+    put(as->mutable_final_position(), a.last.p_W);
+    put(as->mutable_final_consensus(), a.last.view.q);
+    as->set_samples(static_cast<std::uint32_t>(a.samples));
+    as->set_seq_gaps(static_cast<std::uint32_t>(a.gaps));
+    as->set_dropped_by_agent(static_cast<std::uint32_t>(a.last.dropped));
+    const double span = a.last.stamp_s - a.first.stamp_s;
+    if (span > 0.0) {
+      as->set_rate_hz(static_cast<double>(a.samples - 1) / (span / end.time_scale));
+      rate_sum += as->rate_hz();
+      ++rate_n;
+    }
+    if (spec) {
+      final_q.push_back(a.last.view.q);
+      final_p.push_back(a.last.p_W);
+    }
+    msg.set_published(msg.published() + static_cast<std::uint32_t>(a.last.seq));
+    msg.set_received(msg.received() + static_cast<std::uint32_t>(a.samples));
+    msg.set_dropped(msg.dropped() + static_cast<std::uint32_t>(a.last.dropped));
+    msg.set_seq_gaps(msg.seq_gaps() + static_cast<std::uint32_t>(a.gaps));
+  }
+  msg.set_age_p50_ms(percentile(tally.ages_ms, 0.50));
+  msg.set_age_p99_ms(percentile(tally.ages_ms, 0.99));
+  msg.set_rate_hz(rate_n ? rate_sum / rate_n : 0.0);
+  const Vec3 mean = average(final_q);
+  put(s.mutable_final_consensus_mean(), mean);
+  s.set_average_drift_m(final_q.empty() ? 0.0 : (mean - rc.initial_average()).norm());
+  double spread = 0.0;
+  for (const Vec3& x : final_p) spread = std::max(spread, (x - average(final_p)).norm());
+  s.set_max_final_spread_m(spread);
+  s.set_final_disagreement_m(final_q.empty() ? 0.0 : disagreement(final_q));
+  const auto edges_of = [](const records::GraphSnapshot& g, auto* out) {
+    for (const records::GraphEdge& e : g.edges()) {
+      google::protobuf::ListValue* l = out->Add();
+      l->add_values()->set_number_value(e.a());
+      l->add_values()->set_number_value(e.b());
+      l->add_values()->set_number_value(e.weight());
+    }
+  };
+  if (first) {
+    s.set_lambda2_initial(first->lambda2());
+    edges_of(*first, s.mutable_edges_initial());
+  }
+  if (last) {
+    s.set_lambda2_final(last->lambda2());
+    edges_of(*last, s.mutable_edges_final());
+  }
+  records::FaultSummary& fs = *s.mutable_faults();
+  FaultCounters total;
+  for (const auto& [key, c] : tally.fault_counts) {
+    total.loss += c.loss;
+    total.burst += c.burst;
+    total.cut += c.cut;
+    total.partition += c.partition;
+    total.delayed += c.delayed;
+  }
+  fs.set_loss(static_cast<std::uint32_t>(total.loss));
+  fs.set_burst(static_cast<std::uint32_t>(total.burst));
+  fs.set_cut(static_cast<std::uint32_t>(total.cut));
+  fs.set_partition(static_cast<std::uint32_t>(total.partition));
+  fs.set_delayed(static_cast<std::uint32_t>(total.delayed));
+  fs.set_dropped(static_cast<std::uint32_t>(total.dropped()));
+  for (const auto& k : rc.faults.kill) {
+    if (k.at_s <= end.t_s) fs.set_kills(fs.kills() + 1);
+    if (k.restart_at_s > k.at_s && k.restart_at_s <= end.t_s) fs.set_restarts(fs.restarts() + 1);
+  }
+  for (const auto& j : rc.faults.late_join)
+    if (j.at_s <= end.t_s) fs.set_late_joins(fs.late_joins() + 1);
+  fs.set_transport_drop_percent(rc.faults.transport_drop_percent);
+  fs.set_events(tally.fault_events);
+  double detect = 0.0;
+  for (double d : tally.detect_s) detect += d;
+  s.set_detect_s(tally.detect_s.empty() ? -1.0 : detect / static_cast<double>(tally.detect_s.size()));
+  const double last_fault = rc.faults.last_fault_end_s();
+  s.set_last_fault_end_s(last_fault);
+  s.set_reconverge_s(judge.converged() && last_fault > 0.0 ? std::max(0.0, judge.converged_at_s() - last_fault)
+                                                    : -1.0);
+  const double avg_norm = rc.initial_average().norm();
+  s.set_average_relative_error(avg_norm > 0 ? s.average_drift_m() / avg_norm : s.average_drift_m());
+  return s;
+}
+
+std::string summary_text(const records::Summary& s, const RunConfig& rc, const std::string& dir) {
+  std::size_t final_agents = 0;
+  for (const auto& a : s.agents()) final_agents += a.final_consensus_size() == 3 ? 1 : 0;
+  std::ostringstream h;
+  h << "\n== " << rc.name << ": " << (s.converged() ? "CONVERGED" : "NOT CONVERGED") << " ("
+    << s.end_reason() << ") ==\n";
+  if (s.converged()) h << "converged at t = " << fmt("%.2f", s.convergence_time_s()) << " s (simulated)\n";
+  h << "agents " << final_agents << "/" << rc.agents.size() << ", " << s.mode() << " mode, "
+    << s.law() << " law, seed " << rc.seed << ", " << fmt("%.2f", s.duration_s()) << " s simulated in "
+    << fmt("%.2f", s.wall_time_s()) << " s wall\n";
+  const Vec3 avg = rc.initial_average();
+  const Vec3 mean(s.final_consensus_mean(0), s.final_consensus_mean(1), s.final_consensus_mean(2));
+  const records::Messages& msg = s.messages();
+  h << "initial average   (" << fmt("%.6f", avg.x()) << ", " << fmt("%.6f", avg.y()) << ", "
+    << fmt("%.6f", avg.z()) << ")\n";
+  h << "final mean        (" << fmt("%.6f", mean.x()) << ", " << fmt("%.6f", mean.y()) << ", "
+    << fmt("%.6f", mean.z()) << ")  drift " << fmt("%.3e", s.average_drift_m()) << " m\n";
+  h << "final disagreement " << fmt("%.3e", s.final_disagreement_m()) << " m, physical spread "
+    << fmt("%.3e", s.max_final_spread_m()) << " m, min separation " << fmt("%.3f", s.min_separation_m()) << " m\n";
+  h << "lambda2 " << fmt("%.4f", s.lambda2_initial()) << " -> " << fmt("%.4f", s.lambda2_final())
+    << ", edges " << s.edges_initial_size() << " -> " << s.edges_final_size() << "\n";
+  h << "messages: published " << msg.published() << ", received " << msg.received() << ", dropped "
+    << msg.dropped() << ", gaps " << msg.seq_gaps() << ", age p50 " << fmt("%.3f", msg.age_p50_ms())
+    << " ms p99 " << fmt("%.3f", msg.age_p99_ms()) << " ms\n";
+  h << "joins " << s.joins() << ", departures " << s.departures() << "\n";
+  if (!rc.faults.empty()) {
+    const records::FaultSummary& fsum = s.faults();
+    h << "faults: dropped " << fsum.dropped() << " (loss " << fsum.loss() << ", burst "
+      << fsum.burst() << ", cut " << fsum.cut() << ", partition " << fsum.partition()
+      << "), delayed " << fsum.delayed() << ", kills " << fsum.kills() << ", restarts "
+      << fsum.restarts() << ", transport drop " << fsum.transport_drop_percent() << " %\n";
+    h << "relative error of the agreed value " << fmt("%.3e", s.average_relative_error())
+      << ", detect " << fmt("%.2f", s.detect_s()) << " s, reconverge "
+      << fmt("%.2f", s.reconverge_s()) << " s\n";
+  }
+  h << "run directory: " << dir << "\n";
+  return h.str();
+}
+
+}  // namespace qswarm

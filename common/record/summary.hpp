@@ -1,0 +1,44 @@
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "common/record/convergence.hpp"
+#include "common/record/presence.hpp"
+#include "common/runtime/link_faults.hpp"
+#include "common/runtime/run_config.hpp"
+#include "proto/records.pb.h"
+
+namespace qswarm {
+
+// What the recorder counted during a run, for the summary.
+struct RunTally {
+  std::uint32_t joins = 0, departures = 0, fault_events = 0;
+  double min_separation_m = 1e300;
+  std::vector<double> ages_ms;   // sample ages (receive - send wall time)
+  std::vector<double> detect_s;  // planned kill -> departure seen
+  // Fault counters per agent incarnation (an incarnation's counters only grow).
+  std::map<std::pair<AgentId, std::int64_t>, FaultCounters> fault_counts;
+};
+
+struct RunEnd {
+  std::string reason;  // converged, duration, interrupted, ...
+  double t_s = 0.0;    // simulated time at the end
+  double wall_time_s = 0.0;
+  double time_scale = 1.0;
+};
+
+// summary.json's content from what the recorder saw. Pure.
+records::Summary build_summary(const RunConfig& rc, const Presence& presence,
+                               const ConvergenceJudge& judge, const RunTally& tally,
+                               const std::optional<records::GraphSnapshot>& first,
+                               const std::optional<records::GraphSnapshot>& last,
+                               const RunEnd& end);
+// The summary for people (what swarm run prints at the end).
+std::string summary_text(const records::Summary& s, const RunConfig& rc, const std::string& dir);
+
+}  // namespace qswarm
