@@ -46,7 +46,7 @@ pid_t ProcessGroup::spawn(const std::string& role, unsigned id,
   return pid;
 }
 
-std::vector<ProcessGroup::Child> ProcessGroup::reap() {
+std::vector<ChildProcesses::Child> ProcessGroup::reap() {
   std::vector<Child> out;
   for (Child& c : children_) {
     if (!c.running) continue;
@@ -61,8 +61,8 @@ std::vector<ProcessGroup::Child> ProcessGroup::reap() {
   return out;
 }
 
-bool ProcessGroup::any_running() const {
-  for (const Child& c : children_)
+bool ChildProcesses::any_running() const {
+  for (const Child& c : children())
     if (c.running) return true;
   return false;
 }
@@ -83,6 +83,7 @@ int ProcessGroup::terminate_all(double grace_s) {
     if (!c.running) continue;
     kill(c.pid, SIGKILL);
     ++killed;
+    c.killed_at_teardown = true;
     int status = 0;
     waitpid(c.pid, &status, 0);
     c.running = false;

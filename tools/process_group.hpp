@@ -7,10 +7,8 @@
 
 namespace qswarm {
 
-// The launcher's children. Each child gets PR_SET_PDEATHSIG(SIGTERM), so it stops if the launcher
-// dies. Teardown sends SIGTERM, waits a grace period, then escalates to SIGKILL, and reaps
-// every child, so that nothing is left behind.
-class ProcessGroup {
+// What the launcher needs of its children, so that tests can stand in for real processes.
+class ChildProcesses {
  public:
   struct Child {
     std::string role;  // "supervisor" or "agent"
@@ -18,19 +16,32 @@ class ProcessGroup {
     pid_t pid = -1;
     bool running = false;
     int status = 0;  // waitpid status once exited
+    bool killed_at_teardown = false;  // needed SIGKILL after the grace period
   };
-
-  ~ProcessGroup();
+  virtual ~ChildProcesses() = default;
   // Starts argv[0] with the given arguments; stdout/stderr go to `log_path` unless empty.
-  pid_t spawn(const std::string& role, unsigned id, const std::vector<std::string>& argv,
-              const std::string& log_path);
+  virtual pid_t spawn(const std::string& role, unsigned id, const std::vector<std::string>& argv,
+                      const std::string& log_path) = 0;
   // Reaps exited children without blocking; returns those that exited in this call.
-  std::vector<Child> reap();
+  virtual std::vector<Child> reap() = 0;
   // SIGTERM to all running children (supervisor first), wait up to grace_s, then SIGKILL the rest.
   // Returns how many needed SIGKILL.
-  int terminate_all(double grace_s);
-  const std::vector<Child>& children() const { return children_; }
+  virtual int terminate_all(double grace_s) = 0;
+  virtual const std::vector<Child>& children() const = 0;
   bool any_running() const;
+};
+
+// The launcher's children as real processes. Each child gets PR_SET_PDEATHSIG(SIGTERM), so it
+// stops if the launcher dies. Teardown sends SIGTERM, waits a grace period, then escalates to
+// SIGKILL, and reaps every child, so that nothing is left behind.
+class ProcessGroup final : public ChildProcesses {
+ public:
+  ~ProcessGroup() override;
+  pid_t spawn(const std::string& role, unsigned id, const std::vector<std::string>& argv,
+              const std::string& log_path) override;
+  std::vector<Child> reap() override;
+  int terminate_all(double grace_s) override;
+  const std::vector<Child>& children() const override { return children_; }
 
  private:
   std::vector<Child> children_;

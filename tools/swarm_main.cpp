@@ -1,23 +1,23 @@
-// swarm: launch a swarm of agent processes plus a supervisor (`swarm run`), or analyse a scenario's
-// initial graph without flying (`swarm inspect`).
+// swarm: launch a swarm of agent processes plus a supervisor (`swarm run`), analyse a scenario's
+// initial graph without flying (`swarm inspect`), or draw a run (`swarm plot`).
 #include <sys/wait.h>
 #include <unistd.h>
 #include <CLI/CLI.hpp>
 
 #include <atomic>
-#include <chrono>
+#include <cerrno>
 #include <csignal>
+#include <cstring>
 #include <ctime>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
-#include <map>
-#include <sstream>
-#include <thread>
+#include <optional>
 
-#include "common/core/graph.hpp"
 #include "common/runtime/fault_flags.hpp"
 #include "common/runtime/scenario.hpp"
+#include "tools/inspect.hpp"
+#include "tools/launcher.hpp"
 #include "tools/process_group.hpp"
 
 namespace fs = std::filesystem;
@@ -40,99 +40,6 @@ scenario::Scenario random_scenario() {
   s.mutable_weight()->set_policy(scenario::DISTANCE);
   s.mutable_random_agents()->set_box_m(30.0);
   return s;
-}
-
-struct InitialGraph {
-  std::vector<Edge> edges;
-  Eigen::MatrixXd L;
-  Spectrum spectrum;
-};
-
-InitialGraph initial_graph(const RunConfig& rc) {
-  InitialGraph g;
-  const int n = static_cast<int>(rc.agents.size());
-  for (int i = 0; i < n; ++i) {
-    LinkTracker tracker(rc.agents[i].id, rc.law.topology);
-    for (int j = i + 1; j < n; ++j) {
-      const double d = (rc.agents[i].position_W - rc.agents[j].position_W).norm();
-      if (tracker.update(rc.agents[j].id, d)) {
-        g.edges.push_back({i, j, weight_for_distance(rc.law.weight, d)});
-      }
-    }
-  }
-  g.L = laplacian(n, g.edges);
-  g.spectrum = analyze(g.L);
-  return g;
-}
-
-int inspect(const std::string& path, bool json) {
-  RunConfig rc;
-  try {
-    rc = load_scenario(path);
-  } catch (const ScenarioError& e) {
-    std::cerr << "swarm inspect: " << e.what() << "\n";
-    return 2;
-  }
-  const InitialGraph g = initial_graph(rc);
-  const Vec3 avg = rc.initial_average();
-  const double tau = g.spectrum.lambda2 > 0 ? 1.0 / (rc.law.gain * g.spectrum.lambda2) : -1.0;
-  const int n = static_cast<int>(rc.agents.size());
-  std::ostringstream o;
-  o.precision(10);
-  if (json) {
-    o << "{\n  \"scenario\": \"" << rc.name << "\",\n  \"agents\": [";
-    for (int i = 0; i < n; ++i) {
-      const Vec3& p = rc.agents[i].position_W;
-      o << (i ? ", " : "") << "{\"id\": " << rc.agents[i].id << ", \"position\": [" << p.x() << ", "
-        << p.y() << ", " << p.z() << "]}";
-    }
-    o << "],\n  \"edges\": [";
-    for (size_t k = 0; k < g.edges.size(); ++k) {
-      o << (k ? ", " : "") << "[" << rc.agents[g.edges[k].i].id << ", "
-        << rc.agents[g.edges[k].j].id << ", " << g.edges[k].weight << "]";
-    }
-    o << "],\n  \"laplacian\": [";
-    for (int i = 0; i < n; ++i) {
-      o << (i ? ", " : "") << "[";
-      for (int j = 0; j < n; ++j) o << (j ? ", " : "") << g.L(i, j);
-      o << "]";
-    }
-    o << "],\n  \"eigenvalues\": [";
-    for (int i = 0; i < n; ++i) o << (i ? ", " : "") << g.spectrum.eigenvalues[i];
-    o << "],\n  \"lambda2\": " << g.spectrum.lambda2
-      << ",\n  \"components\": " << g.spectrum.components
-      << ",\n  \"connected\": " << (g.spectrum.components == 1 ? "true" : "false")
-      << ",\n  \"agreement_point\": [" << avg.x() << ", " << avg.y() << ", " << avg.z()
-      << "],\n  \"time_constant_s\": " << tau << "\n}\n";
-  } else {
-    o.precision(6);
-    o << "scenario " << rc.name << ": " << n << " agents, " << to_string(rc.law.weight.policy)
-      << " weights, " << to_string(rc.law.topology.policy) << " topology, "
-      << to_string(rc.law.kind) << " law, gain " << rc.law.gain << "\n";
-    o << "initial edges (" << g.edges.size() << "):";
-    for (const Edge& e : g.edges)
-      o << " " << rc.agents[e.i].id << "-" << rc.agents[e.j].id << " (w=" << e.weight << ")";
-    o << "\nweighted Laplacian:\n";
-    for (int i = 0; i < n && n <= 16; ++i) {
-      for (int j = 0; j < n; ++j) {
-        char buf[32];
-        std::snprintf(buf, sizeof buf, "%10.4f", g.L(i, j));
-        o << buf;
-      }
-      o << "\n";
-    }
-    if (n > 16) o << "  (" << n << " x " << n << ", not printed)\n";
-    o << "eigenvalues:";
-    for (int i = 0; i < std::min(n, 16); ++i) o << " " << g.spectrum.eigenvalues[i];
-    o << "\nlambda2 " << g.spectrum.lambda2 << ", components " << g.spectrum.components
-      << (g.spectrum.components == 1 ? " (connected)"
-                                     : " (NOT connected: proximity may join them later)")
-      << "\npredicted agreement point (the initial average): (" << avg.x() << ", " << avg.y()
-      << ", " << avg.z() << ")\n";
-    if (tau > 0) o << "time constant 1/(k lambda2) = " << tau << " s (exact for fixed weights)\n";
-  }
-  std::cout << o.str();
-  return 0;
 }
 
 std::string timestamp() {
@@ -163,36 +70,38 @@ struct RunOptions {
   int random_cuts = 0;
 };
 
-int run(const RunOptions& opt) {
-  RunConfig rc;
+// The scenario file (or random agents) with the command line's overrides and fault shortcuts.
+RunConfig resolve_run(const RunOptions& opt) {
+  if (opt.scenario.empty() && opt.agents < 0) {
+    throw ScenarioError("give a SCENARIO file, or --agents N for seeded random agents");
+  }
   ScenarioOverrides o;
   o.agents = opt.agents;
   o.seed = opt.seed;
   o.duration_s = opt.duration;
   o.domain_id = opt.domain;
+  o.law = opt.law;
+  scenario::Scenario s = opt.scenario.empty() ? random_scenario() : read_scenario_file(opt.scenario);
+  if (opt.loss >= 0) add_loss_shortcut(s, opt.loss);
+  for (const auto& c : opt.cuts) add_cut_shortcut(s, c);
+  for (const auto& p : opt.partitions) add_partition_shortcut(s, p);
+  for (const auto& k : opt.kills) add_kill_shortcut(s, k);
+  if (!opt.delay.empty()) add_delay_shortcut(s, opt.delay);
+  if (opt.transport_loss >= 0) {
+    s.mutable_faults()->set_transport_drop_percent(static_cast<std::uint32_t>(opt.transport_loss));
+  }
+  if (opt.random_cuts > 0) {
+    const RunConfig first = resolve_scenario(s, o);  // agents, duration and seed for the draw
+    add_random_cuts(s, opt.random_cuts, static_cast<int>(first.agents.size()), first.duration_s,
+                    first.seed);
+  }
+  return resolve_scenario(s, o);
+}
+
+int run(const RunOptions& opt) {
+  RunConfig rc;
   try {
-    if (opt.scenario.empty() && opt.agents < 0) {
-      throw ScenarioError("give a SCENARIO file, or --agents N for seeded random agents");
-    }
-    if (opt.agents == 0) throw ScenarioError("--agents: expected a count of at least 1");
-    o.law = opt.law;
-    scenario::Scenario s =
-        opt.scenario.empty() ? random_scenario() : read_scenario_file(opt.scenario);
-    if (opt.loss >= 0) add_loss_shortcut(s, opt.loss);
-    for (const auto& c : opt.cuts) add_cut_shortcut(s, c);
-    for (const auto& p : opt.partitions) add_partition_shortcut(s, p);
-    for (const auto& k : opt.kills) add_kill_shortcut(s, k);
-    if (!opt.delay.empty()) add_delay_shortcut(s, opt.delay);
-    if (opt.transport_loss >= 0) {
-      s.mutable_faults()->set_transport_drop_percent(
-          static_cast<std::uint32_t>(opt.transport_loss));
-    }
-    if (opt.random_cuts > 0) {
-      const RunConfig first = resolve_scenario(s, o);  // agents, duration and seed for the draw
-      add_random_cuts(s, opt.random_cuts, static_cast<int>(first.agents.size()), first.duration_s,
-                      first.seed);
-    }
-    rc = resolve_scenario(s, o);
+    rc = resolve_run(opt);
   } catch (const ScenarioError& e) {
     std::cerr << "swarm run: " << e.what() << "\n";
     return 2;
@@ -211,11 +120,20 @@ int run(const RunOptions& opt) {
     return 2;
   }
   dir = fs::absolute(dir);
-  const std::string scen = (dir / "scenario.txtpb").string();
-  std::ofstream(scen) << "# The scenario as run (defaults filled in, agents listed).\n"
-                      << to_text(rc.resolved);
-  const InitialGraph g = initial_graph(rc);
+  LaunchSpec spec;
+  spec.rc = rc;
+  spec.run_dir = dir.string();
+  spec.scenario_path = (dir / "scenario.txtpb").string();
+  spec.bin_dir = bin_dir().string();
+  spec.time_scale = opt.time_scale;
+  spec.grace_s = opt.grace_s;
+  spec.progress = !opt.quiet;
+  spec.stop_on_agent_exit = opt.stop_on_agent_exit;
+  spec.ignore_sigterm = opt.ignore_sigterm;
+  std::ofstream(spec.scenario_path) << "# The scenario as run (defaults filled in, agents listed).\n"
+                                    << to_text(rc.resolved);
   if (!opt.quiet) {
+    const InitialGraph g = initial_graph(rc);
     std::cout << "swarm run: " << rc.name << ", " << rc.agents.size() << " agents, domain "
               << rc.domain_id << ", time scale " << opt.time_scale << ", seed " << rc.seed << "\n"
               << "initial graph: " << g.edges.size() << " edges, lambda2 " << g.spectrum.lambda2
@@ -226,123 +144,55 @@ int run(const RunOptions& opt) {
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
   std::signal(SIGHUP, on_signal);
-  const std::string ts = std::to_string(opt.time_scale);
-  const std::string bin = bin_dir().string();
   ProcessGroup procs;
-  const auto agent_args = [&](AgentId id, double join_at, bool restart) {
-    std::vector<std::string> args = {
-        bin + "/swarm-agent", "--scenario", scen,           "--id", std::to_string(id),
-        "--run-dir",          dir.string(), "--time-scale", ts};
-    if (join_at >= 0) {
-      args.push_back("--join-at");
-      args.push_back(std::to_string(join_at));
-    }
-    if (restart) args.push_back("--restart");
-    args.push_back("--wait-supervisor");
-    for (unsigned ign : opt.ignore_sigterm)
-      if (ign == id) args.push_back("--ignore-sigterm");
-    return args;
-  };
-  const auto agent_log = [&](AgentId id, int life) {
-    return (dir / ("agent-" + std::to_string(id) + (life ? "-restart" + std::to_string(life) : "") +
-                   ".out"))
-        .string();
-  };
-  // Planned restarts per agent, in order: a planned kill's process dies by SIGKILL and is replaced.
-  std::map<AgentId, std::vector<double>> restarts;
-  for (const auto& k : rc.faults.kill)
-    if (k.restart_at_s > k.at_s) restarts[k.agent].push_back(k.restart_at_s);
-  std::map<AgentId, int> lives;
+  SteadyClock clock;
+  Launcher launcher(spec, procs, clock, [&] { return fs::exists(dir / "supervisor.ready"); });
   try {
-    std::vector<std::string> sup = {bin + "/swarm-supervisor",
-                                    "--scenario",
-                                    scen,
-                                    "--run-dir",
-                                    dir.string(),
-                                    "--time-scale",
-                                    ts};
-    if (!opt.quiet) sup.push_back("--progress");
-    procs.spawn("supervisor", 0, sup, opt.quiet ? (dir / "supervisor.out").string() : "");
-    // The supervisor's reader first, so that it records the start.
-    const auto ready_by = std::chrono::steady_clock::now() + std::chrono::seconds(20);
-    while (!fs::exists(dir / "supervisor.ready") && std::chrono::steady_clock::now() < ready_by &&
-           procs.any_running() && procs.reap().empty()) {
-      std::this_thread::sleep_for(std::chrono::milliseconds(5));
-    }
-    if (!procs.children().front().running || !fs::exists(dir / "supervisor.ready")) {
-      // Without a recorder there is no run: start no agent.
-      procs.reap();
-      const auto sup_child = procs.children().front();
-      throw std::runtime_error("the supervisor did not come up (" +
-                               (sup_child.running ? std::string("no reader after 20 s")
-                                                  : describe_status(sup_child.status)) +
-                               ")" +
-                               (opt.quiet ? "; see " + (dir / "supervisor.out").string() : ""));
-    }
-    for (const AgentSpec& a : rc.agents) {
-      procs.spawn("agent", a.id, agent_args(a.id, -1.0, false), agent_log(a.id, 0));
-    }
+    launcher.start();
   } catch (const std::exception& e) {
     std::cerr << "swarm run: " << e.what() << "\n";
-    procs.terminate_all(opt.grace_s);
+    launcher.stop();
     return 1;
   }
-  {
-    std::ofstream pids(dir / "processes.csv");
-    pids << "role,id,pid\n";
-    for (const auto& c : procs.children()) pids << c.role << ',' << c.id << ',' << c.pid << '\n';
-  }
-
-  // The supervisor is the first child; its state (running, exit status) lives in the group.
-  const auto supervisor = [&procs] { return procs.children().front(); };
-  std::string why;
-  const auto wall0 = std::chrono::steady_clock::now();
-  const double wall_limit = rc.duration_s / opt.time_scale + 120.0;
-  while (true) {
-    for (const auto& c : procs.reap()) {
-      if (c.role == "agent") {
-        std::cerr << "swarm run: agent " << c.id << " " << describe_status(c.status) << "\n";
-        auto& planned = restarts[c.id];
-        const int life = lives[c.id];
-        if (WIFSIGNALED(c.status) && WTERMSIG(c.status) == SIGKILL &&
-            life < static_cast<int>(planned.size())) {
-          ++lives[c.id];
-          std::cerr << "swarm run: restarting agent " << c.id << " (joins at t=" << planned[life]
-                    << " s)\n";
-          procs.spawn("agent", c.id, agent_args(c.id, planned[life], true),
-                      agent_log(c.id, life + 1));
-          std::ofstream(dir / "processes.csv", std::ios::app)
-              << "agent," << c.id << ',' << procs.children().back().pid << '\n';
-        } else if (opt.stop_on_agent_exit && why.empty()) {
-          why = "agent " + std::to_string(c.id) + " exited";
-        }
-      }
-    }
-    if (!supervisor().running) break;
-    if (g_signal) {
-      why = "interrupted";
-      break;
-    }
-    if (!why.empty()) break;
-    if (std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count() >
-        wall_limit) {
-      why = "the supervisor did not finish in time";
-      break;
-    }
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
-  }
-  const int killed = procs.terminate_all(opt.grace_s);
-  const int supervisor_status = supervisor().status;
+  std::optional<std::string> why;
+  while (!(why = launcher.poll(g_signal != 0))) clock.sleep_until(clock.now_s() + 0.02);
+  const int killed = launcher.stop();
   if (!opt.quiet || killed > 0) {
     std::cout << "swarm run: stopped " << procs.children().size() << " processes"
               << (killed ? " (" + std::to_string(killed) + " needed SIGKILL)" : std::string())
               << "\n";
   }
-  if (!why.empty()) std::cerr << "swarm run: " << why << "\n";
-  const bool converged = WIFEXITED(supervisor_status) && WEXITSTATUS(supervisor_status) == 0;
+  if (*why != "supervisor finished") std::cerr << "swarm run: " << *why << "\n";
+  for (const std::string& p : launcher.problems()) std::cerr << "swarm run: " << p << "\n";
+  const int sup = launcher.supervisor_status();
+  if (WIFEXITED(sup) && WEXITSTATUS(sup) == 3) {
+    std::cout << "swarm run: the run record is incomplete (see above); run directory "
+              << dir.string() << std::endl;
+    return 3;
+  }
+  const bool converged = WIFEXITED(sup) && WEXITSTATUS(sup) == 0 && launcher.problems().empty();
   std::cout << "swarm run: " << (converged ? "converged" : "not converged") << "; run record in "
             << dir.string() << std::endl;
   return converged ? 0 : 1;
+}
+
+// `swarm plot`: the figures are drawn by tools/plot/swarm_plot.py (matplotlib), installed beside
+// this binary; Debian's interpreter first, where python3-matplotlib lives.
+int plot(const std::string& run_dir, const std::string& out) {
+  const std::string script = (bin_dir() / "swarm_plot.py").string();
+  const std::string python = fs::exists("/usr/bin/python3") ? "/usr/bin/python3" : "python3";
+  std::vector<std::string> args = {python, script, run_dir};
+  if (!out.empty()) {
+    args.push_back("--out");
+    args.push_back(out);
+  }
+  std::vector<char*> argv;
+  for (std::string& a : args) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  execvp(argv[0], argv.data());
+  std::cerr << "swarm plot: cannot run " << python << " (" << std::strerror(errno)
+            << "); tools/setup.sh installs python3-matplotlib\n";
+  return 2;
 }
 
 }  // namespace
@@ -421,11 +271,17 @@ int main(int argc, char** argv) {
       ->required()
       ->check(CLI::ExistingFile);
   inspect_cmd->add_flag("--json", json, "machine-readable output");
+
+  std::string plot_dir, plot_out;
+  CLI::App* plot_cmd = app.add_subcommand("plot", "PNG figures of a run directory (matplotlib)");
+  plot_cmd->add_option("run_dir", plot_dir, "run directory written by swarm run")->required();
+  plot_cmd->add_option("--out", plot_out, "figure directory (default RUN_DIR/plots)");
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return app.exit(e) == 0 ? 0 : 2;
   }
   if (*run_cmd) return run(ro);
-  return inspect(inspect_path, json);
+  if (*plot_cmd) return plot(plot_dir, plot_out);
+  return inspect_scenario(inspect_path, json);
 }
