@@ -1,6 +1,7 @@
 // swarm-supervisor: subscribes to every agent's state and records the run. It publishes nothing an
-// agent acts on (its participant has no writer). Exit 0 when the swarm converged, 1 when the
-// duration ended (or it was interrupted) without convergence, 2 for bad input.
+// agent acts on (its participant has no writer). Exit 0 when every expected agent converged and
+// the record is complete, 1 when the run ended otherwise (duration, interrupted, an agent
+// missing), 2 for bad input, 3 when a file of the record could not be written.
 #include <spdlog/sinks/basic_file_sink.h>
 #include <spdlog/spdlog.h>
 #include <CLI/CLI.hpp>
@@ -78,14 +79,8 @@ int main(int argc, char** argv) {
         std::fflush(stdout);
         last_print = wall_s();
       }
-      if (rec.converged()) {
-        reason = "converged";
-        break;
-      }
-      if (rec.duration_reached()) {
-        reason = "duration";
-        break;
-      }
+      reason = rec.end_reason_if_over();
+      if (!reason.empty()) break;
       if (g_stop) {
         reason = "interrupted";
         break;
@@ -101,6 +96,12 @@ int main(int argc, char** argv) {
     std::printf("%s", text.c_str());
     std::fflush(stdout);
     logger->info("finished: {}", reason);
+    if (!rec.complete()) {
+      std::fprintf(stderr, "swarm-supervisor: the run record is incomplete: could not write %s\n",
+                   rec.failed_file().c_str());
+      logger->error("run record incomplete: could not write {}", rec.failed_file());
+      return 3;
+    }
     return rec.converged() ? 0 : 1;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "swarm-supervisor: %s\n", e.what());

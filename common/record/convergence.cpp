@@ -2,34 +2,45 @@
 
 namespace qswarm {
 
-ConvergenceJudge::ConvergenceJudge(double tolerance_m, double hold_s, FaultPlan plan)
-    : tolerance_m_(tolerance_m), hold_s_(hold_s), plan_(std::move(plan)) {}
+ConvergenceJudge::ConvergenceJudge(double tolerance_m, double hold_s, double timeout_s,
+                                   FaultPlan plan)
+    : tolerance_m_(tolerance_m), hold_s_(hold_s), timeout_s_(timeout_s), plan_(std::move(plan)) {}
 
-bool ConvergenceJudge::everyone_due_is_back(double t_s, const Presence& presence) const {
-  // Every agent not joining late must have been seen at least once.
-  if (presence.seen_count() + plan_.late_join.size() < presence.tracks().size()) return false;
-  for (const auto& [id, track] : presence.tracks()) {
-    if (plan_.due_back(id, t_s) && !presence.running(id)) return false;
-  }
-  return true;
+std::vector<AgentId> ConvergenceJudge::missing_now(double t_s, const Presence& presence) const {
+  std::vector<AgentId> out;
+  for (const auto& [id, track] : presence.tracks())
+    if (plan_.due_alive(id, t_s) && !presence.running(id)) out.push_back(id);
+  return out;
 }
 
-bool ConvergenceJudge::update(double t_s, const records::GraphSnapshot& g,
-                              const Presence& presence) {
-  const bool agree = g.agents() > 0 && everyone_due_is_back(t_s, presence) &&
-                     t_s >= plan_.last_fault_end_s() && g.disagreement_m() < tolerance_m_ &&
-                     g.spread_m() < tolerance_m_;
+ConvergenceJudge::Verdict ConvergenceJudge::update(double t_s, const records::GraphSnapshot& g,
+                                                   const Presence& presence) {
+  if (converged_ || !missing_.empty()) return Verdict::kNone;  // judged once
+  // An agent the plan brings back (a due restart or late join) must be running before the hold
+  // starts: its return is part of what the swarm agrees on.
+  bool planned_back = true;
+  for (const auto& [id, track] : presence.tracks())
+    planned_back &= !plan_.due_back(id, t_s) || presence.running(id);
+  const bool agree = g.agents() > 0 && planned_back && t_s >= plan_.last_fault_end_s() &&
+                     g.disagreement_m() < tolerance_m_ && g.spread_m() < tolerance_m_;
   if (!agree) {
     hold_start_s_ = -1.0;
-    return false;
+    return Verdict::kNone;
   }
   if (hold_start_s_ < 0.0) hold_start_s_ = t_s;
-  if (!converged_ && t_s - hold_start_s_ >= hold_s_) {
+  const double held = t_s - hold_start_s_;
+  const std::vector<AgentId> missing = missing_now(t_s, presence);
+  if (missing.empty() && held >= hold_s_) {
     converged_ = true;
     converged_at_s_ = hold_start_s_;
-    return true;
+    return Verdict::kConverged;
   }
-  return false;
+  if (!missing.empty() && held >= hold_s_ + timeout_s_) {
+    missing_ = missing;
+    converged_at_s_ = hold_start_s_;
+    return Verdict::kAgreedWithoutSome;
+  }
+  return Verdict::kNone;
 }
 
 }  // namespace qswarm

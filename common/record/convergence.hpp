@@ -8,26 +8,34 @@
 
 namespace qswarm {
 
-// The convergence judgement: the swarm has converged once, for hold_s of simulated time, every
-// agent the plan has brought back (a due restart or late join) is running, the last planned fault
-// is over, and the running agents' consensus states and positions agree within tolerance. An
-// unplanned departure (a crash, an outside kill) does not stop the others from converging. Pure.
+// The convergence judgement. The running agents agree once, for hold_s of simulated time, their
+// consensus states and positions lie within tolerance and the last planned fault is over. The
+// swarm has converged only if, in addition, every agent the run expects alive (the fault plan's
+// due_alive) is running: an agent that crashed, was killed from outside, is stopped or never came
+// is missing, and a swarm that agreed without it has not converged. When the others have agreed
+// without a missing agent for hold_s plus the neighbour timeout, the judgement says so (the run
+// can end, saying who was missing). Pure.
 class ConvergenceJudge {
  public:
-  ConvergenceJudge(double tolerance_m, double hold_s, FaultPlan plan);
-  // Feed each graph snapshot; returns true the first time the swarm counts as converged.
-  bool update(double t_s, const records::GraphSnapshot& g, const Presence& presence);
+  enum class Verdict { kNone, kConverged, kAgreedWithoutSome };
+  ConvergenceJudge(double tolerance_m, double hold_s, double timeout_s, FaultPlan plan);
+  // Feed each graph snapshot; returns a verdict the first time one is reached.
+  Verdict update(double t_s, const records::GraphSnapshot& g, const Presence& presence);
   bool converged() const { return converged_; }
-  // Start of the hold that ended in convergence (-1 before).
+  bool agreed_without_some() const { return !missing_.empty(); }
+  // The agents the run expected that were not running when the others agreed.
+  const std::vector<AgentId>& missing() const { return missing_; }
+  // Start of the hold that ended in a verdict (-1 before).
   double converged_at_s() const { return converged_at_s_; }
 
  private:
-  bool everyone_due_is_back(double t_s, const Presence& presence) const;
-  double tolerance_m_, hold_s_;
+  std::vector<AgentId> missing_now(double t_s, const Presence& presence) const;
+  double tolerance_m_, hold_s_, timeout_s_;
   FaultPlan plan_;
   double hold_start_s_ = -1.0;
   bool converged_ = false;
   double converged_at_s_ = -1.0;
+  std::vector<AgentId> missing_;
 };
 
 }  // namespace qswarm

@@ -25,7 +25,7 @@ Recorder::Recorder(RunConfig rc, std::string run_dir, double time_scale)
       time_scale_(time_scale),
       sinks_(dir_),
       presence_(ids_of(rc_), rc_.neighbor_timeout_s),
-      judge_(rc_.tolerance_m, rc_.hold_s, rc_.faults),
+      judge_(rc_.tolerance_m, rc_.hold_s, rc_.neighbor_timeout_s, rc_.faults),
       timeline_(rc_.faults.timeline()) {}
 
 void Recorder::event(const std::string& kind, AgentId agent, const std::string& detail) {
@@ -152,12 +152,29 @@ void Recorder::snapshot() {
       [&](int i) -> const auto& { return presence_.track(ids[static_cast<size_t>(i)]).last.links; },
       rc_.initial_average());
   record_graph(*last_);
-  if (judge_.update(t_s_, *last_, presence_)) {
-    char buf[120];
-    std::snprintf(buf, sizeof buf, "disagreement %.3g m, spread %.3g m", last_->disagreement_m(),
-                  last_->spread_m());
+  const ConvergenceJudge::Verdict v = judge_.update(t_s_, *last_, presence_);
+  if (v == ConvergenceJudge::Verdict::kNone) return;
+  char buf[120];
+  std::snprintf(buf, sizeof buf, "disagreement %.3g m, spread %.3g m", last_->disagreement_m(),
+                last_->spread_m());
+  if (v == ConvergenceJudge::Verdict::kConverged) {
     event("converged", 0, buf);
+  } else {
+    event("agreed_without", 0, missing_text() + " missing; " + buf);
   }
+}
+
+std::string Recorder::missing_text() const {
+  std::string ids;
+  for (const AgentId id : judge_.missing()) ids += (ids.empty() ? "" : ", ") + std::to_string(id);
+  return "agent" + std::string(judge_.missing().size() > 1 ? "s " : " ") + ids;
+}
+
+std::string Recorder::end_reason_if_over() const {
+  if (judge_.converged()) return "converged";
+  if (judge_.agreed_without_some()) return "agreed without " + missing_text();
+  if (duration_reached()) return "duration";
+  return "";
 }
 
 std::string Recorder::progress_line() const {

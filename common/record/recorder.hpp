@@ -31,6 +31,8 @@ class Recorder {
 
   double time_s() const { return t_s_; }
   bool converged() const { return judge_.converged(); }
+  // Why the run is over ("converged", "agreed without agent 5", "duration"), or "" while it goes on.
+  std::string end_reason_if_over() const;
   bool duration_reached() const { return t_s_ >= rc_.duration_s; }
   std::string progress_line() const;
   int edges_now() const { return last_ ? last_->edges_size() : 0; }
@@ -48,6 +50,7 @@ class Recorder {
   void snapshot();          // the swarm now, from the latest samples; checks convergence
   void initial_snapshot();  // the swarm at t = 0, from q(0) and each agent's initial links
   double swarm_time_at(std::int64_t wall_ns) const;
+  std::string missing_text() const;
 
   RunConfig rc_;
   std::string dir_;

@@ -40,6 +40,7 @@ records::Summary build_summary(const RunConfig& rc, const Presence& presence,
   records::Summary s;
   s.set_scenario(rc.name);
   s.set_converged(judge.converged());
+  for (const AgentId id : judge.missing()) s.add_missing_agents(id);
   s.set_convergence_time_s(judge.converged() ? judge.converged_at_s() : -1.0);
   s.set_end_reason(end.reason);
   s.set_wall_time_s(end.wall_time_s);
@@ -169,6 +170,11 @@ std::string summary_text(const records::Summary& s, const RunConfig& rc, const s
     << msg.dropped() << ", gaps " << msg.seq_gaps() << ", age p50 " << fmt("%.3f", msg.age_p50_ms())
     << " ms p99 " << fmt("%.3f", msg.age_p99_ms()) << " ms\n";
   h << "joins " << s.joins() << ", departures " << s.departures() << "\n";
+  if (s.missing_agents_size() > 0) {
+    h << "MISSING: the others agreed without agent(s)";
+    for (const auto id : s.missing_agents()) h << " " << id;
+    h << "\n";
+  }
   if (!rc.faults.empty()) {
     const records::FaultSummary& fsum = s.faults();
     h << "faults: dropped " << fsum.dropped() << " (loss " << fsum.loss() << ", burst "

@@ -71,7 +71,7 @@ TEST(GraphMetrics, ThePapersWeightedNetworkHasItsSpectrum) {
 TEST(ConvergenceJudge, HoldsForHoldSecondsAndWaitsForThePlanAndDueAgents) {
   FaultPlan plan;
   plan.kill.push_back({2, 1.0, 3.0});  // agent 2 killed at 1 s, back at 3 s
-  ConvergenceJudge judge(0.01, 0.5, plan);
+  ConvergenceJudge judge(0.01, 0.5, 1.0, plan);
   Presence p({1, 2}, 1.0);
   p.on_sample(sample(1, 1, 0.0, Vec3::Zero()), 0.0);
   p.on_sample(sample(2, 1, 0.0, Vec3::Zero()), 0.0);
@@ -80,23 +80,45 @@ TEST(ConvergenceJudge, HoldsForHoldSecondsAndWaitsForThePlanAndDueAgents) {
   agree.set_disagreement_m(0.001);
   agree.set_spread_m(0.001);
   // Before the last planned fault ends (the restart at 3 s), agreement does not count.
-  EXPECT_FALSE(judge.update(2.0, agree, p));
-  EXPECT_FALSE(judge.update(2.9, agree, p));
+  EXPECT_EQ(ConvergenceJudge::Verdict::kNone, judge.update(2.0, agree, p));
+  EXPECT_EQ(ConvergenceJudge::Verdict::kNone, judge.update(2.9, agree, p));
   // After it, agent 2 is due back: it must be running.
   p.expire(3.5);  // both silent: departed
   p.on_sample(sample(1, 2, 3.5, Vec3::Zero()), 3.5);
-  EXPECT_FALSE(judge.update(3.5, agree, p));
-  EXPECT_FALSE(judge.update(4.5, agree, p));
+  EXPECT_EQ(ConvergenceJudge::Verdict::kNone, judge.update(3.5, agree, p));
+  EXPECT_EQ(ConvergenceJudge::Verdict::kNone, judge.update(4.5, agree, p));
   p.on_sample(sample(2, 2, 4.6, Vec3::Zero()), 4.6);
-  EXPECT_FALSE(judge.update(4.6, agree, p));  // the hold starts
+  EXPECT_EQ(ConvergenceJudge::Verdict::kNone, judge.update(4.6, agree, p));  // the hold starts
   records::GraphSnapshot apart = agree;
   apart.set_disagreement_m(0.5);
-  EXPECT_FALSE(judge.update(4.8, apart, p));  // and restarts
-  EXPECT_FALSE(judge.update(4.9, agree, p));
-  EXPECT_TRUE(judge.update(5.4, agree, p));
+  EXPECT_EQ(ConvergenceJudge::Verdict::kNone, judge.update(4.8, apart, p));  // and restarts
+  EXPECT_EQ(ConvergenceJudge::Verdict::kNone, judge.update(4.9, agree, p));
+  EXPECT_EQ(ConvergenceJudge::Verdict::kConverged, judge.update(5.4, agree, p));
   EXPECT_TRUE(judge.converged());
   EXPECT_DOUBLE_EQ(judge.converged_at_s(), 4.9);
-  EXPECT_FALSE(judge.update(5.5, agree, p));  // once
+  EXPECT_EQ(ConvergenceJudge::Verdict::kNone, judge.update(5.5, agree, p));  // once
+}
+
+TEST(ConvergenceJudge, AgentsThatAgreeWithoutAnExpectedAgentHaveNotConverged) {
+  ConvergenceJudge judge(0.01, 0.5, 1.0, FaultPlan{});
+  Presence p({1, 2, 3}, 1.0);
+  for (AgentId id : {1u, 2u, 3u}) p.on_sample(sample(id, 1, 0.0, Vec3::Zero()), 0.0);
+  p.on_sample(sample(3, 2, 0.1, Vec3::Zero(), kStopping), 0.1);  // agent 3 gone (or stopped)
+  records::GraphSnapshot agree;
+  agree.set_agents(2);
+  agree.set_disagreement_m(0.001);
+  agree.set_spread_m(0.001);
+  EXPECT_EQ(ConvergenceJudge::Verdict::kNone, judge.update(1.0, agree, p));
+  EXPECT_EQ(ConvergenceJudge::Verdict::kNone, judge.update(2.0, agree, p));  // hold + timeout
+  EXPECT_EQ(ConvergenceJudge::Verdict::kAgreedWithoutSome, judge.update(2.6, agree, p));
+  EXPECT_FALSE(judge.converged());
+  EXPECT_EQ(judge.missing(), std::vector<AgentId>{3});
+  // An agent the plan kills without restart is not missing.
+  FaultPlan plan;
+  plan.kill.push_back({3, 0.05, 0.0});
+  ConvergenceJudge planned(0.01, 0.5, 1.0, plan);
+  EXPECT_EQ(ConvergenceJudge::Verdict::kNone, planned.update(1.0, agree, p));
+  EXPECT_EQ(ConvergenceJudge::Verdict::kConverged, planned.update(1.5, agree, p));
 }
 
 TEST(Recorder, FedWithMessagesWritesTheRunRecordAndASummary) {
