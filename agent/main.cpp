@@ -65,7 +65,8 @@ int main(int argc, char** argv) {
               to_string(rc->law.kind), opts.time_scale);
     while (!g_stop) {
       const AgentLoop::Poll p = loop.poll();
-      for (const auto& n : p.notes) log->log(n.warning ? spdlog::level::warn : spdlog::level::info, n.text);
+      for (const auto& n : p.notes)
+        log->log(n.warning ? spdlog::level::warn : spdlog::level::info, n.text);
       if (p.kill) {
         log->warn("t={:.3f} s: planned kill: SIGKILL to myself", loop.runtime().time_s());
         log->flush();
@@ -76,7 +77,8 @@ int main(int argc, char** argv) {
     }
     loop.stop();
     log->info(final_report(loop, bus.counters()));
-    if (!run_dir.empty()) write_stats(run_dir + "/" + name + ".stats", loop, bus.counters(), clock.now_s());
+    if (!run_dir.empty())
+      write_stats(run_dir + "/" + name + ".stats", loop, bus.counters(), clock.now_s());
   } catch (const std::exception& e) {
     log->error("fatal: {}", e.what());
     return 1;

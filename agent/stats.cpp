@@ -11,18 +11,17 @@ std::string final_report(const AgentLoop& loop, const BusCounters& c) {
   const AgentRuntime& a = loop.runtime();
   const Vec3 q = a.consensus(), x = a.position();
   char buf[512];
-  std::snprintf(buf, sizeof buf,
-                "stopping at t=%.3f s: consensus (%.6f, %.6f, %.6f) position (%.6f, %.6f, %.6f); "
-                "published %llu, received %llu, dropped %llu, stale %llu, late ticks %llu of %llu "
-                "(%llu physics steps); flows recovered at restart %d",
-                a.time_s(), q.x(), q.y(), q.z(), x.x(), x.y(), x.z(),
-                static_cast<unsigned long long>(c.published),
-                static_cast<unsigned long long>(c.received),
-                static_cast<unsigned long long>(c.dropped),
-                static_cast<unsigned long long>(c.stale),
-                static_cast<unsigned long long>(loop.overruns()),
-                static_cast<unsigned long long>(loop.ticks()),
-                static_cast<unsigned long long>(loop.physics_steps()), a.recovered_flows());
+  std::snprintf(
+      buf, sizeof buf,
+      "stopping at t=%.3f s: consensus (%.6f, %.6f, %.6f) position (%.6f, %.6f, %.6f); "
+      "published %llu, received %llu, dropped %llu, stale %llu, late ticks %llu of %llu "
+      "(%llu physics steps); flows recovered at restart %d",
+      a.time_s(), q.x(), q.y(), q.z(), x.x(), x.y(), x.z(),
+      static_cast<unsigned long long>(c.published), static_cast<unsigned long long>(c.received),
+      static_cast<unsigned long long>(c.dropped), static_cast<unsigned long long>(c.stale),
+      static_cast<unsigned long long>(loop.overruns()),
+      static_cast<unsigned long long>(loop.ticks()),
+      static_cast<unsigned long long>(loop.physics_steps()), a.recovered_flows());
   return buf;
 }
 

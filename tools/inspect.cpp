@@ -54,32 +54,32 @@ std::string as_text(const RunConfig& rc, const InitialGraph& g, double tau) {
   const Vec3 avg = rc.initial_average();
   const int n = static_cast<int>(rc.agents.size());
   std::ostringstream o;
-    o.precision(6);
-    o << "scenario " << rc.name << ": " << n << " agents, " << to_string(rc.law.weight.policy)
-      << " weights, " << to_string(rc.law.topology.policy) << " topology, "
-      << to_string(rc.law.kind) << " law, gain " << rc.law.gain << "\n";
-    o << "initial edges (" << g.edges.size() << "):";
-    for (const Edge& e : g.edges)
-      o << " " << rc.agents[e.i].id << "-" << rc.agents[e.j].id << " (w=" << e.weight << ")";
-    o << "\nweighted Laplacian:\n";
-    for (int i = 0; i < n && n <= 16; ++i) {
-      for (int j = 0; j < n; ++j) {
-        char buf[32];
-        std::snprintf(buf, sizeof buf, "%10.4f", g.L(i, j));
-        o << buf;
-      }
-      o << "\n";
+  o.precision(6);
+  o << "scenario " << rc.name << ": " << n << " agents, " << to_string(rc.law.weight.policy)
+    << " weights, " << to_string(rc.law.topology.policy) << " topology, " << to_string(rc.law.kind)
+    << " law, gain " << rc.law.gain << "\n";
+  o << "initial edges (" << g.edges.size() << "):";
+  for (const Edge& e : g.edges)
+    o << " " << rc.agents[e.i].id << "-" << rc.agents[e.j].id << " (w=" << e.weight << ")";
+  o << "\nweighted Laplacian:\n";
+  for (int i = 0; i < n && n <= 16; ++i) {
+    for (int j = 0; j < n; ++j) {
+      char buf[32];
+      std::snprintf(buf, sizeof buf, "%10.4f", g.L(i, j));
+      o << buf;
     }
-    if (n > 16) o << "  (" << n << " x " << n << ", not printed)\n";
-    o << "eigenvalues:";
-    for (int i = 0; i < std::min(n, 16); ++i) o << " " << g.spectrum.eigenvalues[i];
-    o << "\nlambda2 " << g.spectrum.lambda2 << ", components " << g.spectrum.components
-      << (g.spectrum.components == 1 ? " (connected)"
-                                     : " (NOT connected: proximity may join them later)")
-      << "\npredicted agreement point (the initial average): (" << avg.x() << ", " << avg.y()
-      << ", " << avg.z() << ")\n";
-    if (tau > 0) o << "time constant 1/(k lambda2) = " << tau << " s (exact for fixed weights)\n";
-    return o.str();
+    o << "\n";
+  }
+  if (n > 16) o << "  (" << n << " x " << n << ", not printed)\n";
+  o << "eigenvalues:";
+  for (int i = 0; i < std::min(n, 16); ++i) o << " " << g.spectrum.eigenvalues[i];
+  o << "\nlambda2 " << g.spectrum.lambda2 << ", components " << g.spectrum.components
+    << (g.spectrum.components == 1 ? " (connected)"
+                                   : " (NOT connected: proximity may join them later)")
+    << "\npredicted agreement point (the initial average): (" << avg.x() << ", " << avg.y() << ", "
+    << avg.z() << ")\n";
+  if (tau > 0) o << "time constant 1/(k lambda2) = " << tau << " s (exact for fixed weights)\n";
+  return o.str();
 }
 
 }  // namespace

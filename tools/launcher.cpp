@@ -30,9 +30,12 @@ Launcher::Launcher(LaunchSpec spec, ChildProcesses& procs, Clock& clock,
 double Launcher::wall_limit_s() const { return spec_.rc.duration_s / spec_.time_scale + 120.0; }
 
 std::vector<std::string> Launcher::supervisor_argv() const {
-  std::vector<std::string> a = {spec_.bin_dir + "/swarm-supervisor", "--scenario",
-                                spec_.scenario_path,                 "--run-dir",
-                                spec_.run_dir,                       "--time-scale",
+  std::vector<std::string> a = {spec_.bin_dir + "/swarm-supervisor",
+                                "--scenario",
+                                spec_.scenario_path,
+                                "--run-dir",
+                                spec_.run_dir,
+                                "--time-scale",
                                 num(spec_.time_scale)};
   if (spec_.progress) a.push_back("--progress");
   return a;
@@ -101,8 +104,9 @@ void Launcher::on_agent_exit(const ChildProcesses::Child& c) {
   const std::vector<double> restarts = spec_.rc.faults.restarts_of(c.id);
   int& life = lives_[c.id];
   // A SIGKILL is the plan's while the agent has planned kills left (it kills itself).
-  const bool planned = planned_kill_status(c.status) &&
-                       kills_seen_[c.id]++ < static_cast<int>(spec_.rc.faults.kills_of(c.id).size());
+  const bool planned =
+      planned_kill_status(c.status) &&
+      kills_seen_[c.id]++ < static_cast<int>(spec_.rc.faults.kills_of(c.id).size());
   if (planned && life < static_cast<int>(restarts.size())) {
     // Its planned kill: a new process rejoins at the planned restart time.
     const double at = restarts[static_cast<std::size_t>(life)];
@@ -142,9 +146,10 @@ int Launcher::stop() {
     if (!was_running[i] || c.killed_at_teardown) continue;
     // A child that stopped on our SIGTERM exits 0 (agents, supervisor) or by SIGTERM; anything
     // else (an abort, a segfault, a non-zero exit) is a crash the record must not hide.
-    const bool clean = (WIFEXITED(c.status) && (WEXITSTATUS(c.status) == 0 ||
-                                                (c.role == "supervisor" && WEXITSTATUS(c.status) == 1))) ||
-                       (WIFSIGNALED(c.status) && WTERMSIG(c.status) == SIGTERM);
+    const bool clean =
+        (WIFEXITED(c.status) &&
+         (WEXITSTATUS(c.status) == 0 || (c.role == "supervisor" && WEXITSTATUS(c.status) == 1))) ||
+        (WIFSIGNALED(c.status) && WTERMSIG(c.status) == SIGTERM);
     if (!clean) note_abnormal(c, true);
   }
   return killed;

@@ -15,7 +15,7 @@ class ChildProcesses {
     unsigned id = 0;
     pid_t pid = -1;
     bool running = false;
-    int status = 0;  // waitpid status once exited
+    int status = 0;                   // waitpid status once exited
     bool killed_at_teardown = false;  // needed SIGKILL after the grace period
   };
   virtual ~ChildProcesses() = default;

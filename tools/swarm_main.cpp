@@ -81,7 +81,8 @@ RunConfig resolve_run(const RunOptions& opt) {
   o.duration_s = opt.duration;
   o.domain_id = opt.domain;
   o.law = opt.law;
-  scenario::Scenario s = opt.scenario.empty() ? random_scenario() : read_scenario_file(opt.scenario);
+  scenario::Scenario s =
+      opt.scenario.empty() ? random_scenario() : read_scenario_file(opt.scenario);
   if (opt.loss >= 0) add_loss_shortcut(s, opt.loss);
   for (const auto& c : opt.cuts) add_cut_shortcut(s, c);
   for (const auto& p : opt.partitions) add_partition_shortcut(s, p);
@@ -130,8 +131,9 @@ int run(const RunOptions& opt) {
   spec.progress = !opt.quiet;
   spec.stop_on_agent_exit = opt.stop_on_agent_exit;
   spec.ignore_sigterm = opt.ignore_sigterm;
-  std::ofstream(spec.scenario_path) << "# The scenario as run (defaults filled in, agents listed).\n"
-                                    << to_text(rc.resolved);
+  std::ofstream(spec.scenario_path)
+      << "# The scenario as run (defaults filled in, agents listed).\n"
+      << to_text(rc.resolved);
   if (!opt.quiet) {
     const InitialGraph g = initial_graph(rc);
     std::cout << "swarm run: " << rc.name << ", " << rc.agents.size() << " agents, domain "

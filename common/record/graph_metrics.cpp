@@ -4,9 +4,9 @@
 
 namespace qswarm {
 
-records::GraphSnapshot measure_graph(double t_s, const std::vector<AgentId>& ids, const Positions& q,
-                                     const Positions& p, const LinksOf& links_of,
-                                     const Vec3& initial_average) {
+records::GraphSnapshot measure_graph(double t_s, const std::vector<AgentId>& ids,
+                                     const Positions& q, const Positions& p,
+                                     const LinksOf& links_of, const Vec3& initial_average) {
   records::GraphSnapshot g;
   g.set_t_s(t_s);
   g.set_agents(static_cast<std::uint32_t>(ids.size()));

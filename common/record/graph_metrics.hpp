@@ -15,8 +15,8 @@ using LinksOf = std::function<const std::vector<std::pair<AgentId, double>>&(int
 // end holds it), lambda_2 and components of its Laplacian, disagreement of the consensus states q,
 // drift of their mean from `initial_average`, and the smallest separation and largest spread of
 // the physical positions p. Pure.
-records::GraphSnapshot measure_graph(double t_s, const std::vector<AgentId>& ids, const Positions& q,
-                                     const Positions& p, const LinksOf& links_of,
-                                     const Vec3& initial_average);
+records::GraphSnapshot measure_graph(double t_s, const std::vector<AgentId>& ids,
+                                     const Positions& q, const Positions& p,
+                                     const LinksOf& links_of, const Vec3& initial_average);
 
 }  // namespace qswarm

@@ -108,7 +108,8 @@ void Recorder::tick(std::int64_t now_ns) {
 
 void Recorder::record_graph(const records::GraphSnapshot& g) {
   sinks_.graph(g);
-  if (g.agents() > 1) tally_.min_separation_m = std::min(tally_.min_separation_m, g.min_separation_m());
+  if (g.agents() > 1)
+    tally_.min_separation_m = std::min(tally_.min_separation_m, g.min_separation_m());
 }
 
 void Recorder::initial_snapshot() {

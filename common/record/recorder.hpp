@@ -31,7 +31,8 @@ class Recorder {
 
   double time_s() const { return t_s_; }
   bool converged() const { return judge_.converged(); }
-  // Why the run is over ("converged", "agreed without agent 5", "duration"), or "" while it goes on.
+  // Why the run is over ("converged", "agreed without agent 5", "duration"), or "" while it goes
+  // on.
   std::string end_reason_if_over() const;
   bool duration_reached() const { return t_s_ >= rc_.duration_s; }
   std::string progress_line() const;

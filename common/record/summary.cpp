@@ -135,11 +135,13 @@ records::Summary build_summary(const RunConfig& rc, const Presence& presence,
   fs.set_events(tally.fault_events);
   double detect = 0.0;
   for (double d : tally.detect_s) detect += d;
-  s.set_detect_s(tally.detect_s.empty() ? -1.0 : detect / static_cast<double>(tally.detect_s.size()));
+  s.set_detect_s(tally.detect_s.empty() ? -1.0
+                                        : detect / static_cast<double>(tally.detect_s.size()));
   const double last_fault = rc.faults.last_fault_end_s();
   s.set_last_fault_end_s(last_fault);
-  s.set_reconverge_s(judge.converged() && last_fault > 0.0 ? std::max(0.0, judge.converged_at_s() - last_fault)
-                                                    : -1.0);
+  s.set_reconverge_s(judge.converged() && last_fault > 0.0
+                         ? std::max(0.0, judge.converged_at_s() - last_fault)
+                         : -1.0);
   const double avg_norm = rc.initial_average().norm();
   s.set_average_relative_error(avg_norm > 0 ? s.average_drift_m() / avg_norm : s.average_drift_m());
   return s;
@@ -151,10 +153,11 @@ std::string summary_text(const records::Summary& s, const RunConfig& rc, const s
   std::ostringstream h;
   h << "\n== " << rc.name << ": " << (s.converged() ? "CONVERGED" : "NOT CONVERGED") << " ("
     << s.end_reason() << ") ==\n";
-  if (s.converged()) h << "converged at t = " << fmt("%.2f", s.convergence_time_s()) << " s (simulated)\n";
+  if (s.converged())
+    h << "converged at t = " << fmt("%.2f", s.convergence_time_s()) << " s (simulated)\n";
   h << "agents " << final_agents << "/" << rc.agents.size() << ", " << s.mode() << " mode, "
-    << s.law() << " law, seed " << rc.seed << ", " << fmt("%.2f", s.duration_s()) << " s simulated in "
-    << fmt("%.2f", s.wall_time_s()) << " s wall\n";
+    << s.law() << " law, seed " << rc.seed << ", " << fmt("%.2f", s.duration_s())
+    << " s simulated in " << fmt("%.2f", s.wall_time_s()) << " s wall\n";
   const Vec3 avg = rc.initial_average();
   const Vec3 mean(s.final_consensus_mean(0), s.final_consensus_mean(1), s.final_consensus_mean(2));
   const records::Messages& msg = s.messages();
@@ -163,7 +166,8 @@ std::string summary_text(const records::Summary& s, const RunConfig& rc, const s
   h << "final mean        (" << fmt("%.6f", mean.x()) << ", " << fmt("%.6f", mean.y()) << ", "
     << fmt("%.6f", mean.z()) << ")  drift " << fmt("%.3e", s.average_drift_m()) << " m\n";
   h << "final disagreement " << fmt("%.3e", s.final_disagreement_m()) << " m, physical spread "
-    << fmt("%.3e", s.max_final_spread_m()) << " m, min separation " << fmt("%.3f", s.min_separation_m()) << " m\n";
+    << fmt("%.3e", s.max_final_spread_m()) << " m, min separation "
+    << fmt("%.3f", s.min_separation_m()) << " m\n";
   h << "lambda2 " << fmt("%.4f", s.lambda2_initial()) << " -> " << fmt("%.4f", s.lambda2_final())
     << ", edges " << s.edges_initial_size() << " -> " << s.edges_final_size() << "\n";
   h << "messages: published " << msg.published() << ", received " << msg.received() << ", dropped "

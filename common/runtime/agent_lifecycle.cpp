@@ -101,8 +101,8 @@ LifecycleStep AgentLifecycle::barrier(double now, const std::vector<PeerStatus>&
   }
   if (now - born_s_ > cfg_.start_timeout_s) {
     char buf[120];
-    std::snprintf(buf, sizeof buf, "start timeout: %zu of %zu peers ready, starting anyway",
-                  ready, expected);
+    std::snprintf(buf, sizeof buf, "start timeout: %zu of %zu peers ready, starting anyway", ready,
+                  expected);
     s.warning = buf;
     enter_running(now, s, 0.0);
     return s;

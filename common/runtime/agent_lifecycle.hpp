@@ -61,8 +61,8 @@ class AgentLifecycle {
  public:
   AgentLifecycle(LifecycleConfig cfg, double now_wall_s);
 
-  LifecycleStep step(double now_wall_s, const std::vector<PeerStatus>& peers,
-                     int matched_readers, double agent_time_s);
+  LifecycleStep step(double now_wall_s, const std::vector<PeerStatus>& peers, int matched_readers,
+                     double agent_time_s);
   // The process is stopping (a signal, or the wall limit): no more ticks.
   void stop() { phase_ = LifePhase::kStopping; }
 

@@ -66,8 +66,8 @@ AgentParams make_agent_params(const RunConfig& rc, const AgentSpec& spec) {
   return p;
 }
 
-AgentLoop::AgentLoop(const RunConfig& rc, AgentId id, AgentLoopOptions opts,
-                     NeighborBus& transport, Clock& clock)
+AgentLoop::AgentLoop(const RunConfig& rc, AgentId id, AgentLoopOptions opts, NeighborBus& transport,
+                     Clock& clock)
     : rc_(rc),
       id_(id),
       clock_(clock),
@@ -79,9 +79,7 @@ AgentLoop::AgentLoop(const RunConfig& rc, AgentId id, AgentLoopOptions opts,
 }
 
 std::uint64_t AgentLoop::ticks() const { return life_.pacer() ? life_.pacer()->ticks() : 0; }
-std::uint64_t AgentLoop::overruns() const {
-  return life_.pacer() ? life_.pacer()->overruns() : 0;
-}
+std::uint64_t AgentLoop::overruns() const { return life_.pacer() ? life_.pacer()->overruns() : 0; }
 double AgentLoop::running_since_s() const {
   return life_.pacer() ? life_.pacer()->start_s() : -1.0;
 }
@@ -104,10 +102,9 @@ AgentLoop::Poll AgentLoop::poll() {
     runtime_.set_start_time(s.start_time_s);
     char buf[160];
     std::snprintf(buf, sizeof buf, "%s at swarm time %.3f s after %.2f s of discovery",
-                  runtime_.params().recover_flows ? "restarting"
-                  : runtime_.params().expected_peers == 0 && s.start_time_s > 0.0
-                      ? "joining late"
-                      : "running",
+                  runtime_.params().recover_flows                                 ? "restarting"
+                  : runtime_.params().expected_peers == 0 && s.start_time_s > 0.0 ? "joining late"
+                                                                                  : "running",
                   s.start_time_s, life_.discovery_s());
     r.notes.push_back({false, buf});
   }
@@ -122,9 +119,9 @@ AgentLoop::Poll AgentLoop::poll() {
     for (int i = 0; i < runtime_.steps_per_tick(); ++i, ++physics_steps_) {
       for (const AgentEvent& e : runtime_.step()) {
         char buf[120];
-        std::snprintf(buf, sizeof buf, "t=%.3f s: neighbour %u %s", e.t_s, e.peer,
-                      e.kind == AgentEvent::kNeighborHeard ? "heard"
-                                                           : "lost (silent past timeout)");
+        std::snprintf(
+            buf, sizeof buf, "t=%.3f s: neighbour %u %s", e.t_s, e.peer,
+            e.kind == AgentEvent::kNeighborHeard ? "heard" : "lost (silent past timeout)");
         r.notes.push_back({false, buf});
       }
     }

@@ -24,9 +24,9 @@ class SteadyClock final : public Clock {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0_).count();
   }
   void sleep_until(double t_s) override {
-    std::this_thread::sleep_until(
-        t0_ + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-                  std::chrono::duration<double>(t_s)));
+    std::this_thread::sleep_until(t0_ +
+                                  std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                      std::chrono::duration<double>(t_s)));
   }
 
  private:

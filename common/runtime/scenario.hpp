@@ -38,7 +38,4 @@ std::string to_text(const scenario::Scenario& s);
 RunConfig resolve_scenario(scenario::Scenario s, const ScenarioOverrides& o = {});
 RunConfig load_scenario(const std::string& path, const ScenarioOverrides& o = {});
 
-
-
-
 }  // namespace qswarm

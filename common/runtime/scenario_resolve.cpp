@@ -26,8 +26,8 @@ double ranged(const std::string& field, bool has, double value, double dflt, dou
   if (!has) return dflt;
   const bool below = lo_open ? value <= lo : value < lo;
   if (!std::isfinite(value) || below || value > hi) {
-    fail(field, std::string("a finite value in ") + (lo_open ? "(" : "[") + num(lo) + ", " +
-                    num(hi) + "]",
+    fail(field,
+         std::string("a finite value in ") + (lo_open ? "(" : "[") + num(lo) + ", " + num(hi) + "]",
          num(value));
   }
   return value;
@@ -178,13 +178,13 @@ void resolve_gains(const scenario::Gains& g, TrackingGains& out) {
   out.pos_natural_freq_radps =
       positive("gains.pos_natural_freq_radps", g.has_pos_natural_freq_radps(),
                g.pos_natural_freq_radps(), out.pos_natural_freq_radps, 1e3);
-  out.pos_damping = positive("gains.pos_damping", g.has_pos_damping(), g.pos_damping(),
-                             out.pos_damping, 1e3);
+  out.pos_damping =
+      positive("gains.pos_damping", g.has_pos_damping(), g.pos_damping(), out.pos_damping, 1e3);
   out.att_natural_freq_radps =
       positive("gains.att_natural_freq_radps", g.has_att_natural_freq_radps(),
                g.att_natural_freq_radps(), out.att_natural_freq_radps, 1e4);
-  out.att_damping = positive("gains.att_damping", g.has_att_damping(), g.att_damping(),
-                             out.att_damping, 1e3);
+  out.att_damping =
+      positive("gains.att_damping", g.has_att_damping(), g.att_damping(), out.att_damping, 1e3);
   out.max_tilt_rad =
       positive("gains.max_tilt_rad", g.has_max_tilt_rad(), g.max_tilt_rad(), out.max_tilt_rad);
   try {
@@ -311,8 +311,7 @@ void resolve_link_faults(const scenario::Faults& f, const FaultFields& check, Fa
   }
 }
 
-void resolve_process_faults(const scenario::Faults& f, const FaultFields& check,
-                            FaultPlan& plan) {
+void resolve_process_faults(const scenario::Faults& f, const FaultFields& check, FaultPlan& plan) {
   for (int i = 0; i < f.kill_size(); ++i) {
     const auto& k = f.kill(i);
     const std::string fld = at("kill", i);

@@ -7,7 +7,6 @@
 
 #include "common/core/graph.hpp"
 #include "common/core/update_law.hpp"
-#include "common/core/update_law.hpp"
 
 namespace qswarm {
 
@@ -24,8 +23,8 @@ struct LockstepConfig {
 
 // N bare agreement laws in exact lockstep: every tick each law reads the others' views from the
 // previous tick, all step, then all publish. The oracle for the law's discretisation (tests compare
-// it with exp(-L t) q0) and the preview tool. The product's loop (barrier, pacing, faults, dynamics)
-// runs in InProcessSwarm instead.
+// it with exp(-L t) q0) and the preview tool. The product's loop (barrier, pacing, faults,
+// dynamics) runs in InProcessSwarm instead.
 class LockstepLaws {
  public:
   explicit LockstepLaws(LockstepConfig cfg);

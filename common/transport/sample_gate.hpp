@@ -18,8 +18,9 @@ class SampleGate {
   enum class Verdict { kAccepted, kInvalid, kStale };
   struct Result {
     Verdict verdict = Verdict::kAccepted;
-    std::string why;          // for kInvalid
-    bool first_from = false;  // kInvalid: the first refusal from this agent (log it; count the rest)
+    std::string why;  // for kInvalid
+    bool first_from =
+        false;  // kInvalid: the first refusal from this agent (log it; count the rest)
   };
   // `why` is check_message(m), computed by the caller outside its lock.
   Result admit(const StateMessage& m, const std::string& why);

@@ -12,8 +12,7 @@ namespace qswarm {
 namespace {
 
 LockstepConfig fixed_graph(const Positions& q0, LawKind kind, WeightPolicy w,
-                                 std::vector<std::pair<AgentId, AgentId>> edges,
-                                 double rate_hz = 50.0) {
+                           std::vector<std::pair<AgentId, AgentId>> edges, double rate_hz = 50.0) {
   LockstepConfig cfg;
   for (size_t i = 0; i < q0.size(); ++i) cfg.agents.push_back({static_cast<AgentId>(i + 1), q0[i]});
   cfg.law.kind = kind;

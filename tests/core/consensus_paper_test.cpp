@@ -20,9 +20,8 @@ void expect_spectrum(const Eigen::MatrixXd& L, const std::vector<double>& expect
   for (size_t k = 0; k < expected.size(); ++k) EXPECT_NEAR(s.eigenvalues[k], expected[k], tol) << k;
 }
 
-LockstepConfig paper_swarm(const Positions& q0, LawKind kind, WeightPolicy w,
-                                 TopologyPolicy topo,
-                                 std::vector<std::pair<AgentId, AgentId>> edges) {
+LockstepConfig paper_swarm(const Positions& q0, LawKind kind, WeightPolicy w, TopologyPolicy topo,
+                           std::vector<std::pair<AgentId, AgentId>> edges) {
   LockstepConfig cfg;
   for (size_t i = 0; i < q0.size(); ++i) cfg.agents.push_back({static_cast<AgentId>(i + 1), q0[i]});
   cfg.law.kind = kind;
@@ -83,7 +82,7 @@ TEST_P(TimeVaryingRun, AddsEdgesEndsFullyConnectedAndMeetsAtTheAverage) {
   // Given the paper's time-varying example: distance weights, sticky proximity (threshold 12.5 m:
   // the paper does not state one; any value in [12.083, 15.937) gives its initial graph).
   LockstepLaws swarm(paper_swarm(paper::kTimeVaryingQ0, GetParam(), WeightPolicy::kDistance,
-                                   TopologyPolicy::kStickyProximity, {}));
+                                 TopologyPolicy::kStickyProximity, {}));
   ASSERT_EQ(swarm.edges().size(), 3u);  // the initial graph is the paper's: 1-3, 1-4, 2-3
   size_t max_edges = 3;
   std::vector<double> edge_added_at;

@@ -86,7 +86,8 @@ TEST(InProcessSwarm, AKilledAndRestartedAgentRecoversItsFlowsAndTheAverageStaysE
   swarm.run_until_wall(2.0);
   EXPECT_EQ(swarm.agent(3)->phase(), LifePhase::kJoinWait);  // the respawn waits for 3 s
   bool killed = false;
-  for (const std::string& line : swarm.log()) killed |= line.find(" 3 planned kill") != std::string::npos;
+  for (const std::string& line : swarm.log())
+    killed |= line.find(" 3 planned kill") != std::string::npos;
   EXPECT_TRUE(killed);
   ASSERT_TRUE(swarm.run_until([&] { return all_running(swarm); }, 4.0));
   ASSERT_TRUE(swarm.run_until(

@@ -58,8 +58,8 @@ TEST(GraphMetrics, ThePapersWeightedNetworkHasItsSpectrum) {
     links[a - 1].emplace_back(b, w);
   }
   const records::GraphSnapshot g = measure_graph(
-      0.0, ids, paper::kWeightedQ0, paper::kWeightedQ0,
-      [&](int i) -> const auto& { return links[static_cast<size_t>(i)]; },
+      0.0, ids, paper::kWeightedQ0,
+      paper::kWeightedQ0, [&](int i) -> const auto& { return links[static_cast<size_t>(i)]; },
       paper::kWeightedAgreement);
   EXPECT_EQ(g.edges_size(), 4);
   EXPECT_NEAR(g.lambda2(), 13.060, 5e-4);
@@ -127,8 +127,8 @@ TEST(Recorder, FedWithMessagesWritesTheRunRecordAndASummary) {
       "weight { policy: UNWEIGHTED }\nconvergence { tolerance_m: 0.1 hold_s: 0.2 }\n"
       "faults { cut { a: 1 b: 2 start_s: 0.1 end_s: 0.2 } }\n",
       "rec"));
-  const std::filesystem::path dir = std::filesystem::temp_directory_path() /
-                                    ("qswarm-recorder-" + std::to_string(::getpid()));
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("qswarm-recorder-" + std::to_string(::getpid()));
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   std::string text;
@@ -138,7 +138,8 @@ TEST(Recorder, FedWithMessagesWritesTheRunRecordAndASummary) {
     for (int k = 0; k <= 50; ++k) {
       const double t = 0.02 * k;
       const double x = 1.0 - std::exp(-5.0 * t);  // both move to x = 1
-      StateMessage a = sample(1, k + 1, t, Vec3(x, 0, 0)), b = sample(2, k + 1, t, Vec3(2 - x, 0, 0));
+      StateMessage a = sample(1, k + 1, t, Vec3(x, 0, 0)),
+                   b = sample(2, k + 1, t, Vec3(2 - x, 0, 0));
       a.view.q0 = Vec3(0, 0, 0);
       b.view.q0 = Vec3(2, 0, 0);
       a.links = {{2, 1.0}};

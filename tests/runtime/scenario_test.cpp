@@ -63,15 +63,16 @@ TEST(Scenario, EveryBadFieldIsRefusedWithItsName) {
   for (const Case& c : cases) {
     const std::string why = error_of(c.text);
     EXPECT_NE(why.find(c.expect), std::string::npos)
-        << "scenario:\n" << c.text << "expected '" << c.expect << "' in: '" << why << "'";
+        << "scenario:\n"
+        << c.text << "expected '" << c.expect << "' in: '" << why << "'";
   }
 }
 
 TEST(Scenario, SwarmsBeyondWhatTheWireCarriesAreRefusedAndTheBoundItselfIsAccepted) {
   std::string at_bound, beyond;
   for (int i = 1; i <= static_cast<int>(kMaxSwarmAgents) + 1; ++i) {
-    const std::string a = "agents { id: " + std::to_string(i) + " position { x: " +
-                          std::to_string(i) + " } }\n";
+    const std::string a =
+        "agents { id: " + std::to_string(i) + " position { x: " + std::to_string(i) + " } }\n";
     if (i <= static_cast<int>(kMaxSwarmAgents)) at_bound += a;
     beyond += a;
   }
@@ -90,9 +91,10 @@ TEST(Scenario, DefaultsAreWrittenBackSoTheRecordSaysWhatRan) {
 
 TEST(Scenario, StartPeersAreOneDefinitionFixedAwareWithoutLateJoiners) {
   const RunConfig rc = resolve_scenario(parse_scenario_text(
-      kTwo + "agents { id: 3 }\nagents { id: 4 }\n"
-             "topology { policy: FIXED edges { a: 1 b: 2 } edges { a: 2 b: 3 } edges { a: 3 b: 4 } }\n"
-             "faults { late_join { agent: 3 at_s: 2 } }\n",
+      kTwo +
+          "agents { id: 3 }\nagents { id: 4 }\n"
+          "topology { policy: FIXED edges { a: 1 b: 2 } edges { a: 2 b: 3 } edges { a: 3 b: 4 } }\n"
+          "faults { late_join { agent: 3 at_s: 2 } }\n",
       "s"));
   EXPECT_EQ(rc.start_peers(2), (std::set<AgentId>{1}));  // 3 joins late
   EXPECT_EQ(rc.start_peers(4), (std::set<AgentId>{}));
@@ -141,7 +143,9 @@ TEST(FaultFlags, ShortcutsNameTheirFlag) {
     }
     return "";
   };
-  EXPECT_NE(why([&] { add_cut_shortcut(s, "1to2@5:15"); }).find("--cut '1to2@5:15': expected A-B@START:END"),
+  EXPECT_NE(why([&] {
+              add_cut_shortcut(s, "1to2@5:15");
+            }).find("--cut '1to2@5:15': expected A-B@START:END"),
             std::string::npos);
   EXPECT_NE(why([&] { add_loss_shortcut(s, 2.0); }).find("--loss"), std::string::npos);
   EXPECT_NE(why([&] { add_loss_shortcut(s, std::nan("")); }).find("--loss"), std::string::npos);

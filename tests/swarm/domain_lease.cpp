@@ -19,7 +19,8 @@ DomainLease::DomainLease(const std::string& key) {
   const std::filesystem::path dir = "/tmp/qswarm-test-domains";
   std::filesystem::create_directories(dir);
   const int span = kLast - kFirst + 1;
-  const int start = static_cast<int>(std::hash<std::string>{}(key) % static_cast<std::size_t>(span));
+  const int start =
+      static_cast<int>(std::hash<std::string>{}(key) % static_cast<std::size_t>(span));
   for (int k = 0; k < span; ++k) {
     const int d = kFirst + (start + k) % span;
     const std::string path = (dir / (std::to_string(d) + ".lock")).string();

@@ -8,8 +8,8 @@
 #include <fstream>
 
 #include "common/core/graph.hpp"
-#include "common/runtime/scenario.hpp"
 #include "common/dds/dds_bus.hpp"
+#include "common/runtime/scenario.hpp"
 #include "tests/swarm/domain_lease.hpp"
 #include "tests/swarm/harness.hpp"
 
@@ -37,7 +37,8 @@ void expect_met_at(const records::Summary& s, const Vec3& point, double tol, boo
   }
 }
 
-Result swarm_run(const std::string& scen, const std::filesystem::path& out, double time_scale, std::vector<std::string> extra = {}) {
+Result swarm_run(const std::string& scen, const std::filesystem::path& out, double time_scale,
+                 std::vector<std::string> extra = {}) {
   std::vector<std::string> argv = {bin("swarm"),
                                    "run",
                                    scen,
@@ -201,7 +202,7 @@ TEST(SwarmRun, MalformedScenariosExit2NamingTheProblem) {
   // Every field's check is a pure function tested in tests/runtime/scenario_test.cpp; here a few
   // cases prove the processes turn them into exit 2 with the message.
   const std::vector<Case> cases = {
-      {"name: \"x\"\nagnets { id: 1 }\n", ".txtpb:2:"},  // syntax: line
+      {"name: \"x\"\nagnets { id: 1 }\n", ".txtpb:2:"},                   // syntax: line
       {agents + "agents { id: 2 position { x: 5 } }\n", "agents[2].id"},  // duplicate
       {agents + "rates { physics_hz: 500 consensus_hz: 30 }\n", "rates.consensus_hz"},
       {agents + "faults { cut { a: 1 b: 7 start_s: 1 end_s: 2 } }\n", "faults.cut[0].b"},
@@ -296,8 +297,8 @@ TEST(SwarmRun, CtrlCLeavesNoOrphansAndACompleteRunRecord) {
   const auto dir = fresh_dir("ctrl-c");
   // Agent 2 ignores SIGTERM, so the launcher's escalation to SIGKILL is exercised too.
   Child launcher(
-      {bin("swarm"), "run", scenario("paper_time_varying"), "--out", dir.string(), "--domain", test_domain().str(),
-       "--time-scale", "0.5", "--grace", "1", "--test-ignore-sigterm", "2"},
+      {bin("swarm"), "run", scenario("paper_time_varying"), "--out", dir.string(), "--domain",
+       test_domain().str(), "--time-scale", "0.5", "--grace", "1", "--test-ignore-sigterm", "2"},
       dir.parent_path() / "ctrl-c.log");
   ASSERT_TRUE(wait_for(
       [&] {
