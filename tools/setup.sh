@@ -1,15 +1,20 @@
 #!/usr/bin/env bash
 # Installs what the project needs from Debian 12's archive and configures + builds it.
 # Usage: tools/setup.sh [build-dir]     (idempotent; skips apt when everything is present)
+# Environment: QSWARM_EXTRA_PACKAGES (more Debian packages, e.g. CI's linters),
+#              QSWARM_WERROR=ON (warnings are errors, as in CI).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 BUILD_DIR="${1:-build}"
 
-PACKAGES=(cmake g++ ninja-build pkg-config
+PACKAGES=(cmake g++ ninja-build pkg-config git
   libeigen3-dev libgtest-dev libgmock-dev libbenchmark-dev
   libfastrtps-dev libfastcdr-dev fastddsgen fastdds-tools
   libprotobuf-dev protobuf-compiler libspdlog-dev libcli11-dev
+  python3 python3-matplotlib python3-numpy
   iproute2 iptables procps)
+# shellcheck disable=SC2206
+PACKAGES+=(${QSWARM_EXTRA_PACKAGES:-})
 
 missing=()
 for p in "${PACKAGES[@]}"; do
@@ -23,5 +28,6 @@ if ((${#missing[@]})); then
   DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -q --no-install-recommends "${missing[@]}"
 fi
 
-cmake -S . -B "$BUILD_DIR" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo
+cmake -S . -B "$BUILD_DIR" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+  -DQSWARM_WERROR="${QSWARM_WERROR:-OFF}"
 cmake --build "$BUILD_DIR" --parallel "$(nproc)"

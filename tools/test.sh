@@ -1,8 +1,34 @@
 #!/usr/bin/env bash
-# Sets everything up (apt + build) and runs the default test suite with ctest.
-# Extra arguments go to ctest, e.g. tools/test.sh -L core
+# Sets everything up (apt + build) and runs what CI runs (.ci/run calls this):
+#   1. the default configuration, warnings as errors, and every test but the `long` label;
+#   2. a Release build with -Werror (what users build, compiled strictly);
+#   3. the core and runtime tests under AddressSanitizer + UndefinedBehaviorSanitizer (DDS off);
+#   4. clang-format and clang-tidy on the project's own code (tools/lint.sh).
+# With arguments, only step 1's build, then ctest with those arguments (e.g. tools/test.sh -L core).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-tools/setup.sh build
+export QSWARM_EXTRA_PACKAGES="clang-format clang-tidy clang-tools"
+QSWARM_WERROR=ON tools/setup.sh build
+ctest_args=(--output-on-failure --parallel "$(nproc)" --timeout 600)
+if (($#)); then
+  cd build
+  exec ctest "${ctest_args[@]}" "$@"
+fi
+stage() { printf '\n== %s (%s) ==\n' "$*" "$(date +%T)"; }
+
+stage "release build with -Werror"
+cmake -S . -B build-release -G Ninja -DCMAKE_BUILD_TYPE=Release -DQSWARM_WERROR=ON >/dev/null
+cmake --build build-release --parallel "$(nproc)"
+
+stage "core and runtime tests under ASan+UBSan"
+cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=Debug -DQSWARM_WITH_DDS=OFF \
+  -DQSWARM_SANITIZE=ON -DQSWARM_WERROR=ON -DQSWARM_BUILD_BENCH=OFF >/dev/null
+cmake --build build-asan --parallel "$(nproc)"
+(cd build-asan && ctest "${ctest_args[@]}" -L "core|runtime")
+
+stage "format and clang-tidy"
+tools/lint.sh build
+
+stage "tests"
 cd build
-ctest --output-on-failure --parallel "$(nproc)" --timeout 600 "$@"
+ctest "${ctest_args[@]}" -LE long
