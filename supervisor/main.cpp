@@ -14,6 +14,7 @@
 #include <mutex>
 #include <thread>
 
+#include "common/app/cli_checks.hpp"
 #include "common/app/process_setup.hpp"
 #include "common/record/recorder.hpp"
 
@@ -31,7 +32,8 @@ int main(int argc, char** argv) {
   double start_timeout_s = 30.0;
   add_process_options(app, opts);
   app.add_option("--run-dir", run_dir, "run directory to write")->required();
-  app.add_option("--start-timeout", start_timeout_s, "wall seconds to wait for the first agent");
+  app.add_option("--start-timeout", start_timeout_s, "wall seconds to wait for the first agent")
+      ->check(finite_range(0.0, 3600.0));
   app.add_flag("--progress", progress, "print a live progress line");
   try {
     app.parse(argc, argv);

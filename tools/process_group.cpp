@@ -36,6 +36,7 @@ pid_t ProcessGroup::spawn(const std::string& role, unsigned id,
       }
     }
     std::vector<char*> args;
+    args.reserve(argv.size() + 1);
     for (const std::string& a : argv) args.push_back(const_cast<char*>(a.c_str()));
     args.push_back(nullptr);
     execv(args[0], args.data());

@@ -14,6 +14,7 @@
 #include <iostream>
 #include <optional>
 
+#include "common/app/cli_checks.hpp"
 #include "common/runtime/fault_flags.hpp"
 #include "common/runtime/scenario.hpp"
 #include "tools/inspect.hpp"
@@ -189,6 +190,7 @@ int plot(const std::string& run_dir, const std::string& out) {
     args.push_back(out);
   }
   std::vector<char*> argv;
+  argv.reserve(args.size() + 1);
   for (std::string& a : args) argv.push_back(a.data());
   argv.push_back(nullptr);
   execvp(argv[0], argv.data());
@@ -213,20 +215,21 @@ int main(int argc, char** argv) {
   run_cmd->add_option("--seed", ro.seed, "seed (overrides the scenario)")
       ->check(CLI::Range(std::int64_t{0}, std::int64_t{4294967295}));
   run_cmd->add_option("--duration", ro.duration, "simulated seconds before giving up")
-      ->check(CLI::PositiveNumber);
+      ->check(finite_range(1e-3, 1e7));
   run_cmd
       ->add_option("--time-scale", ro.time_scale, "simulated seconds per wall second (default 1)")
-      ->check(CLI::Range(0.01, 100.0));
+      ->check(finite_range(0.01, 100.0));
   run_cmd->add_option("--domain", ro.domain, "DDS domain id (overrides the scenario)")
       ->check(CLI::Range(0, 232));
   run_cmd->add_option("--grace", ro.grace_s, "seconds between SIGTERM and SIGKILL at teardown")
-      ->check(CLI::NonNegativeNumber);
+      ->check(finite_range(0.0, 600.0));
   run_cmd->add_flag("--quiet", ro.quiet, "no progress line");
   run_cmd->add_flag("--stop-on-agent-exit", ro.stop_on_agent_exit,
                     "end the run when any agent exits");
   run_cmd->add_option("--law", ro.law,
                       "update law: edge-flow or laplacian (overrides the scenario)");
   run_cmd->add_option("--loss", ro.loss, "fault: drop each received message with this probability")
+      ->check(finite_range(0.0, 1.0))
       ->allow_extra_args(false)
       ->group("Faults");
   run_cmd

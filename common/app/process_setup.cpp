@@ -1,5 +1,7 @@
 #include "common/app/process_setup.hpp"
 
+#include "common/app/cli_checks.hpp"
+
 #include <spdlog/sinks/basic_file_sink.h>
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
@@ -13,7 +15,7 @@ namespace qswarm {
 void add_process_options(CLI::App& app, ProcessOptions& o) {
   app.add_option("--scenario", o.scenario, "scenario file (Protobuf text format)")->required();
   app.add_option("--time-scale", o.time_scale, "simulated seconds per wall second")
-      ->check(CLI::Range(0.01, 100.0));
+      ->check(finite_range(0.01, 100.0));
   app.add_option("--domain", o.domain, "DDS domain id (overrides the scenario)")
       ->check(CLI::Range(0, 232));
   app.add_option("--interface", o.interface,

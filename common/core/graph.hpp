@@ -58,6 +58,7 @@ std::vector<Edge> edges_from_links(const std::vector<AgentId>& ids, LinksOf&& li
     }
   }
   std::vector<Edge> out;
+  out.reserve(found.size());
   for (const auto& [key, w] : found) out.push_back({key.first, key.second, w});
   return out;
 }

@@ -9,7 +9,7 @@ namespace qswarm {
 Mat3 orthonormalize(const Mat3& r) {
   Eigen::JacobiSVD<Mat3> svd(r, Eigen::ComputeFullU | Eigen::ComputeFullV);
   Mat3 u = svd.matrixU();
-  const Mat3 v = svd.matrixV();
+  const Mat3& v = svd.matrixV();
   if ((u * v.transpose()).determinant() < 0.0) u.col(2) *= -1.0;
   return u * v.transpose();
 }

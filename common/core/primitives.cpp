@@ -93,7 +93,7 @@ double x_axis_lemma_yaw_torque(const Airframe& af, double omega2, double omega4)
 }
 
 OpenLoopManeuver::OpenLoopManeuver(Airframe af, std::vector<Segment> segments)
-    : af_(af), segments_(std::move(segments)) {
+    : af_(std::move(af)), segments_(std::move(segments)) {
   af_.validate();
   for (const Segment& seg : segments_) {
     if (!(seg.duration_s > 0.0) || !std::isfinite(seg.amount)) {

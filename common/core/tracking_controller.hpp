@@ -36,7 +36,7 @@ struct TrackingOutput {
 // e_R = vee(R_d^T R - R^T R_d)/2, M = -k_R e_R - k_W Omega + Omega x J Omega (cancelling the
 // paper's J Omega x Omega). Position error and tilt are saturated so a distant reference is
 // approached at bounded speed. Pure: a function of its inputs.
-TrackingOutput track(const Airframe& af, const TrackingGains& gains, const QuadState& s,
+TrackingOutput track(const Airframe& af, const TrackingGains& k, const QuadState& s,
                      const TrackingReference& ref);
 
 }  // namespace qswarm

@@ -37,13 +37,13 @@ double Recorder::swarm_time_at(std::int64_t wall_ns) const {
   return t_s_ + std::max(0.0, static_cast<double>(wall_ns - t_wall_ns_) * 1e-9 * time_scale_);
 }
 
-void Recorder::on_sample(const StateMessage& m, std::int64_t recv_ns) {
+void Recorder::on_sample(const StateMessage& m, std::int64_t recv_wall_ns) {
   if (m.phase == kRunning && m.stamp_s > t_s_ && rc_.agent(m.view.id)) {
     t_s_ = m.stamp_s;
-    t_wall_ns_ = recv_ns;
+    t_wall_ns_ = recv_wall_ns;
   }
   const AgentId id = m.view.id;
-  switch (presence_.on_sample(m, swarm_time_at(recv_ns))) {
+  switch (presence_.on_sample(m, swarm_time_at(recv_wall_ns))) {
     case Presence::Change::kStranger:
       // Not an agent of this scenario (e.g. a stray participant on the domain): note it once and
       // keep it out of the swarm's graph, agreement and summary.
@@ -68,7 +68,7 @@ void Recorder::on_sample(const StateMessage& m, std::int64_t recv_ns) {
   }
   tally_.fault_counts[{id, m.incarnation}] = {m.fault_loss, m.fault_burst, m.fault_cut,
                                               m.fault_partition, m.fault_delayed};
-  const double age_ms = m.wall_ns > 0 ? static_cast<double>(recv_ns - m.wall_ns) / 1e6 : 0.0;
+  const double age_ms = m.wall_ns > 0 ? static_cast<double>(recv_wall_ns - m.wall_ns) / 1e6 : 0.0;
   if (m.wall_ns > 0) tally_.ages_ms.push_back(age_ms);
   sinks_.sample(m, age_ms);
   // The initial graph, once every agent of the scenario has reported the links its law started
@@ -89,9 +89,9 @@ void Recorder::depart(AgentId id, const std::string& why) {
   }
 }
 
-void Recorder::tick(std::int64_t now_ns) {
+void Recorder::tick(std::int64_t now_wall_ns) {
   // An agent silent past the neighbour timeout on the swarm's clock has departed.
-  for (const AgentId id : presence_.expire(swarm_time_at(now_ns)))
+  for (const AgentId id : presence_.expire(swarm_time_at(now_wall_ns)))
     depart(id, "silent past the neighbour timeout");
   // The fault plan's windows, as the swarm's clock passes them.
   while (next_timeline_ < timeline_.size() && timeline_[next_timeline_].t_s <= t_s_) {

@@ -66,10 +66,9 @@ AgentParams make_agent_params(const RunConfig& rc, const AgentSpec& spec) {
   return p;
 }
 
-AgentLoop::AgentLoop(const RunConfig& rc, AgentId id, AgentLoopOptions opts, NeighborBus& transport,
-                     Clock& clock)
-    : rc_(rc),
-      id_(id),
+AgentLoop::AgentLoop(const RunConfig& rc, AgentId id, const AgentLoopOptions& opts,
+                     NeighborBus& transport, Clock& clock)
+    : id_(id),
       clock_(clock),
       transport_(transport),
       faulty_(transport, LinkFaults(rc.faults, id, rc.seed), id),

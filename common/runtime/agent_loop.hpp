@@ -31,7 +31,7 @@ struct AgentLoopOptions {
 // ManualClock over the in-memory network. No I/O: what is worth logging comes back as notes.
 class AgentLoop {
  public:
-  AgentLoop(const RunConfig& rc, AgentId id, AgentLoopOptions opts, NeighborBus& transport,
+  AgentLoop(const RunConfig& rc, AgentId id, const AgentLoopOptions& opts, NeighborBus& transport,
             Clock& clock);
 
   struct Note {
@@ -61,7 +61,6 @@ class AgentLoop {
   double running_since_s() const;
 
  private:
-  const RunConfig& rc_;
   AgentId id_;
   Clock& clock_;
   NeighborBus& transport_;

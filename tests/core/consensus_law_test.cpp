@@ -47,7 +47,7 @@ TEST_P(BothLaws, FullyConnectedVertexMovesOnAStraightLine) {
   // q^2(t) - alpha = (q^2(0) - alpha) e^{-n t}: a straight segment toward the agreement point.
   LockstepLaws swarm(
       fixed_graph(paper::kUnweightedQ0, GetParam(), WeightPolicy::kUnweighted, paper::kGraph1));
-  const Vec3 start = paper::kUnweightedQ0[1];
+  const Vec3& start = paper::kUnweightedQ0[1];
   const Vec3 dir = (paper::kUnweightedAgreement - start).normalized();
   double off_line = 0.0;
   double prev_along = 0.0;
@@ -62,7 +62,7 @@ TEST_P(BothLaws, FullyConnectedVertexMovesOnAStraightLine) {
   // Agent 1 (degree 1) does not move on a straight line: the test can tell the difference.
   LockstepLaws other(
       fixed_graph(paper::kUnweightedQ0, GetParam(), WeightPolicy::kUnweighted, paper::kGraph1));
-  const Vec3 s1 = paper::kUnweightedQ0[0];
+  const Vec3& s1 = paper::kUnweightedQ0[0];
   const Vec3 d1 = (paper::kUnweightedAgreement - s1).normalized();
   double off1 = 0.0;
   while (other.time_s() < 5.0) {

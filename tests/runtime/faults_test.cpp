@@ -12,6 +12,7 @@ namespace {
 
 std::vector<bool> drops(LinkFaults& f, AgentId from, int n, double t = 1.0) {
   std::vector<bool> out;
+  out.reserve(static_cast<std::size_t>(n));
   for (int i = 0; i < n; ++i) out.push_back(f.on_receive(from, t).drop);
   return out;
 }

@@ -158,7 +158,7 @@ TEST(Faults, LossBelowTheApplicationThroughFastDdsTestTransport) {
 
 std::string find_tool(const std::string& name) {
   for (const char* dir : {"/usr/sbin/", "/sbin/", "/usr/bin/", "/bin/"}) {
-    const std::string p = std::string(dir) + name;
+    std::string p = std::string(dir) + name;
     if (access(p.c_str(), X_OK) == 0) return p;
   }
   return "";

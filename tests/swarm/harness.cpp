@@ -20,7 +20,7 @@ std::string scenario(const std::string& name) {
 }
 
 std::filesystem::path fresh_dir(const std::string& name) {
-  const std::filesystem::path p = std::filesystem::path(QSWARM_TEST_RUNS_DIR) / name;
+  std::filesystem::path p = std::filesystem::path(QSWARM_TEST_RUNS_DIR) / name;
   std::filesystem::remove_all(p);
   std::filesystem::create_directories(p.parent_path());
   return p;
@@ -41,6 +41,7 @@ Child::Child(const std::vector<std::string>& argv, const std::filesystem::path& 
       dup2(fd, STDERR_FILENO);
     }
     std::vector<char*> args;
+    args.reserve(argv.size() + 1);
     for (const std::string& a : argv) args.push_back(const_cast<char*>(a.c_str()));
     args.push_back(nullptr);
     execv(args[0], args.data());

@@ -1,0 +1,24 @@
+#include "agent/options.hpp"
+
+#include <CLI/CLI.hpp>
+
+#include "common/app/cli_checks.hpp"
+
+namespace qswarm {
+
+void add_agent_options(CLI::App& app, AgentFlags& f) {
+  add_process_options(app, f.process);
+  app.add_option("--id", f.id, "this agent's id (must be listed in the scenario)")->required();
+  app.add_option("--run-dir", f.run_dir, "directory for this agent's log");
+  app.add_option("--start-timeout", f.loop.start_timeout_s, "wall seconds to wait for all peers")
+      ->check(finite_range(0.0, 3600.0));
+  app.add_option("--max-wall", f.loop.max_wall_s, "stop after this many wall seconds running")
+      ->check(finite_range(0.0, 1e6));
+  app.add_option("--join-at", f.loop.join_at_s, "join late: start when the swarm's clock is here")
+      ->check(finite_range(0.0, 1e7));
+  app.add_flag("--restart", f.loop.restarted, "a restart: recover the flows this agent owned");
+  app.add_flag("--wait-supervisor", f.loop.wait_supervisor, "start once a supervisor matched");
+  app.add_flag("--ignore-sigterm", f.ignore_sigterm, "(tests) ignore SIGTERM")->group("");
+}
+
+}  // namespace qswarm

@@ -1,0 +1,24 @@
+#pragma once
+
+#include <string>
+
+#include "common/app/process_setup.hpp"
+#include "common/runtime/agent_loop.hpp"
+
+namespace CLI {
+class App;
+}
+
+namespace qswarm {
+
+// swarm-agent's flags: the ones every process takes, and this agent's own.
+struct AgentFlags {
+  ProcessOptions process;
+  AgentLoopOptions loop;
+  std::string run_dir;  // for agent-ID.log and agent-ID.stats
+  unsigned id = 0;
+  bool ignore_sigterm = false;  // (tests) exercise the launcher's SIGKILL escalation
+};
+void add_agent_options(CLI::App& app, AgentFlags& f);
+
+}  // namespace qswarm
