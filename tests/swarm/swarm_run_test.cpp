@@ -223,19 +223,19 @@ TEST(SwarmRun, MalformedScenariosExit2NamingTheProblem) {
   // Bad flags.
   EXPECT_EQ(run({bin("swarm"), "run", scenario("demo"), "--time-scale", "-1"}).code, 2);
   // Non-finite and out-of-range numbers are refused naming the flag (NaN passed CLI11's ranges).
-  for (const auto& [flag, value] : std::vector<std::pair<std::string, std::string>>{
-           {"--time-scale", "nan"},
-           {"--duration", "nan"},
-           {"--duration", "inf"},
-           {"--loss", "-0.5"},
-           {"--grace", "nan"},
-           {"--time-scale", "1e9"}}) {
+  for (const auto& [flag, value] :
+       std::vector<std::pair<std::string, std::string>>{{"--time-scale", "nan"},
+                                                        {"--duration", "nan"},
+                                                        {"--duration", "inf"},
+                                                        {"--loss", "-0.5"},
+                                                        {"--grace", "nan"},
+                                                        {"--time-scale", "1e9"}}) {
     const Result bad = run({bin("swarm"), "run", scenario("demo"), flag, value, "--quiet"});
     EXPECT_EQ(bad.code, 2) << flag << " " << value << ": " << bad.output;
     EXPECT_NE(bad.output.find(flag + ":"), std::string::npos) << bad.output;
   }
-  const Result agent_nan = run({bin("swarm-agent"), "--scenario", scenario("demo"), "--id", "1",
-                                "--time-scale", "nan"});
+  const Result agent_nan =
+      run({bin("swarm-agent"), "--scenario", scenario("demo"), "--id", "1", "--time-scale", "nan"});
   EXPECT_EQ(agent_nan.code, 2) << agent_nan.output;
   EXPECT_EQ(run({bin("swarm"), "run", "--agents", "0"}).code, 2);
   const Result none = run({bin("swarm"), "run"});
