@@ -69,8 +69,9 @@ std::string Launcher::agent_log(AgentId id, int life) const {
 
 void Launcher::start() {
   started_s_ = clock_.now_s();
+  // Its errors reach the user even when its output goes to a file (that file may be what failed).
   procs_.spawn("supervisor", 0, supervisor_argv(),
-               spec_.progress ? "" : spec_.run_dir + "/supervisor.out");
+               spec_.progress ? "" : spec_.run_dir + "/supervisor.out", true);
   // The supervisor's reader first, so that it records the start.
   const double ready_by = clock_.now_s() + spec_.supervisor_ready_timeout_s;
   while (!supervisor_ready_() && clock_.now_s() < ready_by && procs_.children().front().running) {

@@ -18,7 +18,8 @@ ProcessGroup::~ProcessGroup() {
 }
 
 pid_t ProcessGroup::spawn(const std::string& role, unsigned id,
-                          const std::vector<std::string>& argv, const std::string& log_path) {
+                          const std::vector<std::string>& argv, const std::string& log_path,
+                          bool keep_stderr) {
   const pid_t parent = getpid();
   const pid_t pid = fork();
   if (pid < 0) throw std::runtime_error(std::string("fork: ") + std::strerror(errno));
@@ -32,7 +33,7 @@ pid_t ProcessGroup::spawn(const std::string& role, unsigned id,
       const int fd = open(log_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
       if (fd >= 0) {
         dup2(fd, STDOUT_FILENO);
-        dup2(fd, STDERR_FILENO);
+        if (!keep_stderr) dup2(fd, STDERR_FILENO);
       }
     }
     std::vector<char*> args;

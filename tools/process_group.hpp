@@ -19,9 +19,10 @@ class ChildProcesses {
     bool killed_at_teardown = false;  // needed SIGKILL after the grace period
   };
   virtual ~ChildProcesses() = default;
-  // Starts argv[0] with the given arguments; stdout/stderr go to `log_path` unless empty.
+  // Starts argv[0] with the given arguments; stdout (and stderr unless keep_stderr) go to
+  // `log_path` unless it is empty.
   virtual pid_t spawn(const std::string& role, unsigned id, const std::vector<std::string>& argv,
-                      const std::string& log_path) = 0;
+                      const std::string& log_path, bool keep_stderr = false) = 0;
   // Reaps exited children without blocking; returns those that exited in this call.
   virtual std::vector<Child> reap() = 0;
   // SIGTERM to all running children (supervisor first), wait up to grace_s, then SIGKILL the rest.
@@ -38,7 +39,7 @@ class ProcessGroup final : public ChildProcesses {
  public:
   ~ProcessGroup() override;
   pid_t spawn(const std::string& role, unsigned id, const std::vector<std::string>& argv,
-              const std::string& log_path) override;
+              const std::string& log_path, bool keep_stderr = false) override;
   std::vector<Child> reap() override;
   int terminate_all(double grace_s) override;
   const std::vector<Child>& children() const override { return children_; }

@@ -20,6 +20,7 @@
 #include "tools/inspect.hpp"
 #include "tools/launcher.hpp"
 #include "tools/process_group.hpp"
+#include "tools/run_dir.hpp"
 
 namespace fs = std::filesystem;
 using namespace qswarm;
@@ -108,20 +109,13 @@ int run(const RunOptions& opt) {
     std::cerr << "swarm run: " << e.what() << "\n";
     return 2;
   }
-  fs::path dir =
-      opt.out.empty() ? fs::path("runs") / (timestamp() + "-" + rc.name) : fs::path(opt.out);
-  std::error_code ec;
-  if (fs::exists(dir / "summary.json")) {
-    std::cerr << "swarm run: --out " << dir
-              << ": expected a new directory, this one holds a run already\n";
+  fs::path dir;
+  try {
+    dir = claim_run_dir(opt.out, rc.name, timestamp());
+  } catch (const RunDirError& e) {
+    std::cerr << "swarm run: " << e.what() << "\n";
     return 2;
   }
-  fs::create_directories(dir, ec);
-  if (ec) {
-    std::cerr << "swarm run: --out " << dir << ": cannot create (" << ec.message() << ")\n";
-    return 2;
-  }
-  dir = fs::absolute(dir);
   LaunchSpec spec;
   spec.rc = rc;
   spec.run_dir = dir.string();
@@ -132,9 +126,15 @@ int run(const RunOptions& opt) {
   spec.progress = !opt.quiet;
   spec.stop_on_agent_exit = opt.stop_on_agent_exit;
   spec.ignore_sigterm = opt.ignore_sigterm;
-  std::ofstream(spec.scenario_path)
-      << "# The scenario as run (defaults filled in, agents listed).\n"
-      << to_text(rc.resolved);
+  {
+    std::ofstream scen(spec.scenario_path);
+    scen << "# The scenario as run (defaults filled in, agents listed).\n" << to_text(rc.resolved);
+    scen.flush();
+    if (!scen) {
+      std::cerr << "swarm run: cannot write " << spec.scenario_path << " (disk full?)\n";
+      return 3;
+    }
+  }
   if (!opt.quiet) {
     const InitialGraph g = initial_graph(rc);
     std::cout << "swarm run: " << rc.name << ", " << rc.agents.size() << " agents, domain "
@@ -168,6 +168,13 @@ int run(const RunOptions& opt) {
   if (*why != "supervisor finished") std::cerr << "swarm run: " << *why << "\n";
   for (const std::string& p : launcher.problems()) std::cerr << "swarm run: " << p << "\n";
   const int sup = launcher.supervisor_status();
+  if (!fs::exists(dir / "summary.json")) {
+    // The supervisor died before it could write the summary: the launcher says why.
+    const std::string reason = "supervisor " + describe_status(sup);
+    std::cerr << "swarm run: " << reason << "; the summary says so\n";
+    if (!write_fallback_summary(dir, rc, reason, clock.now_s())) return 3;
+    return 1;
+  }
   if (WIFEXITED(sup) && WEXITSTATUS(sup) == 3) {
     std::cout << "swarm run: the run record is incomplete (see above); run directory "
               << dir.string() << std::endl;

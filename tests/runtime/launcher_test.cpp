@@ -19,7 +19,7 @@ int signalled(int sig) { return sig & 0x7f; }
 class FakeProcesses final : public ChildProcesses {
  public:
   pid_t spawn(const std::string& role, unsigned id, const std::vector<std::string>& argv,
-              const std::string&) override {
+              const std::string&, bool) override {
     children_.push_back({role, id, next_pid_, true, 0, false});
     argv_.push_back(argv);
     return next_pid_++;

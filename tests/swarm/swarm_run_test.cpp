@@ -373,5 +373,42 @@ TEST(Smoke, InspectPredictsWithoutFlying) {
   EXPECT_NE(text.output.find("13.06"), std::string::npos) << text.output;
 }
 
+TEST(Record, ASecondRunOnTheSameOutIsRefusedAndADeadSupervisorStillLeavesASummary) {
+  const auto dir = fresh_dir("dead-supervisor");
+  Child launcher({bin("swarm"), "run", scenario("paper_time_varying"), "--out", dir.string(),
+                  "--domain", test_domain().str(), "--time-scale", "1", "--quiet"},
+                 dir.parent_path() / "dead-supervisor.log");
+  ASSERT_TRUE(wait_for([&] { return pid_of(dir, "supervisor", 0) > 0; }, 30.0));
+  // Given a run writing to dir, a second run given the same --out is refused.
+  const Result second = run({bin("swarm"), "run", scenario("demo"), "--out", dir.string(),
+                             "--domain", test_domain().str(), "--quiet"});
+  EXPECT_EQ(second.code, 2) << second.output;
+  EXPECT_NE(second.output.find("--out"), std::string::npos) << second.output;
+  // When the supervisor dies mid-run
+  ASSERT_EQ(::kill(pid_of(dir, "supervisor", 0), SIGKILL), 0);
+  const Result r = launcher.wait(60.0);
+  // then the run fails, and the launcher's summary says why.
+  EXPECT_EQ(r.code, 1) << r.output;
+  const records::Summary s = read_summary(dir);
+  EXPECT_FALSE(s.converged());
+  EXPECT_NE(s.end_reason().find("supervisor killed by signal"), std::string::npos)
+      << s.end_reason();
+}
+
+TEST(Record, AFullFilesystemEndsTheRunNonZeroNamingTheFileNeverConverged) {
+  if (geteuid() != 0) GTEST_SKIP() << "needs root to mount a small tmpfs";
+  const auto mnt = fresh_dir("full-disk");
+  std::filesystem::create_directories(mnt);
+  if (run({"/bin/mount", "-t", "tmpfs", "-o", "size=256k", "tmpfs", mnt.string()}).code != 0)
+    GTEST_SKIP() << "cannot mount a tmpfs here";
+  const Result r = run({bin("swarm"), "run", scenario("demo"), "--out", (mnt / "run").string(),
+                        "--domain", test_domain().str(), "--time-scale", "2", "--quiet"},
+                       120.0);
+  run({"/bin/umount", "-l", mnt.string()});
+  EXPECT_EQ(r.code, 3) << r.output;  // the record could not be written completely
+  EXPECT_NE(r.output.find("could not write"), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("swarm run: converged"), std::string::npos) << r.output;
+}
+
 }  // namespace
 }  // namespace qswarm::test
