@@ -59,6 +59,7 @@ int main(int argc, char** argv) {
     DdsOptions dopt = dds_options(rc, "swarm-supervisor", opts.interface);
     dopt.publish = false;  // a read-only participant: it publishes nothing an agent acts on
     dopt.test_drop_data_percent = 0;
+    dopt.hear_all_runs = true;  // so that another run on this domain is seen, and said
     DdsBus bus(dopt);
     bus.set_listener([&](const StateMessage& m) {
       const std::int64_t recv_ns = wall_now_ns();
@@ -74,6 +75,7 @@ int main(int argc, char** argv) {
       std::this_thread::sleep_for(std::chrono::milliseconds(20));
       std::lock_guard<std::mutex> lock(mu);
       rec.tick(wall_now_ns());
+      rec.note_foreign_runs(bus.foreign_runs(), bus.counters().foreign);
       // Once a second, and whenever the graph gains or loses an edge.
       if (progress && (wall_s() - last_print >= 1.0 || rec.edges_now() != last_edges)) {
         last_edges = rec.edges_now();

@@ -13,6 +13,7 @@
 #include <fstream>
 #include <iostream>
 #include <optional>
+#include <random>
 
 #include "common/app/cli_checks.hpp"
 #include "common/runtime/fault_flags.hpp"
@@ -98,7 +99,17 @@ RunConfig resolve_run(const RunOptions& opt) {
     add_random_cuts(s, opt.random_cuts, static_cast<int>(first.agents.size()), first.duration_s,
                     first.seed);
   }
-  return resolve_scenario(s, o);
+  RunConfig rc = resolve_scenario(s, o);
+  if (rc.run_id == 0) {
+    // A fresh id for every run: two runs on one domain never hear each other.
+    std::random_device rd;
+    std::uint64_t id = 0;
+    while (id == 0)
+      id = (static_cast<std::uint64_t>(rd()) << 32) ^ rd() ^ static_cast<std::uint64_t>(::getpid());
+    rc.run_id = id;
+    rc.resolved.mutable_transport()->set_run_id(id);
+  }
+  return rc;
 }
 
 int run(const RunOptions& opt) {

@@ -17,6 +17,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <cstdio>
 #include <mutex>
 #include <stdexcept>
 
@@ -82,7 +83,11 @@ struct DdsBus::Impl : public dds::DataReaderListener {
     SampleGate::Result r;
     {
       std::lock_guard<std::mutex> lock(mu);
-      r = gate.admit(m, why);
+      r = gate.admit(m, why, wall_now_ns());
+    }
+    if (r.verdict == SampleGate::Verdict::kForeign && r.first_from) {
+      spdlog::warn("samples of another run (run id {:x}) on this domain: dropped and counted",
+                   m.run_id);
     }
     if (r.verdict == SampleGate::Verdict::kInvalid && r.first_from) {
       spdlog::warn(
@@ -98,6 +103,7 @@ struct DdsBus::Impl : public dds::DataReaderListener {
 DdsBus::DdsBus(const DdsOptions& opts) : impl_(std::make_unique<Impl>()) {
   Impl& d = *impl_;
   d.opts = opts;
+  d.gate = SampleGate(opts.run_id);
   dds::DomainParticipantQos pqos;
   pqos.name(opts.participant_name);
   pqos.transport().use_builtin_transports = false;
@@ -128,7 +134,9 @@ DdsBus::DdsBus(const DdsOptions& opts) : impl_(std::make_unique<Impl>()) {
   if (!d.topic) throw std::runtime_error("dds: cannot create the state topic");
 
   if (opts.publish) {
-    d.publisher = d.participant->create_publisher(dds::PUBLISHER_QOS_DEFAULT);
+    dds::PublisherQos pub_qos = dds::PUBLISHER_QOS_DEFAULT;
+    pub_qos.partition().push_back(run_partition(opts.run_id).c_str());
+    d.publisher = d.participant->create_publisher(pub_qos);
     dds::DataWriterQos wq = dds::DATAWRITER_QOS_DEFAULT;
     wq.reliability().kind = dds::BEST_EFFORT_RELIABILITY_QOS;
     wq.durability().kind = dds::VOLATILE_DURABILITY_QOS;
@@ -141,7 +149,10 @@ DdsBus::DdsBus(const DdsOptions& opts) : impl_(std::make_unique<Impl>()) {
     if (!d.writer) throw std::runtime_error("dds: cannot create the state writer");
   }
 
-  d.subscriber = d.participant->create_subscriber(dds::SUBSCRIBER_QOS_DEFAULT);
+  dds::SubscriberQos sub_qos = dds::SUBSCRIBER_QOS_DEFAULT;
+  sub_qos.partition().push_back(opts.hear_all_runs ? "qswarm-run-*"
+                                                   : run_partition(opts.run_id).c_str());
+  d.subscriber = d.participant->create_subscriber(sub_qos);
   dds::DataReaderQos rq = dds::DATAREADER_QOS_DEFAULT;
   rq.reliability().kind = dds::BEST_EFFORT_RELIABILITY_QOS;
   rq.durability().kind = dds::VOLATILE_DURABILITY_QOS;
@@ -191,6 +202,17 @@ void DdsBus::set_listener(Listener listener) {
 BusCounters DdsBus::counters() const {
   std::lock_guard<std::mutex> lock(impl_->mu);
   return impl_->gate.counters();
+}
+
+std::set<std::uint64_t> DdsBus::foreign_runs() const {
+  std::lock_guard<std::mutex> lock(impl_->mu);
+  return impl_->gate.foreign_runs();
+}
+
+std::string run_partition(std::uint64_t run_id) {
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "qswarm-run-%016llx", static_cast<unsigned long long>(run_id));
+  return buf;
 }
 
 int DdsBus::matched_readers() const { return impl_->writer_listener.matched; }

@@ -2,6 +2,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <set>
 #include <string>
 
 #include "common/transport/neighbor_bus.hpp"
@@ -19,7 +20,15 @@ struct DdsOptions {
   // Fast DDS's test transport instead of plain UDPv4: drop this percentage of data messages on
   // the sending side (0 = plain UDPv4).
   std::uint8_t test_drop_data_percent = 0;
+  // The run: endpoints use the DDS partition qswarm-run-<hex id> and the gate refuses samples of
+  // other runs (0: the partition qswarm-run-0, no check).
+  std::uint64_t run_id = 0;
+  // A reader on every run's partition (the supervisor): other runs' samples arrive, are refused
+  // as foreign and counted, so that a run can say another one shares its domain.
+  bool hear_all_runs = false;
 };
+
+std::string run_partition(std::uint64_t run_id);
 
 // The product's NeighborBus: one DomainParticipant, the keyed best-effort state topic
 // "qswarm/agent_state", a keep-last-1 writer and reader. Incoming samples are checked in the
@@ -40,6 +49,8 @@ class DdsBus final : public NeighborBus {
   BusCounters counters() const override;
   // Number of readers matched to our writer (DDS discovery; the start barrier waits on it).
   int matched_readers() const override;
+  // Run ids of other runs heard on this domain (only a hear_all_runs bus hears them).
+  std::set<std::uint64_t> foreign_runs() const;
 
   struct Impl;
 

@@ -28,6 +28,7 @@ void to_idl(const StateMessage& m, qswarm_msgs::AgentState& s) {
   s.stamp_s(m.stamp_s);
   s.wall_ns(m.wall_ns);
   s.incarnation(m.incarnation);
+  s.run_id(m.run_id);
   s.mode(static_cast<uint8_t>(m.mode));
   s.phase(m.phase);
   s.consensus(arr(m.view.q));
@@ -83,6 +84,7 @@ StateMessage from_idl(const qswarm_msgs::AgentState& s) {
   m.stamp_s = s.stamp_s();
   m.wall_ns = s.wall_ns();
   m.incarnation = s.incarnation();
+  m.run_id = s.run_id();
   m.mode = static_cast<AgentMode>(s.mode());
   m.phase = s.phase();
   m.view.q = vec(s.consensus());

@@ -38,6 +38,20 @@ double Recorder::swarm_time_at(std::int64_t wall_ns) const {
 }
 
 void Recorder::on_sample(const StateMessage& m, std::int64_t recv_wall_ns) {
+  // A stamp far ahead of the swarm's clock (as carried forward by the wall clock) cannot be one of
+  // the run's agents' ticks: recording it would move the run's clock, end the run at once and fill
+  // graph.csv. Refused, counted, and said once per agent.
+  if (rc_.agent(m.view.id) && m.stamp_s > swarm_time_at(recv_wall_ns) + kStampSlackS) {
+    ++tally_.implausible_samples;
+    if (implausible_.insert(m.view.id).second) {
+      char buf[160];
+      std::snprintf(buf, sizeof buf,
+                    "sample stamped %.3f s while the swarm's clock is at %.3f s: refused",
+                    m.stamp_s, swarm_time_at(recv_wall_ns));
+      event("implausible_sample", m.view.id, buf);
+    }
+    return;
+  }
   if (m.phase == kRunning && m.stamp_s > t_s_ && rc_.agent(m.view.id)) {
     t_s_ = m.stamp_s;
     t_wall_ns_ = recv_wall_ns;
@@ -78,6 +92,18 @@ void Recorder::on_sample(const StateMessage& m, std::int64_t recv_wall_ns) {
     for (const auto& [aid, t] : presence_.tracks()) all &= t.seen && t.last.view.seq >= 1;
     if (all) initial_snapshot();
   }
+}
+
+void Recorder::note_foreign_runs(const std::set<std::uint64_t>& runs, std::uint64_t samples) {
+  for (const std::uint64_t id : runs) {
+    if (!foreign_runs_.insert(id).second) continue;
+    char buf[120];
+    std::snprintf(buf, sizeof buf,
+                  "another run (id %016llx) shares this domain: its samples are dropped",
+                  static_cast<unsigned long long>(id));
+    event("foreign_run", 0, buf);
+  }
+  tally_.foreign_samples = samples;
 }
 
 void Recorder::depart(AgentId id, const std::string& why) {

@@ -2,6 +2,7 @@
 
 #include <cstdint>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -25,6 +26,9 @@ class Recorder {
   Recorder(RunConfig rc, std::string run_dir, double time_scale);
 
   void on_sample(const StateMessage& m, std::int64_t recv_wall_ns);
+  // Other runs heard on this run's domain (their samples were refused): each is an event once,
+  // and the summary counts their samples.
+  void note_foreign_runs(const std::set<std::uint64_t>& runs, std::uint64_t samples);
   // Periodic work (departures, fault windows, graph snapshots, convergence); call every few tens
   // of ms.
   void tick(std::int64_t now_wall_ns);
@@ -66,7 +70,12 @@ class Recorder {
   std::optional<records::GraphSnapshot> first_full_, last_;
   std::vector<FaultPlan::Event> timeline_;
   size_t next_timeline_ = 0;
-  std::map<AgentId, double> killed_at_;  // planned kill time, until the departure is seen
+  std::map<AgentId, double> killed_at_;
+  std::set<std::uint64_t> foreign_runs_;
+  std::set<AgentId> implausible_;
+  // How far (simulated s) a sample may be stamped ahead of the swarm's clock: a late joiner's
+  // first stamps, the supervisor's own scheduling, a tick or two of skew.
+  static constexpr double kStampSlackS = 5.0;  // planned kill time, until the departure is seen
   records::Summary summary_;
 };
 

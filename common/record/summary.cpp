@@ -40,6 +40,9 @@ records::Summary build_summary(const RunConfig& rc, const Presence& presence,
   records::Summary s;
   s.set_scenario(rc.name);
   s.set_converged(judge.converged());
+  s.set_run_id(rc.run_id);
+  s.set_foreign_samples(tally.foreign_samples);
+  s.set_implausible_samples(tally.implausible_samples);
   for (const AgentId id : judge.missing()) s.add_missing_agents(id);
   s.set_convergence_time_s(judge.converged() ? judge.converged_at_s() : -1.0);
   s.set_end_reason(end.reason);

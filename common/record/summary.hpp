@@ -18,6 +18,8 @@ namespace qswarm {
 // What the recorder counted during a run, for the summary.
 struct RunTally {
   std::uint32_t joins = 0, departures = 0, fault_events = 0;
+  std::uint64_t foreign_samples = 0;      // samples of other runs on this domain, refused
+  std::uint64_t implausible_samples = 0;  // stamped far ahead of the swarm's clock, refused
   double min_separation_m = 1e300;
   std::vector<double> ages_ms;   // sample ages (receive - send wall time)
   std::vector<double> detect_s;  // planned kill -> departure seen

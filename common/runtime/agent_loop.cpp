@@ -62,6 +62,7 @@ AgentParams make_agent_params(const RunConfig& rc, const AgentSpec& spec) {
   p.reference_speed_mps = rc.reference_speed_mps;
   p.reference_accel_mps2 = rc.reference_accel_mps2;
   p.neighbor_timeout_s = rc.neighbor_timeout_s;
+  p.run_id = rc.run_id;
   p.expected_peers = rc.start_peers(spec.id).size();
   return p;
 }
@@ -69,6 +70,7 @@ AgentParams make_agent_params(const RunConfig& rc, const AgentSpec& spec) {
 AgentLoop::AgentLoop(const RunConfig& rc, AgentId id, const AgentLoopOptions& opts,
                      NeighborBus& transport, Clock& clock)
     : id_(id),
+      is_agent_([ids = rc.ids()](AgentId a) { return ids.count(a) > 0; }),
       clock_(clock),
       transport_(transport),
       faulty_(transport, LinkFaults(rc.faults, id, rc.seed), id),
@@ -90,8 +92,9 @@ AgentLoop::Poll AgentLoop::poll() {
   if (life_.phase() != LifePhase::kRunning) {
     // The barrier and the join wait read the raw transport: faults apply to the run, which
     // starts once everyone is up.
+    // Only the run's own agents count: a stranger's stamp must not start a late joiner early.
     for (const StateMessage& m : transport_.latest(id_))
-      peers.push_back({m.view.id, m.phase, m.stamp_s});
+      if (is_agent_(m.view.id)) peers.push_back({m.view.id, m.phase, m.stamp_s});
   }
   const LifecycleStep s = life_.step(now, peers, transport_.matched_readers(), runtime_.time_s());
   if (!s.warning.empty()) r.notes.push_back({true, s.warning});

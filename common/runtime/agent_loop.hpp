@@ -62,6 +62,7 @@ class AgentLoop {
 
  private:
   AgentId id_;
+  std::function<bool(AgentId)> is_agent_;
   Clock& clock_;
   NeighborBus& transport_;
   FaultyBus faulty_;

@@ -57,6 +57,7 @@ void AgentRuntime::publish(std::uint8_t phase) {
   m.initial_links = initial_links_;
   m.wall_ns = wall_clock_ ? wall_clock_() : 0;
   m.incarnation = p_.incarnation;
+  m.run_id = p_.run_id;
   m.received = received_;
   m.dropped = dropped_;
   m.overruns = overruns_;

@@ -31,6 +31,7 @@ struct AgentParams {
   double reference_accel_mps2 = 2.0;
   double neighbor_timeout_s = 1.0;  // simulated seconds without a new message
   std::int64_t incarnation = 0;
+  std::uint64_t run_id = 0;
   // The law starts when this many peers are running (so the first tick sees the whole initial
   // graph), or after start_grace_s when some never come (late join, dead peer).
   std::size_t expected_peers = 0;

@@ -16,6 +16,12 @@ const AgentSpec* RunConfig::agent(AgentId id) const {
   return nullptr;
 }
 
+std::set<AgentId> RunConfig::ids() const {
+  std::set<AgentId> out;
+  for (const AgentSpec& a : agents) out.insert(a.id);
+  return out;
+}
+
 std::set<AgentId> RunConfig::start_peers(AgentId id) const {
   std::set<AgentId> peers;
   if (law.topology.policy == TopologyPolicy::kFixed) {

@@ -40,11 +40,13 @@ struct RunConfig {
   std::string interface = "127.0.0.1";
   bool shared_memory = false;
   double neighbor_timeout_s = 1.0;
+  std::uint64_t run_id = 0;  // transport.run_id: isolates this run on a shared DDS domain
   FaultPlan faults;
   scenario::Scenario resolved;  // the scenario as run (agents listed, defaults explicit)
 
   Vec3 initial_average() const;
   const AgentSpec* agent(AgentId id) const;
+  std::set<AgentId> ids() const;
   // The one definition of the peers agent `id` waits for at the start (the barrier, and the law's
   // first tick): its listed neighbours on a FIXED graph, every other agent otherwise, and never an
   // agent that the fault plan has joining late.

@@ -218,6 +218,7 @@ void resolve_transport(const scenario::Transport& t, RunConfig& rc) {
     fail("transport.interface", "an IPv4 address such as 127.0.0.1", "\"\"");
   rc.shared_memory = t.has_shared_memory() && t.shared_memory();
   // At least two consensus ticks: a shorter timeout makes every neighbour flap.
+  rc.run_id = t.run_id();
   rc.neighbor_timeout_s = ranged("transport.neighbor_timeout_s", t.has_neighbor_timeout_s(),
                                  t.neighbor_timeout_s(), 1.0, 2.0 / rc.consensus_hz, 3600.0);
 }
@@ -363,6 +364,7 @@ void write_back_defaults(scenario::Scenario& s, const RunConfig& rc) {
   s.mutable_transport()->set_interface(rc.interface);
   s.mutable_transport()->set_shared_memory(rc.shared_memory);
   s.mutable_transport()->set_neighbor_timeout_s(rc.neighbor_timeout_s);
+  s.mutable_transport()->set_run_id(rc.run_id);
   s.mutable_rates()->set_physics_hz(rc.physics_hz);
   s.mutable_rates()->set_consensus_hz(rc.consensus_hz);
   s.mutable_convergence()->set_tolerance_m(rc.tolerance_m);

@@ -13,6 +13,7 @@ struct BusCounters {
   std::uint64_t received = 0;  // accepted samples
   std::uint64_t dropped = 0;   // refused: invalid content
   std::uint64_t stale = 0;     // refused: not newer than what we hold
+  std::uint64_t foreign = 0;   // refused: from another run on the same domain
 };
 
 // The one narrow interface an agent uses to talk: publish its own state, read the newest state of

@@ -2,8 +2,19 @@
 
 namespace qswarm {
 
-SampleGate::Result SampleGate::admit(const StateMessage& m, const std::string& why) {
+SampleGate::Result SampleGate::admit(const StateMessage& m, const std::string& why,
+                                     std::int64_t now_wall_ns) {
   Result r;
+  constexpr std::int64_t kClockSkewNs = 60'000'000'000;
+  if (why.empty() && now_wall_ns > 0 && m.incarnation > now_wall_ns + kClockSkewNs) {
+    return admit(m, "incarnation (start time) in the future", 0);
+  }
+  if (run_id_ != 0 && m.run_id != run_id_) {
+    ++counters_.foreign;
+    r.verdict = Verdict::kForeign;
+    r.first_from = foreign_runs_.insert(m.run_id).second;
+    return r;
+  }
   if (!why.empty()) {
     ++counters_.dropped;
     r.verdict = Verdict::kInvalid;

@@ -36,6 +36,7 @@ struct StateMessage {
   std::vector<std::pair<AgentId, double>> initial_links;
   std::int64_t wall_ns = 0;      // sender's CLOCK_REALTIME at publication
   std::int64_t incarnation = 0;  // sender's start time: a restarted agent has a newer one
+  std::uint64_t run_id = 0;      // the run the sender belongs to (RunConfig::run_id)
   std::uint8_t phase = 0;        // see Phase
   std::uint64_t received = 0;    // samples the sender accepted
   std::uint64_t dropped = 0;     // samples the sender rejected

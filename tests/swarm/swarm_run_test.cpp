@@ -258,9 +258,14 @@ TEST(SwarmRun, BadSamplesFromATestParticipantAreDroppedByEveryAgentAndChangeNoth
   Child launcher({bin("swarm"), "run", scenario("paper_unweighted"), "--out", dir.string(),
                   "--domain", test_domain().str(), "--time-scale", "1", "--quiet"},
                  dir.parent_path() / "bad-samples.log");
+  // The saboteur is inside the run: it knows the run's id (its DDS partition) from the record.
+  ASSERT_TRUE(wait_for([&] { return std::filesystem::exists(dir / "processes.csv"); }, 30.0));
+  const std::uint64_t run_id = load_scenario((dir / "scenario.txtpb").string()).run_id;
+  ASSERT_NE(run_id, 0u);
   DdsOptions opt;
   opt.domain_id = static_cast<std::uint32_t>(test_domain().domain());
   opt.participant_name = "test-saboteur";
+  opt.run_id = run_id;
   DdsBus saboteur(opt);
   std::uint64_t seq = 1u << 30;
   std::int64_t life = wall_now_ns() + 1'000'000'000'000LL;  // "newer" than any agent's incarnation
@@ -272,6 +277,7 @@ TEST(SwarmRun, BadSamplesFromATestParticipantAreDroppedByEveryAgentAndChangeNoth
     nan_msg.phase = kRunning;
     nan_msg.seq = ++seq;
     nan_msg.incarnation = life;
+    nan_msg.run_id = run_id;
     saboteur.publish(nan_msg);
     StateMessage absurd;  // impersonates agent 2 with an absurd position and flow
     absurd.view.id = 2;
@@ -280,6 +286,7 @@ TEST(SwarmRun, BadSamplesFromATestParticipantAreDroppedByEveryAgentAndChangeNoth
     absurd.phase = kRunning;
     absurd.seq = ++seq;
     absurd.incarnation = life;
+    absurd.run_id = run_id;
     saboteur.publish(absurd);
     StateMessage stranger;  // well-formed, but not an agent of the scenario
     stranger.view.id = 77;
@@ -287,7 +294,8 @@ TEST(SwarmRun, BadSamplesFromATestParticipantAreDroppedByEveryAgentAndChangeNoth
     stranger.p_W = stranger.view.q;
     stranger.phase = kRunning;
     stranger.seq = ++seq;
-    stranger.incarnation = life;
+    stranger.incarnation = wall_now_ns();  // plausible: a far-future one is refused as such
+    stranger.run_id = run_id;
     saboteur.publish(stranger);
     ++published;
     wait_for([&] { return !launcher.running(); }, 0.05);
@@ -393,6 +401,32 @@ TEST(Record, ASecondRunOnTheSameOutIsRefusedAndADeadSupervisorStillLeavesASummar
   EXPECT_FALSE(s.converged());
   EXPECT_NE(s.end_reason().find("supervisor killed by signal"), std::string::npos)
       << s.end_reason();
+}
+
+TEST(Record, TwoRunsOnOneDomainKeepTheirOwnResultsAndEachSaysTheOtherWasThere) {
+  // Two unrelated runs, same domain, at the same time: each must meet at its own average.
+  const auto dir_a = fresh_dir("shared-domain-a"), dir_b = fresh_dir("shared-domain-b");
+  Child a({bin("swarm"), "run", scenario("paper_unweighted"), "--out", dir_a.string(), "--domain",
+           test_domain().str(), "--time-scale", "2", "--quiet"},
+          dir_a.parent_path() / "shared-domain-a.log");
+  Child b({bin("swarm"), "run", scenario("paper_weighted"), "--out", dir_b.string(), "--domain",
+           test_domain().str(), "--time-scale", "2", "--quiet"},
+          dir_b.parent_path() / "shared-domain-b.log");
+  const Result ra = a.wait(240.0), rb = b.wait(240.0);
+  ASSERT_EQ(ra.code, 0) << ra.output;
+  ASSERT_EQ(rb.code, 0) << rb.output;
+  const records::Summary sa = read_summary(dir_a), sb = read_summary(dir_b);
+  expect_met_at(sa, Vec3(10.25, 9.75, 29.25), 0.01, true);  // paper 2.6.1
+  expect_met_at(sb, Vec3(9, 12.75, 30.25), 0.01, true);     // paper 2.7.1
+  EXPECT_LT(sa.average_drift_m(), 1e-3);
+  EXPECT_LT(sb.average_drift_m(), 1e-3);
+  EXPECT_NE(sa.run_id(), sb.run_id());
+  // Each supervisor heard the other run while both flew, refused it, and said so.
+  int noted = 0;
+  for (const auto& dir : {dir_a, dir_b})
+    for (const auto& row : read_csv(dir / "events.csv")) noted += row.at("kind") == "foreign_run";
+  EXPECT_GE(noted, 1);
+  EXPECT_GT(sa.foreign_samples() + sb.foreign_samples(), 0u);
 }
 
 TEST(Record, AFullFilesystemEndsTheRunNonZeroNamingTheFileNeverConverged) {
