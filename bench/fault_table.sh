@@ -2,12 +2,13 @@
 # Drift of the agreed value and convergence time against message loss, for both laws:
 # scenarios/faults_six.txtpb (6 agents, complete graph, unweighted, converged = 1e-8 m), random
 # loss in every agent's receive path, 3 seeds per cell; medians reported.
-# Usage: bench/fault_table.sh [seeds]
+# Usage: bench/fault_table.sh [seeds]      (BUILD_DIR=dir to use another build than build/)
 set -euo pipefail
 cd "$(dirname "$0")/.."
-[[ -x build/bin/swarm ]] || tools/setup.sh build >/dev/null
+BUILD=${BUILD_DIR:-build}
+[[ -x $BUILD/bin/swarm ]] || tools/setup.sh "$BUILD" >/dev/null
 SEEDS=${1:-3}
-OUT=build/fault-table
+OUT=$BUILD/fault-table
 mkdir -p "$OUT"
 median() { sort -g | awk '{a[NR]=$1} END {print (NR % 2) ? a[(NR+1)/2] : (a[NR/2] + a[NR/2+1]) / 2}'; }
 printf "| loss | law | agreed-value drift [m] (median) | relative error | convergence time [s] (median) |\n"
@@ -19,7 +20,7 @@ for loss in 0 0.1 0.3 0.5; do
     for seed in $(seq 1 "$SEEDS"); do
       dir="$OUT/$law-$loss-$seed"
       rm -rf "$dir"
-      build/bin/swarm run scenarios/faults_six.txtpb --law "$law" --loss "$loss" --seed "$seed" \
+      "$BUILD"/bin/swarm run scenarios/faults_six.txtpb --law "$law" --loss "$loss" --seed "$seed" \
         --time-scale 4 --domain $((domain++)) --out "$dir" --quiet >/dev/null 2>&1 || true
       drifts+=("$(grep -o '"average_drift_m": [0-9.e+-]*' "$dir/summary.json" | awk '{print $2}')")
       rels+=("$(grep -o '"average_relative_error": [0-9.e+-]*' "$dir/summary.json" | awk '{print $2}')")
