@@ -1,7 +1,6 @@
 #include "tools/inspect.hpp"
 
 #include <google/protobuf/struct.pb.h>
-#include <google/protobuf/util/json_util.h>
 
 #include <cstdio>
 #include <iostream>
@@ -10,6 +9,8 @@
 #include "common/core/graph.hpp"
 #include "common/runtime/scenario.hpp"
 #include "proto/records.pb.h"
+
+#include "common/runtime/proto_util.hpp"
 
 namespace qswarm {
 namespace {
@@ -41,13 +42,7 @@ std::string as_json(const RunConfig& rc, const InitialGraph& g, double tau) {
   const Vec3 avg = rc.initial_average();
   for (int k = 0; k < 3; ++k) ins.add_agreement_point(avg[k]);
   ins.set_time_constant_s(tau);
-  std::string json;
-  google::protobuf::util::JsonPrintOptions opt;
-  opt.add_whitespace = true;
-  opt.preserve_proto_field_names = true;
-  opt.always_print_primitive_fields = true;
-  (void)google::protobuf::util::MessageToJsonString(ins, &json, opt);
-  return json;
+  return to_json(ins);
 }
 
 std::string as_text(const RunConfig& rc, const InitialGraph& g, double tau) {

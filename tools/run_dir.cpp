@@ -7,10 +7,13 @@
 #include <cerrno>
 #include <cstring>
 #include <fstream>
+#include <sstream>
 
 #include "proto/records.pb.h"
 
 namespace fs = std::filesystem;
+
+#include "common/runtime/proto_util.hpp"
 
 namespace qswarm {
 
@@ -80,21 +83,33 @@ bool write_fallback_summary(const fs::path& dir, const RunConfig& rc, const std:
   s.set_convergence_time_s(-1.0);
   s.set_end_reason(reason);
   s.set_wall_time_s(wall_time_s);
+  s.set_run_id(rc.run_id);
   s.set_seed(static_cast<std::uint32_t>(rc.seed));
   s.set_agents_expected(static_cast<std::uint32_t>(rc.agents.size()));
   s.set_law(to_string(rc.law.kind));
   s.set_mode(rc.mode == AgentMode::kQuadcopter ? "quadcopter" : "particle");
   for (int k = 0; k < 3; ++k) s.add_initial_average(rc.initial_average()[k]);
-  std::string json;
-  google::protobuf::util::JsonPrintOptions opt;
-  opt.add_whitespace = true;
-  opt.preserve_proto_field_names = true;
-  opt.always_print_primitive_fields = true;
-  (void)google::protobuf::util::MessageToJsonString(s, &json, opt);
+  const std::string json = to_json(s);
   std::ofstream f(dir / "summary.json");
   f << json;
   f.flush();
   return static_cast<bool>(f);
+}
+
+bool amend_summary(const fs::path& dir, const std::vector<std::string>& problems) {
+  std::ifstream in(dir / "summary.json");
+  std::stringstream text;
+  text << in.rdbuf();
+  records::Summary s;
+  if (!google::protobuf::util::JsonStringToMessage(text.str(), &s).ok()) return false;
+  s.set_converged(false);
+  std::string reason = s.end_reason();
+  for (const std::string& p : problems) reason += "; " + p;
+  s.set_end_reason(reason);
+  std::ofstream out(dir / "summary.json");
+  out << to_json(s);
+  out.flush();
+  return static_cast<bool>(out);
 }
 
 }  // namespace qswarm

@@ -3,6 +3,7 @@
 #include <filesystem>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "common/runtime/run_config.hpp"
 
@@ -30,5 +31,9 @@ std::filesystem::path claim_run_dir(const std::string& out, const std::string& s
 // why, so that a run never ends without summary.json. Returns whether it was written.
 bool write_fallback_summary(const std::filesystem::path& dir, const RunConfig& rc,
                             const std::string& reason, double wall_time_s);
+
+// Children that crashed unseen by the supervisor (at teardown): summary.json is rewritten with
+// converged false and the problems appended to its end_reason. Returns whether it was written.
+bool amend_summary(const std::filesystem::path& dir, const std::vector<std::string>& problems);
 
 }  // namespace qswarm

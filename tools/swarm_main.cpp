@@ -100,8 +100,9 @@ RunConfig resolve_run(const RunOptions& opt) {
                     first.seed);
   }
   RunConfig rc = resolve_scenario(s, o);
-  if (rc.run_id == 0) {
-    // A fresh id for every run: two runs on one domain never hear each other.
+  {
+    // A fresh id for every run, even when the scenario is a previous run's scenario.txtpb (which
+    // holds that run's id): two runs on one domain never hear each other.
     std::random_device rd;
     std::uint64_t id = 0;
     while (id == 0)
@@ -166,6 +167,7 @@ int run(const RunOptions& opt) {
   } catch (const std::exception& e) {
     std::cerr << "swarm run: " << e.what() << "\n";
     launcher.stop();
+    write_fallback_summary(dir, rc, e.what(), clock.now_s());
     return 1;
   }
   std::optional<std::string> why;
@@ -191,6 +193,8 @@ int run(const RunOptions& opt) {
               << dir.string() << std::endl;
     return 3;
   }
+  // A crash the supervisor could not see (at teardown) still unmakes "converged" in the record.
+  if (!launcher.problems().empty() && !amend_summary(dir, launcher.problems())) return 3;
   const bool converged = WIFEXITED(sup) && WEXITSTATUS(sup) == 0 && launcher.problems().empty();
   std::cout << "swarm run: " << (converged ? "converged" : "not converged") << "; run record in "
             << dir.string() << std::endl;

@@ -7,14 +7,10 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "common/runtime/proto_util.hpp"
+
 namespace qswarm {
 namespace {
-
-void put(google::protobuf::RepeatedField<double>* f, const Vec3& v) {
-  f->Add(v.x());
-  f->Add(v.y());
-  f->Add(v.z());
-}
 
 // CSV field: quoted, inner quotes doubled (details and names come from people and the network).
 std::string quoted(const std::string& s) {
@@ -80,9 +76,9 @@ void RecordSinks::sample(const StateMessage& m, double age_ms) {
   s->set_seq(m.seq);
   s->set_stamp_s(m.stamp_s);
   s->set_age_ms(age_ms);
-  put(s->mutable_consensus(), q);
-  put(s->mutable_position(), m.p_W);
-  put(s->mutable_velocity(), m.v_W);
+  put_vec3(s->mutable_consensus(), q);
+  put_vec3(s->mutable_position(), m.p_W);
+  put_vec3(s->mutable_velocity(), m.v_W);
   s->add_orientation(o.w());
   s->add_orientation(o.x());
   s->add_orientation(o.y());

@@ -1,12 +1,12 @@
 #include "common/record/recorder.hpp"
 
-#include <google/protobuf/util/json_util.h>
-
 #include <algorithm>
 #include <cstdio>
 #include <fstream>
 
 #include "common/record/graph_metrics.hpp"
+
+#include "common/runtime/proto_util.hpp"
 
 namespace qswarm {
 namespace {
@@ -218,12 +218,7 @@ std::string Recorder::finish(const std::string& end_reason, double wall_time_s) 
   summary_ = build_summary(rc_, presence_, judge_, tally_, first_full_, last_,
                            {end_reason, t_s_, wall_time_s, time_scale_});
   event("end", 0, end_reason);
-  std::string json;
-  google::protobuf::util::JsonPrintOptions opt;
-  opt.add_whitespace = true;
-  opt.preserve_proto_field_names = true;
-  opt.always_print_primitive_fields = true;
-  (void)google::protobuf::util::MessageToJsonString(summary_, &json, opt);
+  const std::string json = to_json(summary_);
   {
     std::ofstream out(dir_ + "/summary.json");
     out << json;

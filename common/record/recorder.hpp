@@ -70,12 +70,12 @@ class Recorder {
   std::optional<records::GraphSnapshot> first_full_, last_;
   std::vector<FaultPlan::Event> timeline_;
   size_t next_timeline_ = 0;
-  std::map<AgentId, double> killed_at_;
+  std::map<AgentId, double> killed_at_;  // planned kill time, until the departure is seen
   std::set<std::uint64_t> foreign_runs_;
   std::set<AgentId> implausible_;
   // How far (simulated s) a sample may be stamped ahead of the swarm's clock: a late joiner's
   // first stamps, the supervisor's own scheduling, a tick or two of skew.
-  static constexpr double kStampSlackS = 5.0;  // planned kill time, until the departure is seen
+  static constexpr double kStampSlackS = 5.0;
   records::Summary summary_;
 };
 

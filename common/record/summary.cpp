@@ -8,14 +8,10 @@
 
 #include "common/core/graph.hpp"
 
+#include "common/runtime/proto_util.hpp"
+
 namespace qswarm {
 namespace {
-
-void put(google::protobuf::RepeatedField<double>* f, const Vec3& v) {
-  f->Add(v.x());
-  f->Add(v.y());
-  f->Add(v.z());
-}
 
 double percentile(std::vector<double> v, double p) {
   if (v.empty()) return 0.0;
@@ -55,7 +51,7 @@ records::Summary build_summary(const RunConfig& rc, const Presence& presence,
   s.set_joins(tally.joins);
   s.set_departures(tally.departures);
   s.set_min_separation_m(tally.min_separation_m < 1e299 ? tally.min_separation_m : 0.0);
-  put(s.mutable_initial_average(), rc.initial_average());
+  put_vec3(s.mutable_initial_average(), rc.initial_average());
 
   Positions final_q, final_p;
   records::Messages& msg = *s.mutable_messages();
@@ -65,10 +61,10 @@ records::Summary build_summary(const RunConfig& rc, const Presence& presence,
     records::AgentSummary* as = s.add_agents();
     as->set_id(id);
     const AgentSpec* spec = rc.agent(id);
-    put(as->mutable_initial_position(), spec ? spec->position_W : a.first.view.q0);
+    put_vec3(as->mutable_initial_position(), spec ? spec->position_W : a.first.view.q0);
     if (!a.seen) continue;
-    put(as->mutable_final_position(), a.last.p_W);
-    put(as->mutable_final_consensus(), a.last.view.q);
+    put_vec3(as->mutable_final_position(), a.last.p_W);
+    put_vec3(as->mutable_final_consensus(), a.last.view.q);
     as->set_samples(static_cast<std::uint32_t>(a.samples));
     as->set_seq_gaps(static_cast<std::uint32_t>(a.gaps));
     as->set_dropped_by_agent(static_cast<std::uint32_t>(a.last.dropped));
@@ -91,7 +87,7 @@ records::Summary build_summary(const RunConfig& rc, const Presence& presence,
   msg.set_age_p99_ms(percentile(tally.ages_ms, 0.99));
   msg.set_rate_hz(rate_n ? rate_sum / rate_n : 0.0);
   const Vec3 mean = average(final_q);
-  put(s.mutable_final_consensus_mean(), mean);
+  put_vec3(s.mutable_final_consensus_mean(), mean);
   s.set_average_drift_m(final_q.empty() ? 0.0 : (mean - rc.initial_average()).norm());
   double spread = 0.0;
   for (const Vec3& x : final_p) spread = std::max(spread, (x - average(final_p)).norm());

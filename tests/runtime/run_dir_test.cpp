@@ -3,7 +3,13 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <google/protobuf/util/json_util.h>
+
 #include <fstream>
+#include <sstream>
+
+#include "common/runtime/proto_util.hpp"
+#include "proto/records.pb.h"
 
 #include "tools/run_dir.hpp"
 
@@ -64,6 +70,26 @@ TEST_F(RunDir, AnOutWithFilesIsRefusedAndOneOutIsClaimedOnce) {
   } catch (const RunDirError& e) {
     EXPECT_NE(std::string(e.what()).find("another run"), std::string::npos) << e.what();
   }
+}
+
+TEST_F(RunDir, ACrashTheSupervisorCouldNotSeeUnmakesConvergedInTheSummary) {
+  RunConfig rc;
+  rc.name = "x";
+  rc.agents.push_back({1, Vec3::Zero(), 0.0});
+  ASSERT_TRUE(write_fallback_summary(root_, rc, "converged", 1.0));
+  // (write_fallback_summary writes converged: false; make it a converged record first)
+  records::Summary s;
+  s.set_converged(true);
+  s.set_end_reason("converged");
+  std::ofstream(root_ / "summary.json") << to_json(s);
+  ASSERT_TRUE(amend_summary(root_, {"agent 3 killed by signal Aborted at teardown"}));
+  std::ifstream in(root_ / "summary.json");
+  std::stringstream text;
+  text << in.rdbuf();
+  records::Summary back;
+  ASSERT_TRUE(google::protobuf::util::JsonStringToMessage(text.str(), &back).ok());
+  EXPECT_FALSE(back.converged());
+  EXPECT_EQ(back.end_reason(), "converged; agent 3 killed by signal Aborted at teardown");
 }
 
 }  // namespace
