@@ -11,34 +11,39 @@ FaultyBus::~FaultyBus() { inner_.set_listener(nullptr); }
 
 void FaultyBus::set_time(double t) {
   std::vector<StateMessage> released;
-  Listener listener;
   {
     std::lock_guard<std::mutex> lock(mu_);
     t_s_ = t;
-    release_due_locked(listener_ ? &released : nullptr);
-    listener = listener_;
+    release_due_locked(has_listener_ ? &released : nullptr);  // nothing to collect without one
   }
-  for (const StateMessage& m : released) listener(m);
+  notify(released);
 }
 
 void FaultyBus::set_listener(Listener listener) {
-  std::lock_guard<std::mutex> lock(mu_);
+  std::lock_guard<std::mutex> lock(listener_mu_);
+  has_listener_ = static_cast<bool>(listener);
   listener_ = std::move(listener);
+}
+
+void FaultyBus::notify(const std::vector<StateMessage>& released) {
+  if (released.empty()) return;
+  // Held while the listener runs, so that set_listener keeps NeighborBus's promise.
+  std::lock_guard<std::mutex> lock(listener_mu_);
+  if (listener_)
+    for (const StateMessage& m : released) listener_(m);
 }
 
 void FaultyBus::deliver(const StateMessage& m) {
   std::vector<StateMessage> released;
-  Listener listener;
   {
     std::lock_guard<std::mutex> lock(mu_);
     if (m.view.id == self_) return;
     const LinkFaults::Verdict v = faults_.on_receive(m.view.id, t_s_);
     if (v.drop) return;
     held_.emplace(t_s_ + v.delay_s, m);
-    release_due_locked(listener_ ? &released : nullptr);
-    listener = listener_;
+    release_due_locked(has_listener_ ? &released : nullptr);  // nothing to collect without one
   }
-  for (const StateMessage& r : released) listener(r);
+  notify(released);
 }
 
 void FaultyBus::release_due_locked(std::vector<StateMessage>* released) {

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <atomic>
 #include <map>
 #include <mutex>
 
@@ -31,6 +32,7 @@ class FaultyBus final : public NeighborBus {
  private:
   void deliver(const StateMessage& m);
   void release_due_locked(std::vector<StateMessage>* released);
+  void notify(const std::vector<StateMessage>& released);
   NeighborBus& inner_;
   LinkFaults faults_;
   AgentId self_;
@@ -38,6 +40,8 @@ class FaultyBus final : public NeighborBus {
   double t_s_ = 0.0;
   std::multimap<double, StateMessage> held_;  // release time -> message
   std::map<AgentId, StateMessage> latest_;
+  std::mutex listener_mu_;  // held while listener_ runs or is replaced
+  std::atomic<bool> has_listener_{false};
   Listener listener_;
 };
 

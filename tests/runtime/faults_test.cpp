@@ -91,6 +91,30 @@ TEST(FaultyBus, DelayHoldsMessagesAndKeepsTheNewest) {
   EXPECT_EQ(bus.fault_counters().delayed, 2u);
 }
 
+TEST(FaultyBus, ItsListenerHearsWhatSurvivesAndNothingOnceUnregistered) {
+  InMemoryNetwork net;
+  InMemoryBus inner(net), sender(net);
+  FaultPlan plan;
+  plan.cut.push_back({1, 2, 1.0, 2.0, false});
+  FaultyBus bus(inner, LinkFaults(plan, 1, 5), 1);
+  int heard = 0;
+  bus.set_listener([&](const StateMessage&) { ++heard; });
+  StateMessage m;
+  m.view.id = 2;
+  for (std::uint64_t k = 1; k <= 4; ++k) {
+    bus.set_time(0.5 * static_cast<double>(k));  // 0.5, 1.0, 1.5, 2.0: the cut drops 1.0 and 1.5
+    m.seq = k;
+    sender.publish(m);
+    net.deliver();
+  }
+  EXPECT_EQ(heard, 2);
+  bus.set_listener(nullptr);
+  m.seq = 9;
+  sender.publish(m);
+  net.deliver();
+  EXPECT_EQ(heard, 2);
+}
+
 TEST(FaultPlan, TimelineAndLastFaultEnd) {
   FaultPlan plan;
   plan.cut.push_back({1, 2, 5.0, 15.0, false});
