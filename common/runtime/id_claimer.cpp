@@ -1,0 +1,149 @@
+#include "common/runtime/id_claimer.hpp"
+
+#include <algorithm>
+#include <cstdio>
+#include <set>
+
+namespace qswarm {
+
+namespace {
+std::string hex(std::uint64_t v) {
+  char buf[24];
+  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(v));
+  return buf;
+}
+}  // namespace
+
+IdClaimer::IdClaimer(std::vector<AgentId> roster, std::uint64_t nonce, std::uint64_t run_id,
+                     AgentId fixed, Config cfg, double now_s)
+    : roster_(std::move(roster)), cfg_(cfg), start_s_(now_s), view_since_s_(now_s) {
+  std::sort(roster_.begin(), roster_.end());
+  mine_.nonce = nonce;
+  mine_.run_id = run_id;
+  mine_.expected = static_cast<std::uint32_t>(roster_.size());
+  fixed_ = fixed;
+  view_ = {nonce};
+}
+
+IdClaimer::Step IdClaimer::step(double now_s, const std::vector<IdClaim>& heard,
+                                int matched_writers) {
+  for (const IdClaim& c : heard) {
+    if (c.nonce == mine_.nonce) continue;
+    auto [it, fresh] = seen_.try_emplace(c.nonce);
+    if (fresh || it->second.seq != c.seq) it->second.heard_s = now_s;
+    it->second.seq = c.seq;
+    it->second.claim = c;
+  }
+  live_.clear();
+  std::vector<std::uint64_t> view{mine_.nonce};
+  for (const auto& [nonce, s] : seen_) {
+    if (now_s - s.heard_s > cfg_.expire_s) continue;
+    live_[nonce] = s.claim;
+    view.push_back(nonce);
+  }
+  std::sort(view.begin(), view.end());
+  if (view != view_) {
+    view_ = view;
+    view_since_s_ = now_s;
+  }
+  // Ready to decide: the view held still, this replica listened long enough, and every claim
+  // writer DDS matched has been heard.
+  const bool ready = now_s - view_since_s_ >= cfg_.settle_s && now_s - start_s_ >= cfg_.settle_s &&
+                     (matched_writers < 0 || live() >= static_cast<std::size_t>(matched_writers));
+
+  Step s;
+  if (now_s >= next_announce_s_) {
+    s.announce = true;
+    ++mine_.seq;
+    next_announce_s_ = now_s + cfg_.period_s;
+  }
+  const auto refuse = [&s](std::string why) {
+    s.refuse = true;
+    s.message = std::move(why);
+    return s;
+  };
+  for (const auto& [nonce, c] : live_) {
+    if (c.expected != mine_.expected)
+      return refuse("replica " + hex(nonce) + " was told the swarm has " +
+                    std::to_string(c.expected) + " agents and this one " +
+                    std::to_string(mine_.expected) +
+                    ": every replica needs the same swarm size (QSWARM_AGENTS)");
+  }
+  const auto held_by_other = [&](AgentId id) -> std::uint64_t {
+    for (const auto& [nonce, c] : live_) {
+      if (c.id != id || c.stage == kRanking) continue;
+      if (c.stage == kFlying && mine_.stage != kFlying) return nonce;
+      if (c.stage == mine_.stage && nonce < mine_.nonce) return nonce;
+      if (mine_.stage == kRanking) return nonce;
+    }
+    return 0;
+  };
+  const auto already_held = [&](std::uint64_t holder) {
+    return refuse("agent id " + std::to_string(mine_.id != 0 ? mine_.id : fixed_) +
+                  " is already held by another replica (" + hex(holder) +
+                  "): this one refuses to fly it twice");
+  };
+
+  if (mine_.stage == kFlying) {
+    if (const std::uint64_t other = held_by_other(mine_.id))
+      return refuse("agent id " + std::to_string(mine_.id) + " is also flown by replica " +
+                    hex(other) + ", which keeps it: this replica (" + hex(mine_.nonce) +
+                    ") yields and stops");
+    return s;
+  }
+  if (mine_.stage == kConfirming) {
+    if (const std::uint64_t other = held_by_other(mine_.id)) {
+      if (fixed_ != 0) return already_held(other);
+      mine_.id = 0;  // auto: rank again among the ids still free
+      mine_.stage = kRanking;
+      s.announce = true;
+      return s;
+    }
+    if (now_s - confirm_since_s_ >= cfg_.confirm_s) {
+      mine_.stage = kFlying;
+      s.taken = mine_.id;
+      s.announce = true;
+    }
+    return s;
+  }
+
+  const auto confirm = [&](AgentId id) {
+    mine_.id = id;
+    mine_.stage = kConfirming;
+    confirm_since_s_ = now_s;
+    s.announce = true;
+    return s;
+  };
+  if (fixed_ != 0) {
+    if (const std::uint64_t other = held_by_other(fixed_)) return already_held(other);
+    if (ready) return confirm(fixed_);
+  } else {
+    std::set<AgentId> held;
+    std::vector<std::uint64_t> unranked{mine_.nonce};
+    for (const auto& [nonce, c] : live_) {
+      if (c.stage != kRanking)
+        held.insert(c.id);
+      else
+        unranked.push_back(nonce);
+    }
+    std::sort(unranked.begin(), unranked.end());
+    std::vector<AgentId> free;
+    for (AgentId id : roster_)
+      if (!held.count(id)) free.push_back(id);
+    const auto rank = static_cast<std::size_t>(
+        std::find(unranked.begin(), unranked.end(), mine_.nonce) - unranked.begin());
+    if (ready && rank >= free.size())
+      return refuse("more replicas than the swarm's " + std::to_string(mine_.expected) +
+                    " agents (heard " + std::to_string(live()) +
+                    "): this one is left without an id and stops; set QSWARM_AGENTS to the "
+                    "number of agent replicas");
+    if (ready && live() == roster_.size()) return confirm(free[rank]);
+  }
+  if (now_s - start_s_ > cfg_.timeout_s)
+    return refuse("heard " + std::to_string(live()) + " of " + std::to_string(mine_.expected) +
+                  " replicas after " + std::to_string(static_cast<int>(cfg_.timeout_s)) +
+                  " s: is QSWARM_AGENTS the number of agent replicas?");
+  return s;
+}
+
+}  // namespace qswarm

@@ -1,0 +1,196 @@
+// The id claim (swarm-agent --id auto): replicas started alike end up flying distinct ids, and no
+// id is ever held by two live replicas for longer than one exchange.
+#include <gtest/gtest.h>
+
+#include <map>
+#include <numeric>
+#include <optional>
+#include <random>
+#include <set>
+
+#include "common/runtime/id_claimer.hpp"
+
+namespace qswarm {
+namespace {
+
+std::vector<AgentId> roster(int n) {
+  std::vector<AgentId> r(static_cast<std::size_t>(n));
+  std::iota(r.begin(), r.end(), AgentId{1});
+  return r;
+}
+
+// Replicas exchanging claims every 20 ms of simulated wall time; each hears every other's latest
+// claim (a replica joins the exchange at its start time).
+struct Replicas {
+  struct R {
+    IdClaimer claimer;
+    double start_s;
+    bool started = false;
+    bool refused = false;
+    std::string why;
+    AgentId taken = 0;
+    double deaf_until_s = 0.0;  // hears nothing before this (slow discovery)
+  };
+  std::vector<R> rs;
+  std::map<std::uint64_t, IdClaim> wire;
+  double now = 0.0;
+
+  void add(std::uint64_t nonce, int n, AgentId fixed = 0, double start_s = 0.0,
+           double timeout_s = 120.0) {
+    IdClaimer::Config c;
+    c.timeout_s = timeout_s;
+    rs.push_back(
+        {IdClaimer(roster(n), nonce, 7, fixed, c, start_s), start_s, false, false, {}, 0, 0.0});
+  }
+  void run_until(double t_end) {
+    for (; now <= t_end; now += 0.02) {
+      std::vector<IdClaim> heard;
+      for (const auto& [nonce, c] : wire) heard.push_back(c);
+      for (R& r : rs) {
+        if (now < r.start_s || r.refused) continue;
+        const IdClaimer::Step s =
+            r.claimer.step(now, now < r.deaf_until_s ? std::vector<IdClaim>{} : heard);
+        if (s.announce) wire[r.claimer.claim().nonce] = r.claimer.claim();
+        if (s.taken) r.taken = s.taken;
+        if (s.refuse) {
+          r.refused = true;
+          r.why = s.message;
+          wire.erase(r.claimer.claim().nonce);  // the process exits: it falls silent
+        }
+      }
+    }
+  }
+  std::vector<AgentId> flying() const {
+    std::vector<AgentId> ids;
+    for (const R& r : rs)
+      if (!r.refused && r.taken) ids.push_back(r.taken);
+    std::sort(ids.begin(), ids.end());
+    return ids;
+  }
+};
+
+TEST(IdClaimer, ReplicasStartedAlikeTakeEveryIdOnce) {
+  std::mt19937_64 rng(42);
+  for (int n : {1, 2, 8, 32}) {
+    Replicas net;
+    for (int k = 0; k < n; ++k) net.add(rng() | 1, n, 0, 0.05 * k);  // staggered starts
+    net.run_until(10.0);
+    EXPECT_EQ(net.flying(), roster(n)) << "n=" << n;
+  }
+}
+
+TEST(IdClaimer, OneReplicaTooManyIsLeftWithoutAnIdAndTheRestFly) {
+  Replicas net;
+  for (std::uint64_t k = 1; k <= 9; ++k) net.add(k * 1000, 8);
+  net.run_until(10.0);
+  EXPECT_EQ(net.flying(), roster(8));
+  int refused = 0;
+  for (const auto& r : net.rs) {
+    if (!r.refused) continue;
+    ++refused;
+    EXPECT_EQ(r.claimer.claim().nonce, 9000u);  // the largest nonce is ranked past the ids
+    EXPECT_NE(r.why.find("more replicas than the swarm's 8 agents"), std::string::npos) << r.why;
+  }
+  EXPECT_EQ(refused, 1);
+}
+
+TEST(IdClaimer, ALateReplicaTakesTheIdNobodyHolds) {
+  Replicas net;
+  for (std::uint64_t k = 1; k <= 4; ++k) net.add(k, 5);
+  net.run_until(3.0);
+  EXPECT_TRUE(net.flying().empty());  // 4 of 5: nobody takes an id yet
+  net.add(999, 5, 0, 3.0);
+  net.run_until(8.0);
+  EXPECT_EQ(net.flying(), roster(5));
+}
+
+TEST(IdClaimer, ReplicasToldDifferentSizesRefuse) {
+  Replicas net;
+  net.add(1, 3);
+  net.add(2, 3);
+  net.add(3, 4);
+  net.run_until(3.0);
+  EXPECT_TRUE(net.flying().empty());
+  for (const auto& r : net.rs) {
+    EXPECT_TRUE(r.refused);
+    EXPECT_NE(r.why.find("same swarm size"), std::string::npos) << r.why;
+  }
+}
+
+TEST(IdClaimer, AnIdGivenTwiceIsFlownOnce) {
+  // Both replicas given --id 2 at the same moment: both confirm it, the larger nonce refuses
+  // before either flies.
+  Replicas net;
+  net.add(50, 3, 2);
+  net.add(60, 3, 2);
+  net.run_until(4.0);
+  EXPECT_EQ(net.flying(), (std::vector<AgentId>{2}));
+  EXPECT_FALSE(net.rs[0].refused);
+  EXPECT_TRUE(net.rs[1].refused);
+  EXPECT_EQ(net.rs[1].taken, 0u);
+  EXPECT_NE(net.rs[1].why.find("agent id 2 is already held by another replica"), std::string::npos)
+      << net.rs[1].why;
+  // A third replica given --id 2 later finds it held and refuses before taking it.
+  net.add(10, 3, 2, 4.0);
+  net.run_until(8.0);
+  EXPECT_TRUE(net.rs[2].refused);
+  EXPECT_EQ(net.rs[2].taken, 0u);
+  EXPECT_NE(net.rs[2].why.find("already held"), std::string::npos) << net.rs[2].why;
+  EXPECT_EQ(net.flying(), (std::vector<AgentId>{2}));
+}
+
+TEST(IdClaimer, AFlyingReplicaNeverYieldsToANewcomerThatHeardItLate) {
+  Replicas net;
+  net.add(100, 3, 2);
+  net.run_until(3.0);
+  ASSERT_EQ(net.flying(), (std::vector<AgentId>{2}));
+  // A newcomer given the same id, with a smaller nonce, whose discovery is slow: it starts
+  // confirming before it hears the flyer, then backs off before flying.
+  net.add(1, 3, 2, 3.0);
+  net.rs[1].deaf_until_s = 4.5;
+  net.run_until(8.0);
+  EXPECT_FALSE(net.rs[0].refused);
+  EXPECT_TRUE(net.rs[1].refused);
+  EXPECT_EQ(net.rs[1].taken, 0u);
+  EXPECT_EQ(net.flying(), (std::vector<AgentId>{2}));
+}
+
+TEST(IdClaimer, NothingIsDecidedBeforeEveryMatchedWriterIsHeard) {
+  // DDS matched a second claim writer whose claims have not arrived: the replica waits.
+  IdClaimer c(roster(1), 5, 7, 0, IdClaimer::Config{}, 0.0);
+  for (double t = 0.0; t < 10.0; t += 0.02) EXPECT_EQ(c.step(t, {}, 2).taken, 0u);
+  AgentId taken = 0;
+  for (double t = 10.0; t < 15.0 && !taken; t += 0.02) taken = c.step(t, {}, 1).taken;
+  EXPECT_EQ(taken, 1u);
+}
+
+TEST(IdClaimer, TooFewReplicasTimeOutWithAMessage) {
+  Replicas net;
+  for (std::uint64_t k = 1; k <= 5; ++k) net.add(k, 8, 0, 0.0, 5.0);
+  net.run_until(6.0);
+  EXPECT_TRUE(net.flying().empty());
+  for (const auto& r : net.rs) {
+    EXPECT_TRUE(r.refused);
+    EXPECT_NE(r.why.find("heard 5 of 8 replicas"), std::string::npos) << r.why;
+  }
+}
+
+TEST(IdClaimer, AReplacementTakesTheIdOfAReplicaThatDiedBeforeTakingIt) {
+  // Three of three rank; one dies before taking its id: the other two take theirs (it was still
+  // live when the view settled), its id stays free, and a replacement replica takes it.
+  Replicas net;
+  net.add(1, 3);
+  net.add(2, 3);
+  net.add(3, 3);
+  net.run_until(0.5);
+  net.rs[2].refused = true;  // killed
+  net.wire.erase(3);
+  net.run_until(4.0);
+  EXPECT_EQ(net.flying(), (std::vector<AgentId>{1, 2}));
+  net.add(4, 3, 0, 4.0);
+  net.run_until(8.0);
+  EXPECT_EQ(net.flying(), roster(3));
+}
+
+}  // namespace
+}  // namespace qswarm
