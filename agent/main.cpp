@@ -7,6 +7,7 @@
 #include <atomic>
 #include <csignal>
 
+#include "agent/claim.hpp"
 #include "agent/options.hpp"
 #include "agent/stats.hpp"
 
@@ -29,24 +30,42 @@ int main(int argc, char** argv) {
   }
   const std::optional<RunConfig> rc = load_for_process("swarm-agent", f.process);
   if (!rc) return 2;
-  if (!rc->agent(f.id)) {
-    std::fprintf(stderr, "swarm-agent: --id %u: expected the id of an agent listed in %s\n", f.id,
+  const bool claiming = f.claim || f.id == "auto";
+  AgentId id = f.id == "auto" ? 0 : static_cast<AgentId>(std::stoul(f.id));
+  if (id != 0 && !rc->agent(id)) {
+    std::fprintf(stderr, "swarm-agent: --id %u: expected the id of an agent listed in %s\n", id,
                  f.process.scenario.c_str());
     return 2;
   }
-  const std::string name = "agent-" + std::to_string(f.id);
-  auto log = make_process_logger(name, f.run_dir.empty() ? "" : f.run_dir + "/" + name + ".log");
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, f.ignore_sigterm ? SIG_IGN : on_signal);
+  auto log = make_process_logger("agent", "");
   try {
     SteadyClock clock;
-    DdsBus bus(dds_options(*rc, "swarm-" + name, f.process.interface));
+    DdsOptions dopt = dds_options(*rc, "swarm-agent", f.process);
+    dopt.id_claims = claiming;
+    DdsBus bus(dopt);
+    std::optional<IdClaimRunner> claim;
+    if (claiming) {
+      claim.emplace(bus, *rc, id, f.claim_timeout_s, clock);
+      std::string why;
+      const std::optional<AgentId> taken = claim->acquire(g_stop, why);
+      if (!taken) {
+        log->error("replica {:016x}: no agent id: {}", claim->nonce(), why);
+        return g_stop ? 1 : 2;
+      }
+      id = *taken;
+    }
+    const std::string name = "agent-" + std::to_string(id);
+    log = make_process_logger(name, f.run_dir.empty() ? "" : f.run_dir + "/" + name + ".log");
+    if (claim) log->warn("replica {:016x} flies as agent {}", claim->nonce(), id);
     f.loop.time_scale = f.process.time_scale;
     f.loop.incarnation = wall_now_ns();
     f.loop.wall_clock_ns = wall_now_ns;
-    AgentLoop loop(*rc, f.id, f.loop, bus, clock);
-    log->info("agent {} up: domain {}, {} law, time scale {}", f.id, rc->domain_id,
+    AgentLoop loop(*rc, id, f.loop, bus, clock);
+    log->info("agent {} up: domain {}, {} law, time scale {}", id, rc->domain_id,
               to_string(rc->law.kind), f.process.time_scale);
+    int exit_code = 0;
     while (!g_stop) {
       const AgentLoop::Poll p = loop.poll();
       for (const auto& n : p.notes)
@@ -57,15 +76,22 @@ int main(int argc, char** argv) {
         std::raise(SIGKILL);
       }
       if (p.done) break;
+      if (claim) {
+        if (const std::optional<std::string> why = claim->keep()) {
+          log->error("replica {:016x} stops flying agent {}: {}", claim->nonce(), id, *why);
+          exit_code = 2;
+          break;
+        }
+      }
       clock.sleep_until(std::min(p.wake_at_s, clock.now_s() + kMaxSleepS));
     }
     loop.stop();
     log->info(final_report(loop, bus.counters()));
     if (!f.run_dir.empty())
       write_stats(f.run_dir + "/" + name + ".stats", loop, bus.counters(), clock.now_s());
+    return exit_code;
   } catch (const std::exception& e) {
     log->error("fatal: {}", e.what());
     return 1;
   }
-  return 0;
 }

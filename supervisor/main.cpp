@@ -17,6 +17,7 @@
 #include "common/app/cli_checks.hpp"
 #include "common/app/process_setup.hpp"
 #include "common/record/recorder.hpp"
+#include "common/record/run_dir.hpp"
 
 namespace {
 std::atomic<bool> g_stop{false};
@@ -31,7 +32,11 @@ int main(int argc, char** argv) {
   bool progress = false;
   double start_timeout_s = 30.0;
   add_process_options(app, opts);
-  app.add_option("--run-dir", run_dir, "run directory to write")->required();
+  std::string new_run_in;
+  auto* rd = app.add_option("--run-dir", run_dir, "run directory to write");
+  app.add_option("--new-run-in", new_run_in,
+                 "create a fresh run directory ROOT/TIMESTAMP-NAME and record there (compose)")
+      ->excludes(rd);
   app.add_option("--start-timeout", start_timeout_s, "wall seconds to wait for the first agent")
       ->check(finite_range(0.0, 3600.0));
   app.add_flag("--progress", progress, "print a live progress line");
@@ -43,6 +48,24 @@ int main(int argc, char** argv) {
   const std::optional<RunConfig> loaded = load_for_process("swarm-supervisor", opts);
   if (!loaded) return 2;
   const RunConfig& rc = *loaded;
+  if (run_dir.empty() == new_run_in.empty()) {
+    std::fprintf(stderr, "swarm-supervisor: give --run-dir DIR or --new-run-in ROOT\n");
+    return 2;
+  }
+  if (!new_run_in.empty()) {
+    try {
+      run_dir = claim_run_dir("", rc.name, run_timestamp(), new_run_in).string();
+      std::ofstream scen(run_dir + "/scenario.txtpb");
+      scen << "# The scenario as run (defaults filled in, agents listed).\n"
+           << to_text(rc.resolved);
+      if (!scen.flush()) throw RunDirError(run_dir + "/scenario.txtpb: cannot write");
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "swarm-supervisor: --new-run-in %s: %s\n", new_run_in.c_str(), e.what());
+      return 3;
+    }
+    std::printf("swarm-supervisor: recording into %s\n", run_dir.c_str());
+    std::fflush(stdout);
+  }
   auto logger = spdlog::basic_logger_mt("supervisor", run_dir + "/supervisor.log", true);
   logger->flush_on(spdlog::level::info);
   spdlog::set_default_logger(logger);
@@ -56,7 +79,7 @@ int main(int argc, char** argv) {
   try {
     Recorder rec(rc, run_dir, opts.time_scale);
     std::mutex mu;
-    DdsOptions dopt = dds_options(rc, "swarm-supervisor", opts.interface);
+    DdsOptions dopt = dds_options(rc, "swarm-supervisor", opts);
     dopt.publish = false;  // a read-only participant: it publishes nothing an agent acts on
     dopt.test_drop_data_percent = 0;
     dopt.hear_all_runs = true;  // so that another run on this domain is seen, and said

@@ -16,12 +16,12 @@
 #include <random>
 
 #include "common/app/cli_checks.hpp"
+#include "common/record/run_dir.hpp"
 #include "common/runtime/fault_flags.hpp"
 #include "common/runtime/scenario.hpp"
 #include "tools/inspect.hpp"
 #include "tools/launcher.hpp"
 #include "tools/process_group.hpp"
-#include "tools/run_dir.hpp"
 
 namespace fs = std::filesystem;
 using namespace qswarm;
@@ -43,13 +43,6 @@ scenario::Scenario random_scenario() {
   s.mutable_weight()->set_policy(scenario::DISTANCE);
   s.mutable_random_agents()->set_box_m(30.0);
   return s;
-}
-
-std::string timestamp() {
-  const std::time_t t = std::time(nullptr);
-  char buf[32];
-  std::strftime(buf, sizeof buf, "%Y%m%d-%H%M%S", std::localtime(&t));
-  return buf;
 }
 
 struct RunOptions {
@@ -123,7 +116,7 @@ int run(const RunOptions& opt) {
   }
   fs::path dir;
   try {
-    dir = claim_run_dir(opt.out, rc.name, timestamp());
+    dir = claim_run_dir(opt.out, rc.name, run_timestamp());
   } catch (const RunDirError& e) {
     std::cerr << "swarm run: " << e.what() << "\n";
     return 2;

@@ -7,7 +7,9 @@
 # With arguments, only step 1's build, then ctest with those arguments (e.g. tools/test.sh -L core).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-export QSWARM_EXTRA_PACKAGES="clang-format clang-tidy clang-tools"
+# Linters, and the container tools the compose test (label compose) runs the swarm with.
+export QSWARM_EXTRA_PACKAGES="clang-format clang-tidy clang-tools
+  podman podman-compose runc netavark aardvark-dns debootstrap"
 QSWARM_WERROR=ON tools/setup.sh build
 ctest_args=(--output-on-failure --parallel "$(nproc)" --timeout 600)
 if (($#)); then

@@ -19,7 +19,16 @@ void add_process_options(CLI::App& app, ProcessOptions& o) {
   app.add_option("--domain", o.domain, "DDS domain id (overrides the scenario)")
       ->check(CLI::Range(0, 232));
   app.add_option("--interface", o.interface,
-                 "IPv4 address DDS binds to (overrides the scenario; e.g. a test host's address)");
+                 "IPv4 address DDS binds to (overrides the scenario; \"any\": every interface, "
+                 "as inside a container)");
+  app.add_option("--agents", o.agents,
+                 "fly N seeded random agents instead of the scenario's list (compose: the swarm's "
+                 "size)")
+      ->envname("QSWARM_AGENTS")
+      ->check(CLI::Range(1, static_cast<int>(kMaxSwarmAgents)));
+  app.add_option("--discovery-server", o.discovery_server,
+                 "discover through the Fast DDS Discovery Server at HOST:PORT (containers)")
+      ->envname("QSWARM_DISCOVERY_SERVER");
   app.add_option("--seed", o.seed, "run seed (overrides the scenario)")
       ->check(CLI::Range(std::int64_t{0}, std::int64_t{4294967295}));
 }
@@ -29,6 +38,7 @@ std::optional<RunConfig> load_for_process(const char* prog, const ProcessOptions
     ScenarioOverrides o;
     o.domain_id = opts.domain;
     o.seed = opts.seed;
+    o.agents = opts.agents;
     return load_scenario(opts.scenario, o);
   } catch (const ScenarioError& e) {
     std::fprintf(stderr, "%s: %s\n", prog, e.what());
@@ -37,11 +47,13 @@ std::optional<RunConfig> load_for_process(const char* prog, const ProcessOptions
 }
 
 DdsOptions dds_options(const RunConfig& rc, const std::string& participant_name,
-                       const std::string& interface_override) {
+                       const ProcessOptions& o) {
   DdsOptions d;
   d.domain_id = rc.domain_id;
   d.participant_name = participant_name;
-  d.interface = interface_override.empty() ? rc.interface : interface_override;
+  d.interface = o.interface.empty() ? rc.interface : o.interface;
+  if (d.interface == "any") d.interface.clear();
+  d.discovery_server = o.discovery_server;
   d.shared_memory = rc.shared_memory;
   d.max_agents = static_cast<int>(std::max<std::size_t>(rc.agents.size(), 16));
   d.test_drop_data_percent = static_cast<std::uint8_t>(rc.faults.transport_drop_percent);

@@ -19,11 +19,13 @@ namespace qswarm {
 
 // The flags `swarm run` passes to both processes, declared once so that they mean the same.
 struct ProcessOptions {
-  std::string scenario;     // --scenario (required)
-  double time_scale = 1.0;  // --time-scale
-  int domain = -1;          // --domain (overrides the scenario)
-  std::int64_t seed = -1;   // --seed (overrides the scenario)
-  std::string interface;    // --interface (overrides the scenario)
+  std::string scenario;          // --scenario (required)
+  double time_scale = 1.0;       // --time-scale
+  int domain = -1;               // --domain (overrides the scenario)
+  std::int64_t seed = -1;        // --seed (overrides the scenario)
+  std::string interface;         // --interface (overrides the scenario; "any": every interface)
+  int agents = -1;               // --agents / QSWARM_AGENTS: N seeded random agents (compose)
+  std::string discovery_server;  // --discovery-server / QSWARM_DISCOVERY_SERVER: HOST:PORT
 };
 void add_process_options(CLI::App& app, ProcessOptions& o);
 
@@ -32,9 +34,9 @@ void add_process_options(CLI::App& app, ProcessOptions& o);
 std::optional<RunConfig> load_for_process(const char* prog, const ProcessOptions& o);
 
 // The participant settings a run implies (domain, interface unless overridden, shared memory,
-// reader sizing for the swarm, the test transport's drop rate).
+// reader sizing for the swarm, the test transport's drop rate, the discovery server).
 DdsOptions dds_options(const RunConfig& rc, const std::string& participant_name,
-                       const std::string& interface_override);
+                       const ProcessOptions& o);
 
 // The process's default logger: warnings and worse to stderr, everything from info up to
 // `log_path` (appended: a restarted agent adds to its log) unless it is empty.

@@ -1,9 +1,14 @@
 #include "common/dds/dds_bus.hpp"
 
+#include <arpa/inet.h>
+#include <fastdds/rtps/attributes/ServerAttributes.h>
 #include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
 #include <fastdds/rtps/transport/shared_mem/SharedMemTransportDescriptor.h>
 #include <fastdds/rtps/transport/test_UDPv4TransportDescriptor.h>
+#include <fastrtps/utils/IPLocator.h>
+#include <netdb.h>
 #include <spdlog/spdlog.h>
+#include <sys/socket.h>
 #include <fastdds/dds/domain/DomainParticipant.hpp>
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
 #include <fastdds/dds/publisher/DataWriter.hpp>
@@ -18,8 +23,10 @@
 #include <atomic>
 #include <chrono>
 #include <cstdio>
+#include <map>
 #include <mutex>
 #include <stdexcept>
+#include <thread>
 
 #include "common/dds/idl_convert.hpp"
 #include "common/transport/sample_gate.hpp"
@@ -62,6 +69,34 @@ struct DdsBus::Impl : public dds::DataReaderListener {
     }
   } writer_listener;
   qswarm_msgs::AgentState out_sample;  // reused: publishing allocates nothing in steady state
+
+  // The id-claim topic (DdsOptions::id_claims), with its own listener.
+  dds::TypeSupport claim_type{new qswarm_msgs::IdClaimPubSubType()};
+  dds::Topic* claim_topic = nullptr;
+  dds::DataWriter* claim_writer = nullptr;
+  dds::DataReader* claim_reader = nullptr;
+  mutable std::mutex claims_mu;
+  std::map<std::uint64_t, IdClaim> claims;
+  std::size_t max_claims = 0;
+  struct ClaimListener : public dds::DataReaderListener {
+    Impl* d = nullptr;
+    void on_data_available(dds::DataReader* r) override {
+      qswarm_msgs::IdClaim s;
+      dds::SampleInfo info;
+      while (r->take_next_sample(&s, &info) == ReturnCode_t::RETCODE_OK) {
+        if (!info.valid_data || s.run_id() != d->opts.run_id) continue;
+        std::lock_guard<std::mutex> lock(d->claims_mu);
+        if (d->claims.size() >= d->max_claims && !d->claims.count(s.nonce())) continue;
+        IdClaim& c = d->claims[s.nonce()];
+        c.nonce = s.nonce();
+        c.seq = s.seq();
+        c.run_id = s.run_id();
+        c.expected = s.expected();
+        c.id = s.id();
+        c.stage = s.stage();
+      }
+    }
+  } claim_listener;
 
   void on_data_available(dds::DataReader* r) override {
     try {
@@ -109,12 +144,12 @@ DdsBus::DdsBus(const DdsOptions& opts) : impl_(std::make_unique<Impl>()) {
   pqos.transport().use_builtin_transports = false;
   if (opts.test_drop_data_percent > 0) {
     auto t = std::make_shared<rtps::test_UDPv4TransportDescriptor>();
-    t->interfaceWhiteList.push_back(opts.interface);
+    if (!opts.interface.empty()) t->interfaceWhiteList.push_back(opts.interface);
     t->dropDataMessagesPercentage = opts.test_drop_data_percent;
     pqos.transport().user_transports.push_back(t);
   } else {
     auto udp = std::make_shared<rtps::UDPv4TransportDescriptor>();
-    udp->interfaceWhiteList.push_back(opts.interface);
+    if (!opts.interface.empty()) udp->interfaceWhiteList.push_back(opts.interface);
     pqos.transport().user_transports.push_back(udp);
   }
   if (opts.shared_memory) {
@@ -123,6 +158,18 @@ DdsBus::DdsBus(const DdsOptions& opts) : impl_(std::make_unique<Impl>()) {
   }
   // Many participants on one host: allow more port retries than the default 100.
   pqos.wire_protocol().builtin.mutation_tries = 400;
+  if (!opts.discovery_server.empty()) {
+    const auto [ip, port] = resolve_discovery_server(opts.discovery_server);
+    auto& disc = pqos.wire_protocol().builtin.discovery_config;
+    disc.discoveryProtocol = eprosima::fastrtps::rtps::DiscoveryProtocol_t::CLIENT;
+    rtps::RemoteServerAttributes server;
+    rtps::get_server_client_default_guidPrefix(0, server.guidPrefix);
+    eprosima::fastrtps::rtps::Locator_t loc;
+    eprosima::fastrtps::rtps::IPLocator::setIPv4(loc, ip);
+    loc.port = port;
+    server.metatrafficUnicastLocatorList.push_back(loc);
+    disc.m_DiscoveryServers.push_back(server);
+  }
   d.participant =
       dds::DomainParticipantFactory::get_instance()->create_participant(opts.domain_id, pqos);
   if (!d.participant)
@@ -167,12 +214,70 @@ DdsBus::DdsBus(const DdsOptions& opts) : impl_(std::make_unique<Impl>()) {
       eprosima::fastrtps::rtps::PREALLOCATED_WITH_REALLOC_MEMORY_MODE;
   d.reader = d.subscriber->create_datareader(d.topic, rq, &d);
   if (!d.reader) throw std::runtime_error("dds: cannot create the state reader");
+
+  if (opts.id_claims) {
+    if (!d.publisher) throw std::runtime_error("dds: id claims need a publishing participant");
+    d.claim_type.register_type(d.participant);
+    d.claim_topic = d.participant->create_topic("qswarm/id_claim", d.claim_type.get_type_name(),
+                                                dds::TOPIC_QOS_DEFAULT);
+    if (!d.claim_topic) throw std::runtime_error("dds: cannot create the id-claim topic");
+    dds::DataWriterQos cw = dds::DATAWRITER_QOS_DEFAULT;
+    cw.reliability().kind = dds::BEST_EFFORT_RELIABILITY_QOS;  // claims repeat a few times a second
+    cw.durability().kind = dds::VOLATILE_DURABILITY_QOS;
+    cw.history().depth = 1;
+    cw.data_sharing().off();
+    d.claim_writer = d.publisher->create_datawriter(d.claim_topic, cw);
+    dds::DataReaderQos cr = dds::DATAREADER_QOS_DEFAULT;
+    cr.reliability().kind = dds::BEST_EFFORT_RELIABILITY_QOS;
+    cr.durability().kind = dds::VOLATILE_DURABILITY_QOS;
+    cr.history().depth = 1;
+    cr.data_sharing().off();
+    d.max_claims = 2 * static_cast<std::size_t>(opts.max_agents) + 16;
+    cr.resource_limits().max_instances = static_cast<std::int32_t>(d.max_claims);
+    cr.resource_limits().max_samples_per_instance = 1;
+    cr.resource_limits().max_samples = static_cast<std::int32_t>(d.max_claims);
+    d.claim_listener.d = &d;
+    d.claim_reader = d.subscriber->create_datareader(d.claim_topic, cr, &d.claim_listener);
+    if (!d.claim_writer || !d.claim_reader)
+      throw std::runtime_error("dds: cannot create the id-claim endpoints");
+  }
+}
+
+std::pair<std::string, std::uint16_t> resolve_discovery_server(const std::string& host_port) {
+  const auto colon = host_port.rfind(':');
+  if (colon == std::string::npos || colon == 0 || colon + 1 == host_port.size())
+    throw std::invalid_argument("discovery server \"" + host_port + "\": expected HOST:PORT");
+  const std::string host = host_port.substr(0, colon);
+  const std::string port_text = host_port.substr(colon + 1);
+  char* end = nullptr;
+  const long port = std::strtol(port_text.c_str(), &end, 10);
+  if (*end != '\0' || port < 1 || port > 65535)
+    throw std::invalid_argument("discovery server \"" + host_port + "\": port must be 1..65535");
+  addrinfo hints{};
+  hints.ai_family = AF_INET;
+  hints.ai_socktype = SOCK_DGRAM;
+  addrinfo* res = nullptr;
+  // A container's name may take a moment to appear in the network's DNS: retry for ~15 s.
+  int rc = 0;
+  for (int attempt = 0; attempt < 30; ++attempt) {
+    rc = getaddrinfo(host.c_str(), nullptr, &hints, &res);
+    if (rc == 0 || rc != EAI_AGAIN) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  }
+  if (rc != 0 || !res)
+    throw std::invalid_argument("discovery server \"" + host_port + "\": cannot resolve " + host +
+                                " (" + gai_strerror(rc) + ")");
+  char buf[INET_ADDRSTRLEN] = {};
+  inet_ntop(AF_INET, &reinterpret_cast<sockaddr_in*>(res->ai_addr)->sin_addr, buf, sizeof buf);
+  freeaddrinfo(res);
+  return {buf, static_cast<std::uint16_t>(port)};
 }
 
 DdsBus::~DdsBus() {
   Impl& d = *impl_;
   set_listener(nullptr);
   if (d.reader) d.reader->set_listener(nullptr);
+  if (d.claim_reader) d.claim_reader->set_listener(nullptr);
   if (d.participant) {
     d.participant->delete_contained_entities();
     dds::DomainParticipantFactory::get_instance()->delete_participant(d.participant);
@@ -213,6 +318,34 @@ std::string run_partition(std::uint64_t run_id) {
   char buf[40];
   std::snprintf(buf, sizeof buf, "qswarm-run-%016llx", static_cast<unsigned long long>(run_id));
   return buf;
+}
+
+void DdsBus::publish_claim(const IdClaim& claim) {
+  Impl& d = *impl_;
+  if (!d.claim_writer) return;
+  qswarm_msgs::IdClaim s;
+  s.nonce(claim.nonce);
+  s.seq(claim.seq);
+  s.run_id(claim.run_id);
+  s.expected(claim.expected);
+  s.id(claim.id);
+  s.stage(claim.stage);
+  d.claim_writer->write(&s);
+}
+
+int DdsBus::claim_writers_matched() const {
+  if (!impl_->claim_reader) return 0;
+  dds::SubscriptionMatchedStatus st;
+  impl_->claim_reader->get_subscription_matched_status(st);
+  return st.current_count;
+}
+
+std::vector<IdClaim> DdsBus::claims() const {
+  std::lock_guard<std::mutex> lock(impl_->claims_mu);
+  std::vector<IdClaim> out;
+  out.reserve(impl_->claims.size());
+  for (const auto& [nonce, c] : impl_->claims) out.push_back(c);
+  return out;
 }
 
 int DdsBus::matched_readers() const { return impl_->writer_listener.matched; }

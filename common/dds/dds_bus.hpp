@@ -4,7 +4,10 @@
 #include <memory>
 #include <set>
 #include <string>
+#include <utility>
+#include <vector>
 
+#include "common/transport/id_claim.hpp"
 #include "common/transport/neighbor_bus.hpp"
 
 namespace qswarm {
@@ -26,7 +29,16 @@ struct DdsOptions {
   // A reader on every run's partition (the supervisor): other runs' samples arrive, are refused
   // as foreign and counted, so that a run can say another one shares its domain.
   bool hear_all_runs = false;
+  // Also join the id-claim topic "qswarm/id_claim" (swarm-agent --id auto, the compose swarm).
+  bool id_claims = false;
+  // Fast DDS Discovery Server "HOST:PORT" (HOST a name or an IPv4 address): discover through it as
+  // a client instead of by multicast (container networks). Empty: the standard simple discovery.
+  std::string discovery_server;
 };
+
+// The Discovery Server's address as Fast DDS wants it: "HOST:PORT" with HOST resolved to IPv4.
+// Throws std::invalid_argument naming what is wrong.
+std::pair<std::string, std::uint16_t> resolve_discovery_server(const std::string& host_port);
 
 std::string run_partition(std::uint64_t run_id);
 
@@ -51,6 +63,12 @@ class DdsBus final : public NeighborBus {
   int matched_readers() const override;
   // Run ids of other runs heard on this domain (only a hear_all_runs bus hears them).
   std::set<std::uint64_t> foreign_runs() const;
+  // The id-claim topic (DdsOptions::id_claims): announce this replica's claim, and the latest
+  // claim of every replica heard (a bounded number of them: strangers cannot grow it).
+  void publish_claim(const IdClaim& claim);
+  std::vector<IdClaim> claims() const;
+  // Claim writers matched to this participant's claim reader (its own included).
+  int claim_writers_matched() const;
 
   struct Impl;
 

@@ -11,7 +11,7 @@
 #include "common/runtime/proto_util.hpp"
 #include "proto/records.pb.h"
 
-#include "tools/run_dir.hpp"
+#include "common/record/run_dir.hpp"
 
 namespace qswarm {
 namespace {

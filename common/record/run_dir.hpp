@@ -21,11 +21,15 @@ class RunDirError : public std::runtime_error {
 std::string safe_name(const std::string& name);
 
 // Claims the directory one run writes its record into, and returns its absolute path: `out`, or
-// runs/TIMESTAMP-NAME (with -2, -3, ... if taken) when `out` is empty. The directory must be new or
+// ROOT/TIMESTAMP-NAME (with -2, -3, ... if taken) when `out` is empty. The directory must be new or
 // empty; the claim is an exclusive marker file (.swarm-run, created with O_EXCL), so two runs given
 // the same --out never both write there.
 std::filesystem::path claim_run_dir(const std::string& out, const std::string& scenario_name,
-                                    const std::string& timestamp);
+                                    const std::string& timestamp,
+                                    const std::filesystem::path& root = "runs");
+
+// The local time as run directories are named: YYYYMMDD-HHMMSS.
+std::string run_timestamp();
 
 // When the supervisor could not write the summary (it died), the launcher writes one that says
 // why, so that a run never ends without summary.json. Returns whether it was written.

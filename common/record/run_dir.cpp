@@ -1,4 +1,4 @@
-#include "tools/run_dir.hpp"
+#include "common/record/run_dir.hpp"
 
 #include <fcntl.h>
 #include <google/protobuf/util/json_util.h>
@@ -6,6 +6,7 @@
 
 #include <cerrno>
 #include <cstring>
+#include <ctime>
 #include <fstream>
 #include <sstream>
 
@@ -58,15 +59,22 @@ bool try_claim(const fs::path& dir, const std::string& flag) {
 
 }  // namespace
 
+std::string run_timestamp() {
+  const std::time_t t = std::time(nullptr);
+  char buf[32];
+  std::strftime(buf, sizeof buf, "%Y%m%d-%H%M%S", std::localtime(&t));
+  return buf;
+}
+
 fs::path claim_run_dir(const std::string& out, const std::string& scenario_name,
-                       const std::string& timestamp) {
+                       const std::string& timestamp, const fs::path& root) {
   if (!out.empty()) {
     if (!try_claim(out, "--out")) {
       throw RunDirError("--out " + out + ": another run is writing there; choose another --out");
     }
     return fs::absolute(out);
   }
-  const fs::path base = fs::path("runs") / (timestamp + "-" + safe_name(scenario_name));
+  const fs::path base = root / (timestamp + "-" + safe_name(scenario_name));
   for (int k = 1; k < 1000; ++k) {
     const fs::path dir = k == 1 ? base : fs::path(base.string() + "-" + std::to_string(k));
     if (fs::exists(dir)) continue;

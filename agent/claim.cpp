@@ -1,0 +1,59 @@
+#include "agent/claim.hpp"
+
+#include <random>
+#include <vector>
+
+namespace qswarm {
+
+namespace {
+IdClaimer::Config claim_config(double timeout_s) {
+  IdClaimer::Config c;
+  c.timeout_s = timeout_s;
+  return c;
+}
+std::vector<AgentId> roster_of(const RunConfig& rc) {
+  const std::set<AgentId> ids = rc.ids();
+  return {ids.begin(), ids.end()};
+}
+}  // namespace
+
+std::uint64_t random_nonce() {
+  std::random_device rd;
+  const std::uint64_t hi = rd();
+  const std::uint64_t lo = rd();
+  const std::uint64_t n = (hi << 32) ^ lo;
+  return n == 0 ? 1 : n;
+}
+
+IdClaimRunner::IdClaimRunner(DdsBus& bus, const RunConfig& rc, AgentId fixed, double timeout_s,
+                             Clock& clock)
+    : bus_(bus),
+      clock_(clock),
+      claimer_(roster_of(rc), random_nonce(), rc.run_id, fixed, claim_config(timeout_s),
+               clock.now_s()) {}
+
+std::optional<AgentId> IdClaimRunner::acquire(const std::atomic<bool>& stop, std::string& why) {
+  while (!stop) {
+    const IdClaimer::Step s =
+        claimer_.step(clock_.now_s(), bus_.claims(), bus_.claim_writers_matched());
+    if (s.announce) bus_.publish_claim(claimer_.claim());
+    if (s.refuse) {
+      why = s.message;
+      return std::nullopt;
+    }
+    if (s.taken != 0) return s.taken;
+    clock_.sleep_until(clock_.now_s() + 0.02);
+  }
+  why = "stopped before an id was taken";
+  return std::nullopt;
+}
+
+std::optional<std::string> IdClaimRunner::keep() {
+  const IdClaimer::Step s =
+      claimer_.step(clock_.now_s(), bus_.claims(), bus_.claim_writers_matched());
+  if (s.announce) bus_.publish_claim(claimer_.claim());
+  if (s.refuse) return s.message;
+  return std::nullopt;
+}
+
+}  // namespace qswarm

@@ -1,0 +1,63 @@
+#include "common/dds/discovery_server.hpp"
+
+#include <fastdds/rtps/attributes/ServerAttributes.h>
+#include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
+#include <fastrtps/utils/IPLocator.h>
+#include <fastdds/dds/domain/DomainParticipant.hpp>
+#include <fastdds/dds/domain/DomainParticipantFactory.hpp>
+#include <fastdds/dds/domain/DomainParticipantListener.hpp>
+
+#include <atomic>
+#include <stdexcept>
+
+#include "common/dds/dds_bus.hpp"
+
+namespace qswarm {
+
+namespace dds = eprosima::fastdds::dds;
+namespace rtps = eprosima::fastdds::rtps;
+
+struct DiscoveryServer::Impl : public dds::DomainParticipantListener {
+  dds::DomainParticipant* participant = nullptr;
+  std::atomic<int> clients{0};
+  void on_participant_discovery(
+      dds::DomainParticipant*, eprosima::fastrtps::rtps::ParticipantDiscoveryInfo&& info) override {
+    using Status = eprosima::fastrtps::rtps::ParticipantDiscoveryInfo::DISCOVERY_STATUS;
+    if (info.status == Status::DISCOVERED_PARTICIPANT) ++clients;
+    if (info.status == Status::REMOVED_PARTICIPANT || info.status == Status::DROPPED_PARTICIPANT)
+      --clients;
+  }
+};
+
+DiscoveryServer::DiscoveryServer(std::uint32_t domain_id, const std::string& listen,
+                                 std::uint16_t port)
+    : impl_(std::make_unique<Impl>()) {
+  address_ = resolve_discovery_server(listen + ":" + std::to_string(port)).first;
+  dds::DomainParticipantQos pqos;
+  pqos.name("swarm-discovery");
+  pqos.transport().use_builtin_transports = false;
+  pqos.transport().user_transports.push_back(std::make_shared<rtps::UDPv4TransportDescriptor>());
+  auto& disc = pqos.wire_protocol().builtin.discovery_config;
+  disc.discoveryProtocol = eprosima::fastrtps::rtps::DiscoveryProtocol_t::SERVER;
+  rtps::get_server_client_default_guidPrefix(0, pqos.wire_protocol().prefix);
+  eprosima::fastrtps::rtps::Locator_t loc;
+  eprosima::fastrtps::rtps::IPLocator::setIPv4(loc, address_);
+  loc.port = port;
+  pqos.wire_protocol().builtin.metatrafficUnicastLocatorList.push_back(loc);
+  impl_->participant = dds::DomainParticipantFactory::get_instance()->create_participant(
+      domain_id, pqos, impl_.get(), dds::StatusMask::none());
+  if (!impl_->participant)
+    throw std::runtime_error("cannot start a discovery server on " + address_ + ":" +
+                             std::to_string(port));
+}
+
+DiscoveryServer::~DiscoveryServer() {
+  if (impl_->participant) {
+    impl_->participant->set_listener(nullptr);
+    dds::DomainParticipantFactory::get_instance()->delete_participant(impl_->participant);
+  }
+}
+
+int DiscoveryServer::clients() const { return impl_->clients; }
+
+}  // namespace qswarm

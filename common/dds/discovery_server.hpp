@@ -1,0 +1,32 @@
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+
+namespace qswarm {
+
+// A Fast DDS Discovery Server (server id 0, the prefix clients assume): the compose swarm's agents
+// and supervisor discover each other through it instead of by multicast, which container networks
+// do not carry reliably. Data still flows directly between the participants. This is what
+// `fastdds discovery -i 0 -l ADDR -p PORT` runs, without needing Python in the image.
+class DiscoveryServer {
+ public:
+  // `listen`: an IPv4 address or a host name (resolved); `port`: its metatraffic UDP port.
+  DiscoveryServer(std::uint32_t domain_id, const std::string& listen, std::uint16_t port);
+  ~DiscoveryServer();
+  DiscoveryServer(const DiscoveryServer&) = delete;
+  DiscoveryServer& operator=(const DiscoveryServer&) = delete;
+
+  const std::string& address() const { return address_; }
+  // Participants (clients) the server currently knows.
+  int clients() const;
+
+  struct Impl;
+
+ private:
+  std::unique_ptr<Impl> impl_;
+  std::string address_;
+};
+
+}  // namespace qswarm

@@ -1,0 +1,60 @@
+// swarm-discovery: the Fast DDS Discovery Server the compose swarm's participants find each other
+// through (docker/docker-compose.yml). Runs until SIGINT/SIGTERM.
+#include <CLI/CLI.hpp>
+
+#include <atomic>
+#include <chrono>
+#include <csignal>
+#include <cstdio>
+#include <thread>
+
+#include <unistd.h>
+
+#include "common/dds/discovery_server.hpp"
+
+namespace {
+std::atomic<bool> g_stop{false};
+void on_signal(int) { g_stop = true; }
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"swarm-discovery: a Fast DDS Discovery Server for the compose swarm"};
+  std::string listen;
+  unsigned port = 11811;
+  unsigned domain = 0;
+  app.add_option("--listen", listen,
+                 "IPv4 address or host name to listen on (default: this host's name)");
+  app.add_option("--port", port, "UDP port")->check(CLI::Range(1, 65535));
+  app.add_option("--domain", domain, "DDS domain id")->check(CLI::Range(0, 232));
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 2;
+  }
+  if (listen.empty()) {
+    char host[256] = {};
+    gethostname(host, sizeof host - 1);
+    listen = host;
+  }
+  std::signal(SIGINT, on_signal);
+  std::signal(SIGTERM, on_signal);
+  try {
+    qswarm::DiscoveryServer server(domain, listen, static_cast<std::uint16_t>(port));
+    std::printf("swarm-discovery: serving domain %u on %s:%u\n", domain, server.address().c_str(),
+                port);
+    std::fflush(stdout);
+    int last = -1;
+    while (!g_stop) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(200));
+      if (server.clients() != last) {
+        last = server.clients();
+        std::printf("swarm-discovery: %d participants\n", last);
+        std::fflush(stdout);
+      }
+    }
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "swarm-discovery: %s\n", e.what());
+    return 2;
+  }
+  return 0;
+}

@@ -1,0 +1,88 @@
+// Agents started alike (swarm-agent --id auto, as compose starts its replicas) claim distinct ids
+// over DDS; a replica given an id another one flies, or one replica too many, is refused with a
+// message and the swarm flies on. Real processes on loopback, the supervisor recording into a
+// fresh run directory it creates (--new-run-in, as in compose).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <memory>
+#include <regex>
+#include <set>
+
+#include "tests/swarm/domain_lease.hpp"
+#include "tests/swarm/harness.hpp"
+
+namespace qswarm::test {
+namespace {
+
+std::set<unsigned> ids_flown(const std::filesystem::path& dir, int n) {
+  std::set<unsigned> ids;
+  const std::regex flies("flies as agent ([0-9]+)");
+  for (int k = 0; k < n; ++k) {
+    const std::string text = read_file(dir / ("replica-" + std::to_string(k) + ".out"));
+    std::smatch m;
+    if (std::regex_search(text, m, flies)) ids.insert(static_cast<unsigned>(std::stoul(m[1])));
+  }
+  return ids;
+}
+
+TEST(IdClaimRun, ReplicasStartedAlikeFlyDistinctIdsAndDuplicatesAreRefused) {
+  const auto dir = fresh_dir("id-claim");
+  std::filesystem::create_directories(dir / "runs");
+  const auto scen = dir / "swarm.txtpb";
+  std::ofstream(scen) << "name: \"claim\"\n"
+                         "random_agents { count: 4 box_m: 30 }\n"
+                         "mode: PARTICLE law: EDGE_FLOW\n"
+                         "weight { policy: UNWEIGHTED }\n"
+                         "topology { policy: PROXIMITY threshold_m: 1000 }\n"
+                         "convergence { tolerance_m: 1e-8 hold_s: 1 }\n"
+                         "duration_s: 60 seed: 5\n";
+  const std::vector<std::string> common = {"--scenario",        scen.string(), "--domain",
+                                           test_domain().str(), "--agents",    "4"};
+  auto with = [&](std::vector<std::string> argv, const std::vector<std::string>& more) {
+    argv.insert(argv.end(), common.begin(), common.end());
+    argv.insert(argv.end(), more.begin(), more.end());
+    return argv;
+  };
+  Child sup(with({bin("swarm-supervisor")}, {"--new-run-in", (dir / "runs").string()}),
+            dir / "supervisor.out");
+  std::vector<std::unique_ptr<Child>> agents;
+  for (int k = 0; k < 4; ++k)
+    agents.push_back(
+        std::make_unique<Child>(with({bin("swarm-agent")}, {"--id", "auto", "--wait-supervisor"}),
+                                dir / ("replica-" + std::to_string(k) + ".out")));
+  ASSERT_TRUE(wait_for([&] { return ids_flown(dir, 4).size() == 4; }, 60.0))
+      << "the four replicas did not all take an id";
+  EXPECT_EQ(ids_flown(dir, 4), (std::set<unsigned>{1, 2, 3, 4}));
+
+  // A fifth replica told to fly agent 2, and a sixth one with --id auto: both refused, exit 2.
+  Child dup(with({bin("swarm-agent")}, {"--id", "2", "--claim"}), dir / "dup.out");
+  Child extra(with({bin("swarm-agent")}, {"--id", "auto"}), dir / "extra.out");
+  const Result d = dup.wait(60.0);
+  EXPECT_EQ(d.code, 2) << d.output;
+  EXPECT_NE(d.output.find("agent id 2 is already held by another replica"), std::string::npos)
+      << d.output;
+  const Result e = extra.wait(60.0);
+  EXPECT_EQ(e.code, 2) << e.output;
+  EXPECT_NE(e.output.find("more replicas than the swarm's 4 agents"), std::string::npos)
+      << e.output;
+
+  const Result s = sup.wait(120.0);
+  EXPECT_EQ(s.code, 0) << s.output;
+  for (auto& a : agents) a->signal(SIGINT);
+  for (auto& a : agents) EXPECT_EQ(a->wait(30.0).code, 0);
+
+  std::filesystem::path run;
+  for (const auto& entry : std::filesystem::directory_iterator(dir / "runs")) run = entry.path();
+  ASSERT_FALSE(run.empty()) << "no run directory under " << dir / "runs";
+  const records::Summary sum = read_summary(run);
+  EXPECT_TRUE(sum.converged()) << sum.end_reason();
+  EXPECT_EQ(sum.agents_size(), 4);
+  EXPECT_EQ(sum.missing_agents_size(), 0);
+  EXPECT_LT(sum.average_relative_error(), 1e-9);
+  EXPECT_TRUE(std::filesystem::exists(run / "scenario.txtpb"));
+}
+
+}  // namespace
+}  // namespace qswarm::test
