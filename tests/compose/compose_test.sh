@@ -1,0 +1,117 @@
+#!/usr/bin/env bash
+# ctest label `compose`: the compose swarm for real. Builds the image, flies 6 agent containers
+# (ids claimed over DDS, discovery through the Discovery Server, on an internal network), cuts
+# one agent's container off the network for a window while the scenario also cuts link 1-2, and
+# checks the record on the host: converged, every agent present, the agreed point the initial
+# average (relative error < 1e-9, edge-flow), the container cut in events.csv and graph.csv, and a
+# replica given an id another one flies refused. Cleans up its containers and network.
+#
+# Exit 77 (ctest: skipped) with the reason when there is no container engine or no way to make
+# the Debian base image. Environment: QSWARM_COMPOSE_AGENTS (default 6).
+set -euo pipefail
+SRC="$(cd "$(dirname "$0")/../.." && pwd)"
+N="${QSWARM_COMPOSE_AGENTS:-6}"
+CUT_AGENT=3
+skip() { echo "SKIPPED: $*"; exit 77; }
+
+command -v podman >/dev/null || skip "no podman (apt-get install podman podman-compose runc debootstrap)"
+command -v podman-compose >/dev/null || skip "no podman-compose"
+export CONTAINERS_CONF="$SRC/tests/compose/containers.conf"
+RUNTIME=()
+if command -v runc >/dev/null; then RUNTIME=(--runtime runc); fi
+podman "${RUNTIME[@]}" info >/dev/null 2>&1 || skip "podman does not work here: $(podman info 2>&1 | tail -1)"
+
+# No image registry is reachable: make debian:bookworm-slim from Debian's packages once.
+if ! podman image exists docker.io/library/debian:bookworm-slim; then
+  [[ $(id -u) -eq 0 ]] || skip "no debian:bookworm-slim image, and making one needs root (debootstrap)"
+  command -v debootstrap >/dev/null || skip "no debian:bookworm-slim image and no debootstrap"
+  rootfs=$(mktemp -d /var/tmp/qswarm-rootfs.XXXXXX)
+  echo "compose test: making debian:bookworm-slim with debootstrap (about 2 minutes)"
+  debootstrap --variant=minbase bookworm "$rootfs" >/dev/null
+  tar -C "$rootfs" -c . | podman import - docker.io/library/debian:bookworm-slim >/dev/null
+  rm -rf "$rootfs"
+fi
+echo "compose test: building the image"
+podman "${RUNTIME[@]}" build --pull=never --layers -q -f "$SRC/docker/Dockerfile" -t localhost/qswarm:latest "$SRC" >/dev/null
+
+PROJECT="qswarm-test-$$"
+WORK=$(mktemp -d /tmp/qswarm-compose.XXXXXX)
+mkdir -p "$WORK/runs"
+export QSWARM_AGENTS="$N" QSWARM_RUNS="$WORK/runs" QSWARM_USER="$(id -u):$(id -g)"
+COMPOSE=(podman-compose -p "$PROJECT" -f "$SRC/docker/docker-compose.yml")
+cleanup() {
+  "${COMPOSE[@]}" down >/dev/null 2>&1 || true
+  podman rm -f "$PROJECT-dup" >/dev/null 2>&1 || true
+  podman network rm -f "${PROJECT}_swarm" >/dev/null 2>&1 || true
+  rm -rf "$WORK"
+}
+trap cleanup EXIT
+
+echo "compose test: $N agents, project $PROJECT"
+"${COMPOSE[@]}" --podman-run-args="${RUNTIME[*]}" up -d --no-build >"$WORK/up.log" 2>&1 || {
+  cat "$WORK/up.log"; echo "FAIL: compose up"; exit 1; }
+sup="${PROJECT}_supervisor_1"
+
+# The run directory the supervisor created, once the whole swarm flies (a complete graph).
+FULL=$((N * (N - 1) / 2))
+run=""
+flying() { [[ -s "$run/graph.csv" ]] && awk -F, -v full="$FULL" 'NR > 1 && $3 == full { found = 1 } END { exit !found }' "$run/graph.csv"; }
+for _ in $(seq 1 1500); do
+  run=$(find "$WORK/runs" -mindepth 1 -maxdepth 1 -type d | head -1)
+  if [[ -n "$run" ]] && flying; then break; fi
+  if [[ "$(podman inspect -f '{{.State.Running}}' "$sup" 2>/dev/null)" != "true" ]]; then break; fi
+  sleep 0.2
+done
+[[ -n "$run" ]] && flying || {
+  podman logs "$sup" 2>&1 | tail -20; echo "FAIL: the swarm never flew complete"; exit 1; }
+echo "compose test: recording into $run"
+
+# A replica given an id that another one flies is refused (exit 2, a message in its log).
+dup_code=0
+podman "${RUNTIME[@]}" run --name "$PROJECT-dup" --network "${PROJECT}_swarm" \
+  -e QSWARM_AGENTS="$N" -e QSWARM_DISCOVERY_SERVER=discovery:11811 localhost/qswarm:latest \
+  swarm-agent --scenario /opt/qswarm/scenarios/compose/swarm.txtpb --interface any --id 2 --claim \
+  >"$WORK/dup.log" 2>&1 || dup_code=$?
+
+# Cut one agent's container off the network for 6 s, mid-run.
+QSWARM_ENGINE=podman "$SRC/docker/cut.sh" "$CUT_AGENT" 6 "$PROJECT"
+
+code=$(podman wait "$sup")
+podman logs "$sup" >"$WORK/supervisor.out" 2>&1 || true
+echo "compose test: supervisor exited $code"
+cat "$WORK/supervisor.out" | sed -n '/==/,$p'
+
+fail=0
+check() { if eval "$2"; then echo "ok: $1"; else echo "FAIL: $1"; fail=1; fi; }
+check "a replica given a flown id exits 2 (got $dup_code)" '[[ $dup_code -eq 2 ]]'
+check "its log says why" 'grep -q "agent id 2 is already held by another replica" "$WORK/dup.log"'
+check "the supervisor exits 0 (converged, complete record)" '[[ $code -eq 0 ]]'
+/usr/bin/python3 - "$run" "$N" "$CUT_AGENT" <<'PY' || fail=1
+import csv, json, sys
+run, n, cut = sys.argv[1], int(sys.argv[2]), int(sys.argv[3])
+s = json.load(open(f"{run}/summary.json"))
+bad = []
+def check(name, ok, got):
+    print(("ok: " if ok else "FAIL: ") + f"{name} ({got})")
+    if not ok: bad.append(name)
+check("converged", s.get("converged") is True, s.get("end_reason"))
+ids = sorted(a["id"] for a in s.get("agents", []))
+check(f"all {n} agents in the summary", ids == list(range(1, n + 1)), ids)
+check("no agent missing", not s.get("missing_agents"), s.get("missing_agents"))
+err = s.get("average_relative_error", 1.0)
+check("agreed value = initial average to < 1e-9", err < 1e-9, err)
+events = list(csv.DictReader(open(f"{run}/events.csv")))
+kinds = [e["kind"] for e in events if e["agent"] == str(cut)]
+check(f"agent {cut}'s cut in events.csv (depart, then rejoin)",
+      "depart" in kinds and "rejoin" in kinds[kinds.index("depart"):], kinds)
+rows = list(csv.DictReader(open(f"{run}/graph.csv")))
+full = n * (n - 1) // 2
+edges = [int(r["edges"]) for r in rows]
+edges = edges[edges.index(full):] if full in edges else []  # from the first complete graph on
+check("graph.csv: the planned cut 1-2 (one edge fewer)", full - 1 in edges, sorted(set(edges)))
+check(f"graph.csv: the container cut (agent {cut}'s {n - 1} edges gone)",
+      any(e <= full - (n - 1) for e in edges), min(edges, default=None))
+check("graph.csv: whole again at the end", edges and edges[-1] == full, edges[-1:])
+sys.exit(1 if bad else 0)
+PY
+exit $fail
