@@ -58,7 +58,9 @@ int main(int argc, char** argv) {
     }
     const std::string name = "agent-" + std::to_string(id);
     log = make_process_logger(name, f.run_dir.empty() ? "" : f.run_dir + "/" + name + ".log");
-    if (claim) log->warn("replica {:016x} flies as agent {}", claim->nonce(), id);
+    if (claim)
+      log->info("replica {:016x} after {:.2f} s of claiming flies as agent {}", claim->nonce(),
+                clock.now_s(), id);
     f.loop.time_scale = f.process.time_scale;
     f.loop.incarnation = wall_now_ns();
     f.loop.wall_clock_ns = wall_now_ns;

@@ -27,7 +27,8 @@ void add_agent_options(CLI::App& app, AgentFlags& f) {
                  "--id auto: wall seconds to wait for every replica")
       ->check(finite_range(1.0, 3600.0));
   app.add_option("--run-dir", f.run_dir, "directory for this agent's log");
-  app.add_option("--start-timeout", f.loop.start_timeout_s, "wall seconds to wait for all peers")
+  app.add_option("--start-timeout", f.loop.start_timeout_s,
+                 "wall seconds to wait for all peers (default 30 + 0.5 per agent)")
       ->check(finite_range(0.0, 3600.0));
   app.add_option("--max-wall", f.loop.max_wall_s, "stop after this many wall seconds running")
       ->check(finite_range(0.0, 1e6));

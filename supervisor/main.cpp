@@ -18,6 +18,7 @@
 #include "common/app/process_setup.hpp"
 #include "common/record/recorder.hpp"
 #include "common/record/run_dir.hpp"
+#include "common/runtime/agent_loop.hpp"
 
 namespace {
 std::atomic<bool> g_stop{false};
@@ -30,14 +31,15 @@ int main(int argc, char** argv) {
   ProcessOptions opts;
   std::string run_dir;
   bool progress = false;
-  double start_timeout_s = 30.0;
+  double start_timeout_s = -1.0;
   add_process_options(app, opts);
   std::string new_run_in;
   auto* rd = app.add_option("--run-dir", run_dir, "run directory to write");
   app.add_option("--new-run-in", new_run_in,
                  "create a fresh run directory ROOT/TIMESTAMP-NAME and record there (compose)")
       ->excludes(rd);
-  app.add_option("--start-timeout", start_timeout_s, "wall seconds to wait for the first agent")
+  app.add_option("--start-timeout", start_timeout_s,
+                 "wall seconds to wait for the first agent (default 30 + 0.5 per agent)")
       ->check(finite_range(0.0, 3600.0));
   app.add_flag("--progress", progress, "print a live progress line");
   try {
@@ -48,6 +50,7 @@ int main(int argc, char** argv) {
   const std::optional<RunConfig> loaded = load_for_process("swarm-supervisor", opts);
   if (!loaded) return 2;
   const RunConfig& rc = *loaded;
+  if (start_timeout_s < 0.0) start_timeout_s = default_start_timeout_s(rc.agents.size());
   if (run_dir.empty() == new_run_in.empty()) {
     std::fprintf(stderr, "swarm-supervisor: give --run-dir DIR or --new-run-in ROOT\n");
     return 2;

@@ -65,7 +65,9 @@ std::shared_ptr<spdlog::logger> make_process_logger(const std::string& name,
                                                     const std::string& log_path) {
   std::vector<spdlog::sink_ptr> sinks;
   auto console = std::make_shared<spdlog::sinks::stderr_color_sink_mt>();
-  console->set_level(spdlog::level::warn);
+  // With a log file, the terminal gets warnings only; without one (a container, whose log is its
+  // output), everything.
+  console->set_level(log_path.empty() ? spdlog::level::info : spdlog::level::warn);
   sinks.push_back(console);
   if (!log_path.empty())
     sinks.push_back(std::make_shared<spdlog::sinks::basic_file_sink_mt>(log_path, false));

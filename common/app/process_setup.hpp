@@ -38,8 +38,8 @@ std::optional<RunConfig> load_for_process(const char* prog, const ProcessOptions
 DdsOptions dds_options(const RunConfig& rc, const std::string& participant_name,
                        const ProcessOptions& o);
 
-// The process's default logger: warnings and worse to stderr, everything from info up to
-// `log_path` (appended: a restarted agent adds to its log) unless it is empty.
+// The process's default logger: everything from info up to `log_path` (appended: a restarted
+// agent adds to its log) and warnings to stderr; with no `log_path`, everything to stderr.
 std::shared_ptr<spdlog::logger> make_process_logger(const std::string& name,
                                                     const std::string& log_path);
 

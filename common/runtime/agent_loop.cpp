@@ -26,13 +26,22 @@ LifecycleConfig lifecycle_config(const RunConfig& rc, AgentId id, const AgentLoo
     }
   }
   c.time_scale = o.time_scale;
-  c.start_timeout_s = o.start_timeout_s;
-  c.join_timeout_s = o.start_timeout_s + 10.0;
+  c.start_timeout_s =
+      o.start_timeout_s >= 0.0 ? o.start_timeout_s : default_start_timeout_s(rc.agents.size());
+  c.join_timeout_s = c.start_timeout_s + 10.0;
   c.tick_wall_s = steps_per_tick / (rc.physics_hz * o.time_scale);
   c.max_wall_s = o.max_wall_s >= 0.0 ? o.max_wall_s : 2.0 * rc.duration_s / o.time_scale + 30.0;
   c.kill_at_s = rc.faults.kills_of(id);
   return c;
 }
+
+}  // namespace
+
+double default_start_timeout_s(std::size_t agents) {
+  return 30.0 + 0.5 * static_cast<double>(agents);
+}
+
+namespace {
 
 AgentParams params_for(const RunConfig& rc, AgentId id, const AgentLoopOptions& o) {
   const AgentSpec* spec = rc.agent(id);
