@@ -13,6 +13,12 @@
 namespace qswarm {
 namespace {
 
+// The summary's counts are uint32 (JSON numbers, not the strings proto3 makes of uint64): a count
+// past 2^32 - 1 (about 46 h of a 512-agent swarm's samples) saturates there instead of wrapping.
+std::uint32_t count32(std::uint64_t n) {
+  return static_cast<std::uint32_t>(std::min<std::uint64_t>(n, 4294967295ULL));
+}
+
 double percentile(std::vector<double> v, double p) {
   if (v.empty()) return 0.0;
   const std::size_t k = static_cast<std::size_t>(p * static_cast<double>(v.size() - 1));
@@ -57,6 +63,7 @@ records::Summary build_summary(const RunConfig& rc, const Presence& presence,
   records::Messages& msg = *s.mutable_messages();
   double rate_sum = 0.0;
   int rate_n = 0;
+  std::uint64_t published = 0, received = 0, dropped = 0, gaps = 0;
   for (const auto& [id, a] : presence.tracks()) {
     records::AgentSummary* as = s.add_agents();
     as->set_id(id);
@@ -65,9 +72,9 @@ records::Summary build_summary(const RunConfig& rc, const Presence& presence,
     if (!a.seen) continue;
     put_vec3(as->mutable_final_position(), a.last.p_W);
     put_vec3(as->mutable_final_consensus(), a.last.view.q);
-    as->set_samples(static_cast<std::uint32_t>(a.samples));
-    as->set_seq_gaps(static_cast<std::uint32_t>(a.gaps));
-    as->set_dropped_by_agent(static_cast<std::uint32_t>(a.last.dropped));
+    as->set_samples(count32(a.samples));
+    as->set_seq_gaps(count32(a.gaps));
+    as->set_dropped_by_agent(count32(a.last.dropped));
     const double span = a.last.stamp_s - a.first.stamp_s;
     if (span > 0.0) {
       as->set_rate_hz(static_cast<double>(a.samples - 1) / (span / end.time_scale));
@@ -78,11 +85,15 @@ records::Summary build_summary(const RunConfig& rc, const Presence& presence,
       final_q.push_back(a.last.view.q);
       final_p.push_back(a.last.p_W);
     }
-    msg.set_published(msg.published() + static_cast<std::uint32_t>(a.last.seq));
-    msg.set_received(msg.received() + static_cast<std::uint32_t>(a.samples));
-    msg.set_dropped(msg.dropped() + static_cast<std::uint32_t>(a.last.dropped));
-    msg.set_seq_gaps(msg.seq_gaps() + static_cast<std::uint32_t>(a.gaps));
+    published += a.last.seq;
+    received += a.samples;
+    dropped += a.last.dropped;
+    gaps += a.gaps;
   }
+  msg.set_published(count32(published));
+  msg.set_received(count32(received));
+  msg.set_dropped(count32(dropped));
+  msg.set_seq_gaps(count32(gaps));
   msg.set_age_p50_ms(percentile(tally.ages_ms, 0.50));
   msg.set_age_p99_ms(percentile(tally.ages_ms, 0.99));
   msg.set_rate_hz(rate_n ? rate_sum / rate_n : 0.0);
@@ -118,12 +129,12 @@ records::Summary build_summary(const RunConfig& rc, const Presence& presence,
     total.partition += c.partition;
     total.delayed += c.delayed;
   }
-  fs.set_loss(static_cast<std::uint32_t>(total.loss));
-  fs.set_burst(static_cast<std::uint32_t>(total.burst));
-  fs.set_cut(static_cast<std::uint32_t>(total.cut));
-  fs.set_partition(static_cast<std::uint32_t>(total.partition));
-  fs.set_delayed(static_cast<std::uint32_t>(total.delayed));
-  fs.set_dropped(static_cast<std::uint32_t>(total.dropped()));
+  fs.set_loss(count32(total.loss));
+  fs.set_burst(count32(total.burst));
+  fs.set_cut(count32(total.cut));
+  fs.set_partition(count32(total.partition));
+  fs.set_delayed(count32(total.delayed));
+  fs.set_dropped(count32(total.dropped()));
   for (const auto& k : rc.faults.kill) {
     if (k.at_s <= end.t_s) fs.set_kills(fs.kills() + 1);
     if (k.restart_at_s > k.at_s && k.restart_at_s <= end.t_s) fs.set_restarts(fs.restarts() + 1);
