@@ -74,6 +74,8 @@ int main(int argc, char** argv) {
         log->log(n.warning ? spdlog::level::warn : spdlog::level::info, n.text);
       if (p.kill) {
         log->warn("t={:.3f} s: planned kill: SIGKILL to myself", loop.runtime().time_s());
+        if (!f.run_dir.empty() && !mark_planned_kill(f.run_dir, id, loop.runtime().time_s()))
+          log->error("cannot mark the planned kill in {}", planned_kills_file(f.run_dir, id));
         log->flush();
         std::raise(SIGKILL);
       }

@@ -104,10 +104,12 @@ void Launcher::note_abnormal(const ChildProcesses::Child& c, bool at_teardown) {
 void Launcher::on_agent_exit(const ChildProcesses::Child& c) {
   const std::vector<double> restarts = spec_.rc.faults.restarts_of(c.id);
   int& life = lives_[c.id];
-  // A SIGKILL is the plan's while the agent has planned kills left (it kills itself).
-  const bool planned =
-      planned_kill_status(c.status) &&
-      kills_seen_[c.id]++ < static_cast<int>(spec_.rc.faults.kills_of(c.id).size());
+  // A SIGKILL is the plan's when the agent marked it before killing itself (a line in
+  // agent-ID.planned-kills); a SIGKILL from outside, even while planned kills are left, is not.
+  const bool planned = planned_kill_status(c.status) &&
+                       kills_seen_[c.id] < planned_kills_marked(spec_.run_dir, c.id) &&
+                       kills_seen_[c.id] < static_cast<int>(spec_.rc.faults.kills_of(c.id).size());
+  if (planned) ++kills_seen_[c.id];
   if (planned && life < static_cast<int>(restarts.size())) {
     // Its planned kill: a new process rejoins at the planned restart time.
     const double at = restarts[static_cast<std::size_t>(life)];

@@ -96,7 +96,7 @@ TEST(Launcher, StartsNoAgentWhenTheSupervisorNeverListens) {
   EXPECT_EQ(procs.children().size(), 1u);
 }
 
-TEST(Launcher, RespawnsAPlannedKillAtItsRestartTimeAndOnlyAsOftenAsPlanned) {
+TEST(Launcher, AnUnmarkedSigkillIsNotThePlansEvenWithKillsPlanned) {
   FakeProcesses procs;
   ManualClock clock;
   Launcher l(spec_for("faults { kill { agent: 2 at_s: 3 restart_at_s: 6 } }"), procs, clock,
@@ -104,6 +104,23 @@ TEST(Launcher, RespawnsAPlannedKillAtItsRestartTimeAndOnlyAsOftenAsPlanned) {
   l.start();
   ASSERT_EQ(procs.children().size(), 4u);  // supervisor + 3 agents
   EXPECT_TRUE(has(procs.argv_[2], "--wait-supervisor"));
+  std::filesystem::remove(planned_kills_file(spec_for("").run_dir, 2));
+  // A SIGKILL from outside before the planned one (the agent marked nothing): not the plan's.
+  procs.exit_child("agent", 2, signalled(SIGKILL));
+  EXPECT_FALSE(l.poll(false));
+  EXPECT_EQ(procs.spawned("agent", 2), 1);
+  ASSERT_EQ(l.problems().size(), 1u);
+  EXPECT_NE(l.problems()[0].find("agent 2"), std::string::npos);
+}
+
+TEST(Launcher, RespawnsAMarkedPlannedKillAtItsRestartTime) {
+  FakeProcesses procs;
+  ManualClock clock;
+  const LaunchSpec spec = spec_for("faults { kill { agent: 2 at_s: 3 restart_at_s: 6 } }");
+  std::filesystem::remove(planned_kills_file(spec.run_dir, 2));
+  Launcher l(spec, procs, clock, [] { return true; });
+  l.start();
+  ASSERT_TRUE(mark_planned_kill(spec.run_dir, 2, 3.0));  // what the agent does before dying
   procs.exit_child("agent", 2, signalled(SIGKILL));
   EXPECT_FALSE(l.poll(false));
   ASSERT_EQ(procs.spawned("agent", 2), 2);
