@@ -94,6 +94,7 @@ struct DdsBus::Impl : public dds::DataReaderListener {
         c.expected = s.expected();
         c.id = s.id();
         c.stage = s.stage();
+        c.flying_s = s.flying_s();
       }
     }
   } claim_listener;
@@ -257,11 +258,12 @@ std::pair<std::string, std::uint16_t> resolve_discovery_server(const std::string
   hints.ai_family = AF_INET;
   hints.ai_socktype = SOCK_DGRAM;
   addrinfo* res = nullptr;
-  // A container's name may take a moment to appear in the network's DNS: retry for ~15 s.
+  // A container's name may take a moment to appear in the network's DNS (unknown name, no data,
+  // a server failure): retry for ~15 s. A numeric address resolves at once.
   int rc = 0;
   for (int attempt = 0; attempt < 30; ++attempt) {
     rc = getaddrinfo(host.c_str(), nullptr, &hints, &res);
-    if (rc == 0 || rc != EAI_AGAIN) break;
+    if (rc != EAI_AGAIN && rc != EAI_NONAME && rc != EAI_FAIL && rc != EAI_NODATA) break;
     std::this_thread::sleep_for(std::chrono::milliseconds(500));
   }
   if (rc != 0 || !res)
@@ -330,6 +332,7 @@ void DdsBus::publish_claim(const IdClaim& claim) {
   s.expected(claim.expected);
   s.id(claim.id);
   s.stage(claim.stage);
+  s.flying_s(claim.flying_s);
   d.claim_writer->write(&s);
 }
 

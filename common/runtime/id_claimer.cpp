@@ -22,6 +22,7 @@ IdClaimer::IdClaimer(std::vector<AgentId> roster, std::uint64_t nonce, std::uint
   mine_.run_id = run_id;
   mine_.expected = static_cast<std::uint32_t>(roster_.size());
   fixed_ = fixed;
+  mine_.id = fixed;  // a given id is announced from the start: auto replicas leave it alone
   view_ = {nonce};
 }
 
@@ -57,13 +58,16 @@ IdClaimer::Step IdClaimer::step(double now_s, const std::vector<IdClaim>& heard,
     ++mine_.seq;
     next_announce_s_ = now_s + cfg_.period_s;
   }
+  if (mine_.stage == kFlying) mine_.flying_s = now_s - flying_since_s_;
   const auto refuse = [&s](std::string why) {
     s.refuse = true;
     s.message = std::move(why);
     return s;
   };
   for (const auto& [nonce, c] : live_) {
-    if (c.expected != mine_.expected)
+    // Only a replica still choosing refuses over the swarm's size: a stray replica told another N
+    // must not stop a swarm that flies.
+    if (mine_.stage == kRanking && c.expected != mine_.expected)
       return refuse("replica " + hex(nonce) + " was told the swarm has " +
                     std::to_string(c.expected) + " agents and this one " +
                     std::to_string(mine_.expected) +
@@ -73,6 +77,14 @@ IdClaimer::Step IdClaimer::step(double now_s, const std::vector<IdClaim>& heard,
     for (const auto& [nonce, c] : live_) {
       if (c.id != id || c.stage == kRanking) continue;
       if (c.stage == kFlying && mine_.stage != kFlying) return nonce;
+      if (c.stage == kFlying && mine_.stage == kFlying) {
+        // Two flights of one id (a healed split, a late discovery): the earlier keeps it; their
+        // start times, each on this replica's clock, are compared with a margin of 0.25 s.
+        const double other_since = seen_.at(nonce).heard_s - c.flying_s;
+        if (other_since < flying_since_s_ - 0.25) return nonce;
+        if (other_since <= flying_since_s_ + 0.25 && nonce < mine_.nonce) return nonce;
+        continue;
+      }
       if (c.stage == mine_.stage && nonce < mine_.nonce) return nonce;
       if (mine_.stage == kRanking) return nonce;
     }
@@ -87,8 +99,8 @@ IdClaimer::Step IdClaimer::step(double now_s, const std::vector<IdClaim>& heard,
   if (mine_.stage == kFlying) {
     if (const std::uint64_t other = held_by_other(mine_.id))
       return refuse("agent id " + std::to_string(mine_.id) + " is also flown by replica " +
-                    hex(other) + ", which keeps it: this replica (" + hex(mine_.nonce) +
-                    ") yields and stops");
+                    hex(other) + ", which flew it first and keeps it: this replica (" +
+                    hex(mine_.nonce) + ") yields and stops");
     return s;
   }
   if (mine_.stage == kConfirming) {
@@ -101,6 +113,7 @@ IdClaimer::Step IdClaimer::step(double now_s, const std::vector<IdClaim>& heard,
     }
     if (now_s - confirm_since_s_ >= cfg_.confirm_s) {
       mine_.stage = kFlying;
+      flying_since_s_ = now_s;
       s.taken = mine_.id;
       s.announce = true;
     }
@@ -116,12 +129,14 @@ IdClaimer::Step IdClaimer::step(double now_s, const std::vector<IdClaim>& heard,
   };
   if (fixed_ != 0) {
     if (const std::uint64_t other = held_by_other(fixed_)) return already_held(other);
-    if (ready) return confirm(fixed_);
+    // A given id also waits for the whole swarm: a replica that has not discovered the others
+    // would not know that its id is flown.
+    if (ready && live() >= roster_.size()) return confirm(fixed_);
   } else {
     std::set<AgentId> held;
     std::vector<std::uint64_t> unranked{mine_.nonce};
     for (const auto& [nonce, c] : live_) {
-      if (c.stage != kRanking)
+      if (c.id != 0)  // confirming, flying, or given by hand
         held.insert(c.id);
       else
         unranked.push_back(nonce);

@@ -17,17 +17,21 @@ namespace qswarm {
 // included), has heard every claim writer DDS matched, and that set has not changed for
 // `settle_s`; then the ids nobody holds yet are handed out by the rank of the nonces of the
 // replicas that hold none: every replica with the same view computes the same assignment, so
-// nobody waits for anybody's answer. A replica given an id (--id K) skips the ranking. Before
+// nobody waits for anybody's answer. A replica given an id (--id K) announces it from the start
+// (auto replicas count it as held) and also waits for all N before confirming it. Before
 // flying, a replica announces its id for `confirm_s` (confirming) without publishing any state.
 // The rules that keep one id from being flown twice:
 //   - an id confirmed or flown by another replica is not taken: a replica given it refuses, a
 //     ranking replica counts it as held;
 //   - two replicas confirming one id: the larger nonce backs off (given the id: refuses; auto:
 //     ranks again), before either flies;
-//   - a flying replica never yields to a newcomer; two flying one id (a healed network split):
-//     the larger nonce yields and stops;
+//   - a flying replica never yields to a newcomer; two flying one id (a healed network split, a
+//     discovery later than settle + confirm): the later flight yields and stops;
 //   - a replica ranked past the free ids (more replicas than agents) refuses;
-//   - replicas told different N refuse (the swarm's size is one setting, not two).
+//   - replicas told different N refuse while they choose (the swarm's size is one setting, not
+//     two); a flying replica ignores a stray one.
+// A replica that died stays live for expire_s: a replacement started within that time can find
+// the view crowded (known limit; the claim timeout then says so).
 // Pure: the caller feeds the claims heard and the time; tests drive it with numbers.
 class IdClaimer {
  public:
@@ -70,6 +74,7 @@ class IdClaimer {
   AgentId fixed_ = 0;
   double start_s_ = 0.0;
   double confirm_since_s_ = 0.0;
+  double flying_since_s_ = 0.0;
   double next_announce_s_ = 0.0;
   std::map<std::uint64_t, Seen> seen_;     // every nonce ever heard
   std::map<std::uint64_t, IdClaim> live_;  // heard within expire_s, without mine

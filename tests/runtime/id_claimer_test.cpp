@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <map>
+#include <memory>
 #include <numeric>
 #include <optional>
 #include <random>
@@ -117,42 +118,79 @@ TEST(IdClaimer, ReplicasToldDifferentSizesRefuse) {
   }
 }
 
-TEST(IdClaimer, AnIdGivenTwiceIsFlownOnce) {
-  // Both replicas given --id 2 at the same moment: both confirm it, the larger nonce refuses
-  // before either flies.
+TEST(IdClaimer, AnIdGivenTwiceIsFlownOnceAndAutoReplicasLeaveItAlone) {
+  // Two replicas given --id 2 and one auto replica, together: the auto one takes 1 (2 is given),
+  // both given ones confirm 2, the larger nonce refuses before either flies.
   Replicas net;
   net.add(50, 3, 2);
   net.add(60, 3, 2);
+  net.add(5, 3);
   net.run_until(4.0);
-  EXPECT_EQ(net.flying(), (std::vector<AgentId>{2}));
+  EXPECT_EQ(net.flying(), (std::vector<AgentId>{1, 2}));
   EXPECT_FALSE(net.rs[0].refused);
   EXPECT_TRUE(net.rs[1].refused);
   EXPECT_EQ(net.rs[1].taken, 0u);
   EXPECT_NE(net.rs[1].why.find("agent id 2 is already held by another replica"), std::string::npos)
       << net.rs[1].why;
-  // A third replica given --id 2 later finds it held and refuses before taking it.
+  // A replica given 2 later finds it flown and refuses before taking it; one given 3 flies it.
   net.add(10, 3, 2, 4.0);
+  net.add(11, 3, 3, 4.0);
   net.run_until(8.0);
-  EXPECT_TRUE(net.rs[2].refused);
-  EXPECT_EQ(net.rs[2].taken, 0u);
-  EXPECT_NE(net.rs[2].why.find("already held"), std::string::npos) << net.rs[2].why;
-  EXPECT_EQ(net.flying(), (std::vector<AgentId>{2}));
+  EXPECT_TRUE(net.rs[3].refused);
+  EXPECT_EQ(net.rs[3].taken, 0u);
+  EXPECT_NE(net.rs[3].why.find("already held"), std::string::npos) << net.rs[3].why;
+  EXPECT_EQ(net.flying(), (std::vector<AgentId>{1, 2, 3}));
 }
 
-TEST(IdClaimer, AFlyingReplicaNeverYieldsToANewcomerThatHeardItLate) {
+TEST(IdClaimer, AGivenIdWaitsForTheSwarmSoADeafNewcomerNeverFliesIt) {
   Replicas net;
   net.add(100, 3, 2);
+  net.add(200, 3);
+  net.add(300, 3);
   net.run_until(3.0);
-  ASSERT_EQ(net.flying(), (std::vector<AgentId>{2}));
-  // A newcomer given the same id, with a smaller nonce, whose discovery is slow: it starts
-  // confirming before it hears the flyer, then backs off before flying.
+  ASSERT_EQ(net.flying(), (std::vector<AgentId>{1, 2, 3}));
+  // A newcomer given 2, with a smaller nonce, that discovers nobody for 3 s: it does not confirm
+  // alone, and refuses once it hears the flyer.
   net.add(1, 3, 2, 3.0);
-  net.rs[1].deaf_until_s = 4.5;
-  net.run_until(8.0);
-  EXPECT_FALSE(net.rs[0].refused);
-  EXPECT_TRUE(net.rs[1].refused);
-  EXPECT_EQ(net.rs[1].taken, 0u);
-  EXPECT_EQ(net.flying(), (std::vector<AgentId>{2}));
+  net.rs[3].deaf_until_s = 6.0;
+  net.run_until(9.0);
+  EXPECT_TRUE(net.rs[3].refused);
+  EXPECT_EQ(net.rs[3].taken, 0u);
+  EXPECT_EQ(net.flying(), (std::vector<AgentId>{1, 2, 3}));
+}
+
+TEST(IdClaimer, OfTwoFlightsOfOneIdTheEarlierKeepsIt) {
+  // A flies 1 (alone, N = 1); then it hears another replica flying 1 too: a later flight does not
+  // make it yield, whatever the nonces; an earlier one does.
+  const auto flying = [] {
+    auto c = std::make_unique<IdClaimer>(roster(1), 50, 7, 0, IdClaimer::Config{}, 0.0);
+    for (double t = 0.0; t < 5.0; t += 0.02) c->step(t, {});
+    return c;
+  };
+  auto a = flying();
+  ASSERT_EQ(a->claim().stage, kFlying);
+  IdClaim later{1, 1, 7, 1, 1, kFlying, 0.5};  // smaller nonce, but flying for 0.5 s only
+  for (int k = 0; k < 10; ++k) {
+    later.seq++;
+    EXPECT_FALSE(a->step(5.0 + 0.1 * k, {later}).refuse);
+  }
+  auto b = flying();
+  const IdClaim earlier{999, 1, 7, 1, 1, kFlying, 30.0};  // larger nonce, flying for 30 s
+  const IdClaimer::Step s = b->step(5.0, {earlier});
+  EXPECT_TRUE(s.refuse);
+  EXPECT_NE(s.message.find("flew it first"), std::string::npos) << s.message;
+}
+
+TEST(IdClaimer, AStrayReplicaToldAnotherSizeDoesNotStopAFlyingSwarm) {
+  Replicas net;
+  for (std::uint64_t k = 1; k <= 3; ++k) net.add(k * 10, 3);
+  net.run_until(3.0);
+  ASSERT_EQ(net.flying(), roster(3));
+  net.add(7, 4, 0, 3.0);
+  net.run_until(6.0);
+  EXPECT_EQ(net.flying(), roster(3));
+  EXPECT_TRUE(net.rs[3].refused);
+  EXPECT_NE(net.rs[3].why.find("same swarm size"), std::string::npos) << net.rs[3].why;
 }
 
 TEST(IdClaimer, NothingIsDecidedBeforeEveryMatchedWriterIsHeard) {
