@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <atomic>
 #include <csignal>
+#include <cstdlib>
 
 #include "agent/claim.hpp"
 #include "agent/options.hpp"
@@ -47,12 +48,15 @@ int main(int argc, char** argv) {
     DdsBus bus(dopt);
     std::optional<IdClaimRunner> claim;
     if (claiming) {
-      claim.emplace(bus, *rc, id, f.claim_timeout_s, clock);
+      claim.emplace(bus, *rc, id,
+                    f.claim_timeout_s >= 0.0 ? f.claim_timeout_s
+                                             : 60.0 + 4.0 * static_cast<double>(rc->agents.size()),
+                    clock);
       std::string why;
       const std::optional<AgentId> taken = claim->acquire(g_stop, why);
       if (!taken) {
         log->error("replica {:016x}: no agent id: {}", claim->nonce(), why);
-        return g_stop ? 1 : 2;
+        return g_stop ? 0 : 2;  // stopped while claiming: a stop, not a failure
       }
       id = *taken;
     }
@@ -78,6 +82,7 @@ int main(int argc, char** argv) {
           log->error("cannot mark the planned kill in {}", planned_kills_file(f.run_dir, id));
         log->flush();
         std::raise(SIGKILL);
+        std::_Exit(137);  // as PID 1 of a container the kernel ignores our own SIGKILL
       }
       if (p.done) break;
       if (claim) {

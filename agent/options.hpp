@@ -15,11 +15,11 @@ namespace qswarm {
 struct AgentFlags {
   ProcessOptions process;
   AgentLoopOptions loop;
-  std::string run_dir;             // for agent-ID.log and agent-ID.stats
-  std::string id;                  // --id / QSWARM_AGENT_ID: a listed agent id, or "auto"
-  bool claim = false;              // announce the id on the claim topic, refuse duplicates
-  double claim_timeout_s = 120.0;  // --id auto: wait this long for every replica
-  bool ignore_sigterm = false;     // (tests) exercise the launcher's SIGKILL escalation
+  std::string run_dir;            // for agent-ID.log and agent-ID.stats
+  std::string id;                 // --id / QSWARM_AGENT_ID: a listed agent id, or "auto"
+  bool claim = false;             // announce the id on the claim topic, refuse duplicates
+  double claim_timeout_s = -1.0;  // --id auto: wait this long for every replica (-1: 60 + 4 N)
+  bool ignore_sigterm = false;    // (tests) exercise the launcher's SIGKILL escalation
 };
 void add_agent_options(CLI::App& app, AgentFlags& f);
 

@@ -7,6 +7,7 @@
 #include <atomic>
 #include <cerrno>
 #include <csignal>
+#include <cstdlib>
 #include <cstring>
 #include <ctime>
 #include <filesystem>
@@ -217,6 +218,10 @@ int plot(const std::string& run_dir, const std::string& out) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  // The compose swarm's variables are read by swarm-agent and swarm-supervisor as flag defaults;
+  // `swarm run` passes everything its children need, so a shell that exported them for compose
+  // must not change a local run.
+  for (const char* v : {"QSWARM_AGENTS", "QSWARM_DISCOVERY_SERVER", "QSWARM_AGENT_ID"}) unsetenv(v);
   CLI::App app{"swarm: a quadcopter swarm that agrees over DDS"};
   app.require_subcommand(1);
   RunOptions ro;

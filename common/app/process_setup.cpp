@@ -27,8 +27,10 @@ void add_process_options(CLI::App& app, ProcessOptions& o) {
       ->envname("QSWARM_AGENTS")
       ->check(CLI::Range(1, static_cast<int>(kMaxSwarmAgents)));
   app.add_option("--discovery-server", o.discovery_server,
-                 "discover through the Fast DDS Discovery Server at HOST:PORT (containers)")
-      ->envname("QSWARM_DISCOVERY_SERVER");
+                 "discover through the Fast DDS Discovery Server at HOST:PORT (containers); "
+                 "\"none\" or empty: simple discovery")
+      ->envname("QSWARM_DISCOVERY_SERVER")
+      ->transform([](std::string v) { return v == "none" ? std::string() : v; });
   app.add_option("--seed", o.seed, "run seed (overrides the scenario)")
       ->check(CLI::Range(std::int64_t{0}, std::int64_t{4294967295}));
 }
@@ -39,9 +41,16 @@ std::optional<RunConfig> load_for_process(const char* prog, const ProcessOptions
     o.domain_id = opts.domain;
     o.seed = opts.seed;
     o.agents = opts.agents;
-    return load_scenario(opts.scenario, o);
+    RunConfig rc = load_scenario(opts.scenario, o);
+    // Checked (and resolved, with retries while a container network's DNS catches up) before
+    // anything is created, so that a bad address is bad input: exit 2.
+    if (!opts.discovery_server.empty()) resolve_discovery_server(opts.discovery_server);
+    return rc;
   } catch (const ScenarioError& e) {
     std::fprintf(stderr, "%s: %s\n", prog, e.what());
+    return std::nullopt;
+  } catch (const std::invalid_argument& e) {
+    std::fprintf(stderr, "%s: --discovery-server (QSWARM_DISCOVERY_SERVER): %s\n", prog, e.what());
     return std::nullopt;
   }
 }

@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <filesystem>
@@ -75,7 +76,12 @@ LaunchSpec spec_for(const std::string& extra) {
   LaunchSpec spec;
   spec.rc = resolve_scenario(parse_scenario_text(
       "agents { id: 1 }\nagents { id: 2 }\nagents { id: 3 }\nduration_s: 30\n" + extra, "s"));
-  spec.run_dir = (std::filesystem::temp_directory_path() / "qswarm-launcher-test").string();
+  // One directory per test and process: ctest runs the tests of this file at once.
+  spec.run_dir = (std::filesystem::temp_directory_path() /
+                  ("qswarm-launcher-test-" +
+                   std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) +
+                   "-" + std::to_string(::getpid())))
+                     .string();
   std::filesystem::create_directories(spec.run_dir);
   spec.scenario_path = spec.run_dir + "/scenario.txtpb";
   spec.bin_dir = "/bin-dir";
