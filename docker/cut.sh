@@ -19,11 +19,12 @@ if [[ -z "$engine" ]]; then
   if docker info >/dev/null 2>&1; then engine=docker; else engine=podman; fi
 fi
 
-# The container flying the agent: each replica logs "replica NONCE flies as agent ID".
+# The container flying the agent: each replica logs "replica NONCE ... flies as agent ID".
 container=""
 for c in $($engine ps --filter "label=com.docker.compose.project=$project" \
   --filter "label=com.docker.compose.service=agent" --format '{{.Names}}'); do
-  if $engine logs "$c" 2>&1 | grep -q "flies as agent $agent\$"; then
+  # (grep reads all of the log: -q would stop early and fail the pipeline with SIGPIPE)
+  if (($($engine logs "$c" 2>&1 | grep -c "flies as agent $agent\$") > 0)); then
     container="$c"
     break
   fi
@@ -36,6 +37,6 @@ network=$($engine inspect "$container" --format '{{range $k, $v := .NetworkSetti
 ip=$($engine inspect "$container" --format "{{(index .NetworkSettings.Networks \"$network\").IPAddress}}")
 echo "cut: agent $agent ($container, $ip on $network) off the network for $seconds s"
 $engine network disconnect "$network" "$container"
+# Reconnected however this script ends (Ctrl-C during the window included).
+trap '$engine network connect --ip "$ip" "$network" "$container" && echo "cut: agent $agent reconnected at $ip"' EXIT
 sleep "$seconds"
-$engine network connect --ip "$ip" "$network" "$container"
-echo "cut: agent $agent reconnected at $ip"

@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # Sets everything up (apt + build) and runs what CI runs (.ci/run calls this):
-#   1. the default configuration, warnings as errors, and every test but the `long` label;
+#   1. the default configuration with warnings as errors;
 #   2. a Release build of the product with -Werror (what users build, compiled strictly);
 #   3. the core and runtime tests under AddressSanitizer + UndefinedBehaviorSanitizer (DDS off);
-#   4. clang-format and clang-tidy on the project's own code (tools/lint.sh).
+#   4. clang-format and clang-tidy on the project's own code (tools/lint.sh);
+#   5. every test but the `long` and `compose` labels, then the `compose` label alone.
 # With arguments, only step 1's build, then ctest with those arguments (e.g. tools/test.sh -L core).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -35,4 +36,8 @@ tools/lint.sh build
 
 stage "tests"
 cd build
-ctest "${ctest_args[@]}" -LE long
+ctest "${ctest_args[@]}" -LE "long|compose"
+
+stage "compose swarm in containers"
+# Alone: it builds an image and runs containers, which would crowd the timing of the other tests.
+ctest "${ctest_args[@]}" -L compose

@@ -37,7 +37,9 @@ podman "${RUNTIME[@]}" build --pull=never --layers -q -f "$SRC/docker/Dockerfile
 PROJECT="qswarm-test-$$"
 WORK=$(mktemp -d /tmp/qswarm-compose.XXXXXX)
 mkdir -p "$WORK/runs"
-export QSWARM_AGENTS="$N" QSWARM_RUNS="$WORK/runs" QSWARM_USER="$(id -u):$(id -g)"
+# A subnet of its own, so that a user's compose swarm (10.89.77.0/24) and this test can coexist.
+export QSWARM_AGENTS="$N" QSWARM_RUNS="$WORK/runs" QSWARM_USER="$(id -u):$(id -g)" \
+  QSWARM_SUBNET="10.89.$((100 + $$ % 100)).0/24"
 COMPOSE=(podman-compose -p "$PROJECT" -f "$SRC/docker/docker-compose.yml")
 cleanup() {
   "${COMPOSE[@]}" down >/dev/null 2>&1 || true
@@ -68,8 +70,8 @@ echo "compose test: recording into $run"
 
 # A replica given an id that another one flies is refused (exit 2, a message in its log).
 dup_code=0
-podman "${RUNTIME[@]}" run --name "$PROJECT-dup" --network "${PROJECT}_swarm" \
-  -e QSWARM_AGENTS="$N" -e QSWARM_DISCOVERY_SERVER=discovery:11811 localhost/qswarm:latest \
+timeout 300 podman "${RUNTIME[@]}" run --name "$PROJECT-dup" --network "${PROJECT}_swarm" \
+  -e QSWARM_AGENTS="$N" localhost/qswarm:latest \
   swarm-agent --scenario /opt/qswarm/scenarios/compose/swarm.txtpb --interface any --id 2 --claim \
   >"$WORK/dup.log" 2>&1 || dup_code=$?
 

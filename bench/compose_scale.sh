@@ -1,0 +1,73 @@
+#!/usr/bin/env bash
+# The compose swarm at N agents (podman-compose): how long replicas take to claim their ids and to
+# pass the start barrier, and what each agent container costs (CPU, memory) while flying.
+#
+#   bench/compose_scale.sh N [N ...]       (needs the image: podman build -f docker/Dockerfile
+#                                            -t localhost/qswarm:latest .)
+# Prints one line per N: claim and discovery seconds (median, max over agents), per-container CPU
+# % and cgroup memory (median over agents and 5 samples of `podman stats`), the agent process's
+# RSS (VmRSS, median over agents), the supervisor's exit and convergence time.
+set -euo pipefail
+SRC="$(cd "$(dirname "$0")/.." && pwd)"
+export CONTAINERS_CONF="$SRC/tests/compose/containers.conf"
+RUNTIME="--runtime runc"
+command -v runc >/dev/null || RUNTIME=""
+printf '%-4s %-18s %-18s %-10s %-10s %-10s %-6s %s\n' N "claim_s p50/max" "discovery_s p50/max" \
+  "cpu%/agent" "cgroup_MiB" "RSS_MiB" exit converged_at_s
+for N in "$@"; do
+  project="qswarm-bench-$N-$$"
+  work=$(mktemp -d /tmp/qswarm-bench.XXXXXX)
+  mkdir -p "$work/runs"
+  compose=(podman-compose -p "$project" -f "$SRC/docker/docker-compose.yml")
+  QSWARM_AGENTS="$N" QSWARM_RUNS="$work/runs" QSWARM_USER="$(id -u):$(id -g)" \
+    "${compose[@]}" --podman-run-args="$RUNTIME" up -d --no-build >"$work/up.log" 2>&1
+  sup="${project}_supervisor_1"
+  # Sample while the swarm flies: wait for every agent to be running, then 5 samples 2 s apart.
+  for _ in $(seq 1 900); do
+    running=$(for c in $(podman ps --filter "label=com.docker.compose.project=$project" \
+      --filter label=com.docker.compose.service=agent --format '{{.Names}}'); do
+      podman logs "$c" 2>&1 | grep -c "running at swarm time" || true; done | awk '{s += $1} END {print s + 0}')
+    ((running >= N)) && break
+    [[ "$(podman inspect -f '{{.State.Running}}' "$sup")" == true ]] || break
+    sleep 1
+  done
+  for _ in 1 2 3 4 5; do
+    podman stats --no-stream --format '{{.Name}} {{.CPUPerc}} {{.MemUsage}}' 2>/dev/null |
+      grep "${project}_agent_" >>"$work/stats" || true
+    sleep 2
+  done
+  for c in $(podman ps --filter "label=com.docker.compose.project=$project" \
+    --filter label=com.docker.compose.service=agent --format '{{.Names}}'); do
+    podman exec "$c" grep VmRSS /proc/1/status >>"$work/rss" 2>/dev/null || true
+  done
+  code=$(podman wait "$sup")
+  for c in $(podman ps -a --filter "label=com.docker.compose.project=$project" \
+    --filter label=com.docker.compose.service=agent --format '{{.Names}}'); do
+    podman logs "$c" >>"$work/agents.log" 2>&1 || true
+  done
+  conv=$(podman logs "$sup" 2>&1 | sed -n 's/^converged at t = \([0-9.]*\) s.*/\1/p')
+  # down needs the same QSWARM_AGENTS: podman-compose lists the replicas from deploy.replicas.
+  QSWARM_AGENTS="$N" QSWARM_RUNS="$work/runs" "${compose[@]}" down >/dev/null 2>&1 || true
+  /usr/bin/python3 - "$work" "$N" "$code" "${conv:--}" <<'PY'
+import re, statistics, sys
+work, n, code, conv = sys.argv[1], int(sys.argv[2]), sys.argv[3], sys.argv[4]
+log = open(f"{work}/agents.log").read()
+claim = [float(x) for x in re.findall(r"after ([0-9.]+) s of claiming", log)]
+disc = [float(x) for x in re.findall(r"after ([0-9.]+) s of discovery", log)]
+cpu, mem = [], []
+rss = [int(l.split()[1]) / 1024 for l in open(f"{work}/rss")] if __import__("os").path.exists(f"{work}/rss") else []
+for line in open(f"{work}/stats"):
+    parts = line.split()
+    cpu.append(float(parts[1].rstrip("%")))
+    m = re.match(r"([0-9.]+)([kMG]i?B)", parts[2]) if len(parts) > 2 else None
+    if not m:
+        continue
+    scale = {"kB": 1 / 1024, "KiB": 1 / 1024, "MB": 1, "MiB": 1, "GB": 1024, "GiB": 1024}[m.group(2)]
+    mem.append(float(m.group(1)) * scale)
+med = lambda v: f"{statistics.median(v):.2f}" if v else "-"
+mx = lambda v: f"{max(v):.2f}" if v else "-"
+print(f"{n:<4} {med(claim) + '/' + mx(claim):<18} {med(disc) + '/' + mx(disc):<18} "
+      f"{med(cpu):<10} {med(mem):<10} {med(rss):<10} {code:<6} {conv}")
+PY
+  rm -rf "$work"
+done
