@@ -19,6 +19,9 @@ for N in "$@"; do
   work=$(mktemp -d /tmp/qswarm-bench.XXXXXX)
   mkdir -p "$work/runs"
   compose=(podman-compose -p "$project" -f "$SRC/docker/docker-compose.yml")
+  # Whatever happens, its containers, network and files go (down needs the same QSWARM_AGENTS).
+  trap 'QSWARM_AGENTS="$N" QSWARM_RUNS="$work/runs" "${compose[@]}" down >/dev/null 2>&1 || true;
+        podman network rm -f "${project}_swarm" >/dev/null 2>&1 || true; rm -rf "$work"' EXIT
   QSWARM_AGENTS="$N" QSWARM_RUNS="$work/runs" QSWARM_USER="$(id -u):$(id -g)" \
     "${compose[@]}" --podman-run-args="$RUNTIME" up -d --no-build >"$work/up.log" 2>&1
   sup="${project}_supervisor_1"
@@ -46,8 +49,7 @@ for N in "$@"; do
     podman logs "$c" >>"$work/agents.log" 2>&1 || true
   done
   conv=$(podman logs "$sup" 2>&1 | sed -n 's/^converged at t = \([0-9.]*\) s.*/\1/p')
-  # down needs the same QSWARM_AGENTS: podman-compose lists the replicas from deploy.replicas.
-  QSWARM_AGENTS="$N" QSWARM_RUNS="$work/runs" "${compose[@]}" down >/dev/null 2>&1 || true
+  cp "$(find "$work/runs" -name summary.json | head -1)" "$work/summary.json" 2>/dev/null || true
   /usr/bin/python3 - "$work" "$N" "$code" "${conv:--}" <<'PY'
 import re, statistics, sys
 work, n, code, conv = sys.argv[1], int(sys.argv[2]), sys.argv[3], sys.argv[4]
@@ -69,5 +71,9 @@ mx = lambda v: f"{max(v):.2f}" if v else "-"
 print(f"{n:<4} {med(claim) + '/' + mx(claim):<18} {med(disc) + '/' + mx(disc):<18} "
       f"{med(cpu):<10} {med(mem):<10} {med(rss):<10} {code:<6} {conv}")
 PY
+  /usr/bin/python3 -c "import json,sys; s=json.load(open(sys.argv[1])); print('     end:', s.get('end_reason'), '| missing', s.get('missing_agents'))" "$work/summary.json" 2>/dev/null || true
+  (trap - EXIT; QSWARM_AGENTS="$N" QSWARM_RUNS="$work/runs" "${compose[@]}" down >/dev/null 2>&1 || true)
+  podman network rm -f "${project}_swarm" >/dev/null 2>&1 || true
   rm -rf "$work"
+  trap - EXIT
 done
