@@ -30,7 +30,7 @@ void add_process_options(CLI::App& app, ProcessOptions& o) {
                  "discover through the Fast DDS Discovery Server at HOST:PORT (containers); "
                  "\"none\" or empty: simple discovery")
       ->envname("QSWARM_DISCOVERY_SERVER")
-      ->transform([](std::string v) { return v == "none" ? std::string() : v; });
+      ->transform([](const std::string& v) { return v == "none" ? std::string() : v; });
   app.add_option("--seed", o.seed, "run seed (overrides the scenario)")
       ->check(CLI::Range(std::int64_t{0}, std::int64_t{4294967295}));
 }

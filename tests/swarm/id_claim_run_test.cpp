@@ -48,6 +48,7 @@ TEST(IdClaimRun, ReplicasStartedAlikeFlyDistinctIdsAndDuplicatesAreRefused) {
   Child sup(with({bin("swarm-supervisor")}, {"--new-run-in", (dir / "runs").string()}),
             dir / "supervisor.out");
   std::vector<std::unique_ptr<Child>> agents;
+  agents.reserve(4);
   for (int k = 0; k < 4; ++k)
     agents.push_back(
         std::make_unique<Child>(with({bin("swarm-agent")}, {"--id", "auto", "--wait-supervisor"}),
