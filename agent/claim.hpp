@@ -15,7 +15,7 @@ namespace qswarm {
 // IdClaimer over the DDS claim topic, before the flight and during it.
 class IdClaimRunner {
  public:
-  // `fixed`: the id given by hand, 0 for auto.
+  // `fixed`: the id given by hand, 0 for auto; `timeout_s` < 0: the default for the swarm's size.
   IdClaimRunner(DdsBus& bus, const RunConfig& rc, AgentId fixed, double timeout_s, Clock& clock);
 
   // Waits until an id is taken (returned), the claim is refused (`why` says why) or `stop` is set.

@@ -48,10 +48,7 @@ int main(int argc, char** argv) {
     DdsBus bus(dopt);
     std::optional<IdClaimRunner> claim;
     if (claiming) {
-      claim.emplace(bus, *rc, id,
-                    f.claim_timeout_s >= 0.0 ? f.claim_timeout_s
-                                             : 60.0 + 4.0 * static_cast<double>(rc->agents.size()),
-                    clock);
+      claim.emplace(bus, *rc, id, f.claim_timeout_s, clock);
       std::string why;
       const std::optional<AgentId> taken = claim->acquire(g_stop, why);
       if (!taken) {

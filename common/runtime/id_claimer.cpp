@@ -14,6 +14,17 @@ std::string hex(std::uint64_t v) {
 }
 }  // namespace
 
+IdClaimer::Config IdClaimer::Config::for_swarm(std::size_t n, double timeout_s) {
+  Config c;
+  const double size = static_cast<double>(n);
+  c.timeout_s = timeout_s >= 0.0 ? timeout_s : 60.0 + 4.0 * size;
+  c.period_s = 0.1 * std::max(1.0, size / 6.0);
+  c.expire_s = std::max(c.expire_s, 6.0 * c.period_s);
+  c.settle_s = std::max(c.settle_s, 3.0 * c.period_s);
+  c.confirm_s = std::max(c.confirm_s, 3.0 * c.period_s);
+  return c;
+}
+
 IdClaimer::IdClaimer(std::vector<AgentId> roster, std::uint64_t nonce, std::uint64_t run_id,
                      AgentId fixed, Config cfg, double now_s)
     : roster_(std::move(roster)), cfg_(cfg), start_s_(now_s), view_since_s_(now_s) {

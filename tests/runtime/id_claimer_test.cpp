@@ -202,6 +202,19 @@ TEST(IdClaimer, NothingIsDecidedBeforeEveryMatchedWriterIsHeard) {
   EXPECT_EQ(taken, 1u);
 }
 
+TEST(IdClaimer, ABigSwarmClaimsLessOftenWithWindowsToMatch) {
+  const IdClaimer::Config few = IdClaimer::Config::for_swarm(4, -1.0);
+  EXPECT_DOUBLE_EQ(few.period_s, 0.1);
+  EXPECT_DOUBLE_EQ(few.expire_s, 2.0);
+  EXPECT_DOUBLE_EQ(few.timeout_s, 76.0);
+  const IdClaimer::Config many = IdClaimer::Config::for_swarm(32, 30.0);
+  EXPECT_NEAR(many.period_s, 0.1 * 32 / 6, 1e-12);
+  EXPECT_NEAR(many.expire_s, 6 * many.period_s, 1e-12);
+  EXPECT_NEAR(many.settle_s, 3 * many.period_s, 1e-12);
+  EXPECT_NEAR(many.confirm_s, 3 * many.period_s, 1e-12);
+  EXPECT_DOUBLE_EQ(many.timeout_s, 30.0);
+}
+
 TEST(IdClaimer, TooFewReplicasTimeOutWithAMessage) {
   Replicas net;
   for (std::uint64_t k = 1; k <= 5; ++k) net.add(k, 8, 0, 0.0, 5.0);
