@@ -2,7 +2,7 @@
 // person) and a state sample (from the network). Whatever the bytes, loading either ends in a
 // value that honours its invariants or a clean refusal: never a crash, a hang or another exception.
 // Runs a bounded number of mutations (CI runs it under ASan+UBSan too); the corpus is
-// scenarios/*.txtpb plus tests/fuzz/corpus. QSWARM_FUZZ_ITERATIONS raises the count by hand.
+// scenarios/*.txtpb, scenarios/paper/*.txtpb plus tests/fuzz/corpus. QSWARM_FUZZ_ITERATIONS raises the count by hand.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -20,7 +20,7 @@ namespace {
 
 std::vector<std::string> corpus() {
   std::vector<std::string> out;
-  for (const char* dir : {"/scenarios", "/tests/fuzz/corpus"}) {
+  for (const char* dir : {"/scenarios", "/scenarios/paper", "/tests/fuzz/corpus"}) {
     for (const auto& e :
          std::filesystem::directory_iterator(std::string(QSWARM_SOURCE_DIR) + dir)) {
       if (e.path().extension() != ".txtpb") continue;

@@ -58,7 +58,7 @@ class PaperParticle : public ::testing::TestWithParam<PaperCase> {};
 TEST_P(PaperParticle, FourAgentProcessesMeetAtThePapersPointWithin1cm) {
   const PaperCase& c = GetParam();
   const auto dir = fresh_dir("particle-" + c.scenario);
-  const Result r = swarm_run(scenario(c.scenario), dir, 4.0);
+  const Result r = swarm_run(scenario("paper/" + c.scenario), dir, 4.0);
   ASSERT_EQ(r.code, 0) << r.output;
   const records::Summary s = read_summary(dir);
   EXPECT_TRUE(s.converged());
@@ -71,11 +71,11 @@ TEST_P(PaperParticle, FourAgentProcessesMeetAtThePapersPointWithin1cm) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Paper, PaperParticle,
-                         ::testing::Values(PaperCase{"paper_unweighted", {10.25, 9.75, 29.25}},
-                                           PaperCase{"paper_weighted", {9, 12.75, 30.25}},
-                                           PaperCase{"paper_time_varying", {15.25, 10.25, 31}}),
+                         ::testing::Values(PaperCase{"unweighted", {10.25, 9.75, 29.25}},
+                                           PaperCase{"weighted", {9, 12.75, 30.25}},
+                                           PaperCase{"time_varying", {15.25, 10.25, 31}}),
                          [](const ::testing::TestParamInfo<PaperCase>& p) {
-                           return p.param.scenario;
+                           return "paper_" + p.param.scenario;
                          });
 
 class PaperQuadcopter : public ::testing::TestWithParam<PaperCase> {};
@@ -83,7 +83,7 @@ class PaperQuadcopter : public ::testing::TestWithParam<PaperCase> {};
 TEST_P(PaperQuadcopter, FourQuadcoptersFlyToThePapersPointWithin10cm) {
   const PaperCase& c = GetParam();
   const auto dir = fresh_dir("quadcopter-" + c.scenario);
-  const Result r = swarm_run(scenario(c.scenario + "_quadcopter"), dir, 2.0);
+  const Result r = swarm_run(scenario("paper/" + c.scenario + "_quadcopter"), dir, 2.0);
   ASSERT_EQ(r.code, 0) << r.output;
   const records::Summary s = read_summary(dir);
   EXPECT_TRUE(s.converged());
@@ -99,11 +99,11 @@ TEST_P(PaperQuadcopter, FourQuadcoptersFlyToThePapersPointWithin10cm) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Paper, PaperQuadcopter,
-                         ::testing::Values(PaperCase{"paper_unweighted", {10.25, 9.75, 29.25}},
-                                           PaperCase{"paper_weighted", {9, 12.75, 30.25}},
-                                           PaperCase{"paper_time_varying", {15.25, 10.25, 31}}),
+                         ::testing::Values(PaperCase{"unweighted", {10.25, 9.75, 29.25}},
+                                           PaperCase{"weighted", {9, 12.75, 30.25}},
+                                           PaperCase{"time_varying", {15.25, 10.25, 31}}),
                          [](const ::testing::TestParamInfo<PaperCase>& p) {
-                           return p.param.scenario;
+                           return "paper_" + p.param.scenario;
                          });
 
 TEST(SwarmRun, TwelveSeededRandomAgentsConvergeToTheirInitialAverage) {
@@ -131,7 +131,7 @@ TEST(SwarmRun, TwelveSeededRandomAgentsConvergeToTheirInitialAverage) {
 
 TEST(SwarmRun, ProximityAddsLinksAtRuntimeVisibleInGraphCsv) {
   const auto dir = fresh_dir("proximity");
-  const Result r = swarm_run(scenario("paper_time_varying"), dir, 4.0);
+  const Result r = swarm_run(scenario("paper/time_varying"), dir, 4.0);
   ASSERT_EQ(r.code, 0) << r.output;
   const auto rows = read_csv(dir / "graph.csv");
   int first_full_edges = -1, last_edges = -1;
@@ -257,7 +257,7 @@ TEST(SwarmRun, MalformedScenariosExit2NamingTheProblem) {
 
 TEST(SwarmRun, BadSamplesFromATestParticipantAreDroppedByEveryAgentAndChangeNothing) {
   const auto dir = fresh_dir("bad-samples");
-  Child launcher({bin("swarm"), "run", scenario("paper_unweighted"), "--out", dir.string(),
+  Child launcher({bin("swarm"), "run", scenario("paper/unweighted"), "--out", dir.string(),
                   "--domain", test_domain().str(), "--time-scale", "1", "--quiet"},
                  dir.parent_path() / "bad-samples.log");
   // The saboteur is inside the run: it knows the run's id (its DDS partition) from the record.
@@ -322,7 +322,7 @@ TEST(SwarmRun, CtrlCLeavesNoOrphansAndACompleteRunRecord) {
   const auto dir = fresh_dir("ctrl-c");
   // Agent 2 ignores SIGTERM, so the launcher's escalation to SIGKILL is exercised too.
   Child launcher(
-      {bin("swarm"), "run", scenario("paper_time_varying"), "--out", dir.string(), "--domain",
+      {bin("swarm"), "run", scenario("paper/time_varying"), "--out", dir.string(), "--domain",
        test_domain().str(), "--time-scale", "0.5", "--grace", "1", "--test-ignore-sigterm", "2"},
       dir.parent_path() / "ctrl-c.log");
   ASSERT_TRUE(wait_for(
@@ -366,7 +366,7 @@ TEST(Smoke, EveryBinaryRunsWithATinyDuration) {
 }
 
 TEST(Smoke, InspectPredictsWithoutFlying) {
-  const Result r = run({bin("swarm"), "inspect", scenario("paper_time_varying"), "--json"});
+  const Result r = run({bin("swarm"), "inspect", scenario("paper/time_varying"), "--json"});
   ASSERT_EQ(r.code, 0) << r.output;
   records::Inspection ins;
   ASSERT_TRUE(google::protobuf::util::JsonStringToMessage(r.output, &ins).ok()) << r.output;
@@ -379,13 +379,13 @@ TEST(Smoke, InspectPredictsWithoutFlying) {
   EXPECT_EQ(ins.edges_size(), 3);
   EXPECT_EQ(ins.laplacian_size(), 4);
   EXPECT_TRUE(ins.connected());
-  const Result text = run({bin("swarm"), "inspect", scenario("paper_weighted")});
+  const Result text = run({bin("swarm"), "inspect", scenario("paper/weighted")});
   EXPECT_NE(text.output.find("13.06"), std::string::npos) << text.output;
 }
 
 TEST(Record, ASecondRunOnTheSameOutIsRefusedAndADeadSupervisorStillLeavesASummary) {
   const auto dir = fresh_dir("dead-supervisor");
-  Child launcher({bin("swarm"), "run", scenario("paper_time_varying"), "--out", dir.string(),
+  Child launcher({bin("swarm"), "run", scenario("paper/time_varying"), "--out", dir.string(),
                   "--domain", test_domain().str(), "--time-scale", "1", "--quiet"},
                  dir.parent_path() / "dead-supervisor.log");
   ASSERT_TRUE(wait_for([&] { return pid_of(dir, "supervisor", 0) > 0; }, 30.0));
@@ -408,10 +408,10 @@ TEST(Record, ASecondRunOnTheSameOutIsRefusedAndADeadSupervisorStillLeavesASummar
 TEST(Record, TwoRunsOnOneDomainKeepTheirOwnResultsAndEachSaysTheOtherWasThere) {
   // Two unrelated runs, same domain, at the same time: each must meet at its own average.
   const auto dir_a = fresh_dir("shared-domain-a"), dir_b = fresh_dir("shared-domain-b");
-  Child a({bin("swarm"), "run", scenario("paper_unweighted"), "--out", dir_a.string(), "--domain",
+  Child a({bin("swarm"), "run", scenario("paper/unweighted"), "--out", dir_a.string(), "--domain",
            test_domain().str(), "--time-scale", "2", "--quiet"},
           dir_a.parent_path() / "shared-domain-a.log");
-  Child b({bin("swarm"), "run", scenario("paper_weighted"), "--out", dir_b.string(), "--domain",
+  Child b({bin("swarm"), "run", scenario("paper/weighted"), "--out", dir_b.string(), "--domain",
            test_domain().str(), "--time-scale", "2", "--quiet"},
           dir_b.parent_path() / "shared-domain-b.log");
   const Result ra = a.wait(240.0), rb = b.wait(240.0);

@@ -51,7 +51,7 @@ TEST(Soak, HundredsOfTeardownsWithoutAChildAborting) {
     // Two of three runs are interrupted by Ctrl-C while flying, one ends at its duration.
     const bool interrupt = i % 3 != 2;
     std::vector<std::string> argv = {
-        soak_bin("swarm"), "run",      scenario("paper_unweighted"), "--out",
+        soak_bin("swarm"), "run",      scenario("paper/unweighted"), "--out",
         dir.string(),      "--domain", test_domain().str(),          "--quiet",
         "--time-scale",    "2"};
     if (!interrupt) {
