@@ -1,5 +1,6 @@
 // swarm: launch a swarm of agent processes plus a supervisor (`swarm run`), analyse a scenario's
-// initial graph without flying (`swarm inspect`), or draw a run (`swarm plot`).
+// initial graph without flying (`swarm inspect`), draw a run (`swarm plot`), or regenerate the
+// paper's figures and report (`swarm paper`).
 #include <sys/wait.h>
 #include <unistd.h>
 #include <CLI/CLI.hpp>
@@ -22,6 +23,7 @@
 #include "common/runtime/scenario.hpp"
 #include "tools/inspect.hpp"
 #include "tools/launcher.hpp"
+#include "tools/paper_maneuvers.hpp"
 #include "tools/process_group.hpp"
 
 namespace fs = std::filesystem;
@@ -195,24 +197,79 @@ int run(const RunOptions& opt) {
   return converged ? 0 : 1;
 }
 
-// `swarm plot`: the figures are drawn by tools/plot/swarm_plot.py (matplotlib), installed beside
-// this binary; Debian's interpreter first, where python3-matplotlib lives.
-int plot(const std::string& run_dir, const std::string& out) {
-  const std::string script = (bin_dir() / "swarm_plot.py").string();
+// Runs a figure script installed beside this binary (tools/plot/) with Debian's interpreter
+// first, where python3-matplotlib lives. Returns only when it cannot be started.
+int exec_script(const std::string& command, const std::string& script,
+                std::vector<std::string> script_args) {
   const std::string python = fs::exists("/usr/bin/python3") ? "/usr/bin/python3" : "python3";
-  std::vector<std::string> args = {python, script, run_dir};
-  if (!out.empty()) {
-    args.push_back("--out");
-    args.push_back(out);
-  }
+  std::vector<std::string> args = {python, (bin_dir() / script).string()};
+  args.insert(args.end(), script_args.begin(), script_args.end());
   std::vector<char*> argv;
   argv.reserve(args.size() + 1);
   for (std::string& a : args) argv.push_back(a.data());
   argv.push_back(nullptr);
   execvp(argv[0], argv.data());
-  std::cerr << "swarm plot: cannot run " << python << " (" << std::strerror(errno)
+  std::cerr << command << ": cannot run " << python << " (" << std::strerror(errno)
             << "); tools/setup.sh installs python3-matplotlib\n";
   return 2;
+}
+
+// `swarm plot`: the figures are drawn by tools/plot/swarm_plot.py (matplotlib).
+int plot(const std::string& run_dir, const std::string& out) {
+  std::vector<std::string> args = {run_dir};
+  if (!out.empty()) {
+    args.push_back("--out");
+    args.push_back(out);
+  }
+  return exec_script("swarm plot", "swarm_plot.py", args);
+}
+
+struct PaperOptions {
+  std::string out = "docs/paper";
+  std::string runs;  // where the runs go (default runs/TIMESTAMP-paper)
+  std::string from;  // redraw from these runs, fly nothing
+  std::string scenarios = "scenarios/paper";
+  double time_scale = 4.0;
+  int domain = -1;  // DDS domain for the runs (default: each scenario's)
+};
+
+// `swarm paper`: the section 4 maneuvers are simulated here (core primitives, in-process); the
+// rendezvous scenarios are flown by `swarm run` and the figures and report are drawn by
+// tools/plot/swarm_paper.py.
+int paper(const PaperOptions& opt) {
+  std::string runs = opt.from;
+  if (runs.empty()) {
+    const fs::path rendezvous = fs::path(opt.scenarios) / "rendezvous3.txtpb";
+    RunConfig rc;
+    try {
+      rc = resolve_scenario(read_scenario_file(rendezvous.string()));
+    } catch (const ScenarioError& e) {
+      std::cerr << "swarm paper: " << e.what() << "\n";
+      return 2;
+    }
+    try {
+      runs = claim_run_dir(opt.runs, "paper", run_timestamp()).string();
+      fs::create_directories(fs::path(runs) / "maneuvers");
+      write_paper_maneuvers(rc, (fs::path(runs) / "maneuvers").string());
+    } catch (const RunDirError& e) {
+      std::cerr << "swarm paper: " << e.what() << "\n";
+      return 2;
+    } catch (const std::exception& e) {
+      std::cerr << "swarm paper: " << e.what() << "\n";
+      return 3;
+    }
+  }
+  std::vector<std::string> args = {"--swarm",      (bin_dir() / "swarm").string(),
+                                   "--scenarios",  opt.scenarios,
+                                   "--runs",       runs,
+                                   "--out",        opt.out,
+                                   "--time-scale", std::to_string(opt.time_scale)};
+  if (opt.domain >= 0) {
+    args.emplace_back("--domain");
+    args.push_back(std::to_string(opt.domain));
+  }
+  if (opt.from.empty()) args.emplace_back("--fly");
+  return exec_script("swarm paper", "swarm_paper.py", args);
 }
 
 }  // namespace
@@ -301,6 +358,25 @@ int main(int argc, char** argv) {
   CLI::App* plot_cmd = app.add_subcommand("plot", "PNG figures of a run directory (matplotlib)");
   plot_cmd->add_option("run_dir", plot_dir, "run directory written by swarm run")->required();
   plot_cmd->add_option("--out", plot_out, "figure directory (default RUN_DIR/plots)");
+  PaperOptions po;
+  CLI::App* paper_cmd = app.add_subcommand(
+      "paper", "fly the paper's scenarios and write its figures and a report (docs/paper)");
+  paper_cmd->add_option("--out", po.out, "figure and report directory (default docs/paper)");
+  CLI::Option* paper_runs = paper_cmd->add_option(
+      "--runs", po.runs, "directory for the runs (default runs/TIMESTAMP-paper)");
+  paper_cmd
+      ->add_option("--from", po.from,
+                   "redraw from the runs of an earlier `swarm paper`, fly nothing")
+      ->check(CLI::ExistingDirectory)
+      ->excludes(paper_runs);
+  paper_cmd
+      ->add_option("--scenarios", po.scenarios, "the paper's scenarios (default scenarios/paper)")
+      ->check(CLI::ExistingDirectory);
+  paper_cmd
+      ->add_option("--time-scale", po.time_scale, "simulated seconds per wall second (default 4)")
+      ->check(finite_range(0.01, 100.0));
+  paper_cmd->add_option("--domain", po.domain, "DDS domain id for the runs")
+      ->check(CLI::Range(0, 232));
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -308,5 +384,6 @@ int main(int argc, char** argv) {
   }
   if (*run_cmd) return run(ro);
   if (*plot_cmd) return plot(plot_dir, plot_out);
+  if (*paper_cmd) return paper(po);
   return inspect_scenario(inspect_path, json);
 }

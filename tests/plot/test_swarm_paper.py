@@ -1,0 +1,191 @@
+#!/usr/bin/python3
+"""Tests of `swarm paper` (tools/swarm_main.cpp + tools/plot/swarm_paper.py), end to end.
+
+Flies the paper's scenarios once with the real multi-process swarm (about a minute of wall time
+here) into a temporary directory on a leased DDS test domain, then checks what a user relies on:
+every figure and the report are written, the report's numbers are the paper's where they should be,
+drawing the same runs again gives identical bytes, and bad or failed runs give no report.
+
+Usage: test_swarm_paper.py BUILD_BIN_DIR   (ctest -L paper runs it)
+"""
+
+import fcntl
+import os
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+import unittest
+import zlib
+
+BIN = None
+FIGURES = [
+    "fig01_unweighted_l2_3d.png", "fig02_unweighted_l2_agent1_xyz.png", "fig03_weighted_3d.png",
+    "fig04_weighted_agent1_xyz.png", "fig05_time_varying_3d.png",
+    "fig06_time_varying_agent1_xyz.png", "fig07_maneuver_path_and_attitude.png",
+    "fig08_maneuver_controls.png", "fig09_rendezvous3_paths.png", "fig10_rendezvous3_yaw.png",
+    "fig11_rendezvous3_controls.png", "fig12_rendezvous3_with_without_dynamics.png",
+    "swarm_quadcopters_3d.png",
+]
+RUN_NAMES = ["unweighted", "unweighted_l2", "weighted_baseline", "weighted",
+             "time_varying_baseline", "time_varying", "rendezvous3", "time_varying_quadcopter"]
+PAPER_POINTS = {"unweighted": (10.25, 9.75, 29.25), "weighted": (9, 12.75, 30.25),
+                "time_varying": (15.25, 10.25, 31), "rendezvous3": (5, 6, 0)}
+
+
+def lease_domain(key):
+    """A DDS domain in 20..232 no other test holds (the flock scheme of tests/swarm/domain_lease)."""
+    os.makedirs("/tmp/qswarm-test-domains", exist_ok=True)
+    start = zlib.crc32(key.encode()) % 213
+    for k in range(213):
+        d = 20 + (start + k) % 213
+        f = open(f"/tmp/qswarm-test-domains/{d}.lock", "a+")
+        try:
+            fcntl.flock(f, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            return d, f
+        except OSError:
+            f.close()
+    raise RuntimeError("no free DDS test domain")
+
+
+def swarm(*args):
+    return subprocess.run([os.path.join(BIN, "swarm"), *args], capture_output=True, text=True,
+                          timeout=900)
+
+
+def tree(d):
+    out = {}
+    for name in sorted(os.listdir(d)):
+        with open(os.path.join(d, name), "rb") as f:
+            out[name] = f.read()
+    return out
+
+
+class SwarmPaperTest(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        cls.tmp = tempfile.TemporaryDirectory(prefix="swarm-paper-test-")
+        cls.root = cls.tmp.name
+        cls.domain, cls.lock = lease_domain("SwarmPaperTest")
+        cls.runs = os.path.join(cls.root, "runs")
+        cls.out = os.path.join(cls.root, "out")
+        cls.first = swarm("paper", "--runs", cls.runs, "--out", cls.out, "--domain",
+                          str(cls.domain), "--scenarios", os.path.join(SOURCE, "scenarios", "paper"))
+
+    @classmethod
+    def tearDownClass(cls):
+        cls.lock.close()
+        cls.tmp.cleanup()
+
+    def copy_runs(self, name):
+        dst = os.path.join(self.root, name)
+        shutil.copytree(self.runs, dst)
+        return dst
+
+    def paper_from(self, runs, out):
+        return swarm("paper", "--from", runs, "--out", out, "--scenarios",
+                     os.path.join(SOURCE, "scenarios", "paper"))
+
+    def test_flies_every_run_and_writes_every_figure_and_the_report(self):
+        r = self.first
+        self.assertEqual(r.returncode, 0, r.stdout + r.stderr)
+        for name in RUN_NAMES:
+            self.assertTrue(os.path.isfile(os.path.join(self.runs, name, "summary.json")), name)
+        for name in ("single_agent.csv", "rendezvous_dynamics.csv"):
+            self.assertTrue(os.path.isfile(os.path.join(self.runs, "maneuvers", name)), name)
+        listed = r.stdout.split()
+        for name in FIGURES + ["report.md"]:
+            path = os.path.join(self.out, name)
+            self.assertIn(path, listed)
+            self.assertGreater(os.path.getsize(path), 1000, name)
+        for name in FIGURES:
+            with open(os.path.join(self.out, name), "rb") as f:
+                self.assertEqual(f.read(8), b"\x89PNG\r\n\x1a\n", name)
+        self.assertEqual(sorted(os.listdir(self.out)), sorted(FIGURES + ["report.md"]))
+
+    def test_report_puts_our_numbers_beside_the_papers(self):
+        with open(os.path.join(self.out, "report.md"), encoding="utf-8") as f:
+            text = f.read()
+        for name in FIGURES:
+            self.assertIn(f"]({name})", text)
+        # The table row of each paper run: our agreed point within 1e-3 m of the paper's.
+        for stem, q in PAPER_POINTS.items():
+            row = next(line for line in text.splitlines() if line.startswith(f"| `{stem}` |"))
+            cells = [c.strip() for c in row.split("|")]
+            ours = [float(x) for x in cells[3].strip("()").split(",")]
+            for a, b in zip(ours, q):
+                self.assertAlmostEqual(a, b, delta=1e-3, msg=stem)
+        self.assertIn("{0, 6.240, 19.385, 37.655}", text)  # the eigenvalues of the paper's L_2i
+        self.assertIn("{0, 13.060, 42.248, 62.558}", text)
+        # The weighted network converges faster, by a ratio of decay rates near lambda_2's 13.06.
+        m = re.search(r"measured decay rates ([0-9.]+) against ([0-9.]+)", text)
+        self.assertIsNotNone(m)
+        self.assertGreater(float(m.group(1)) / float(m.group(2)), 8.0)
+        self.assertIsNone(re.search(r"\bnan\b", text, re.I))  # every number was measured
+
+    def test_drawing_the_same_runs_again_gives_identical_bytes(self):
+        out2 = os.path.join(self.root, "out-again")
+        r = self.paper_from(self.runs, out2)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        self.assertEqual(tree(self.out), tree(out2))
+
+    def test_a_missing_maneuver_file_is_named_and_exits_2(self):
+        runs = self.copy_runs("runs-no-maneuver")
+        os.remove(os.path.join(runs, "maneuvers", "single_agent.csv"))
+        out = os.path.join(self.root, "out-no-maneuver")
+        r = self.paper_from(runs, out)
+        self.assertEqual(r.returncode, 2)
+        self.assertIn("single_agent.csv", r.stderr)
+        self.assertFalse(os.path.exists(os.path.join(out, "report.md")))
+
+    def test_a_half_written_run_is_named_and_exits_2(self):
+        runs = self.copy_runs("runs-half")
+        path = os.path.join(runs, "weighted", "summary.json")
+        with open(path, "r+", encoding="utf-8") as f:
+            text = f.read()
+            f.seek(0)
+            f.truncate()
+            f.write(text[: len(text) // 2])
+        r = self.paper_from(runs, os.path.join(self.root, "out-half"))
+        self.assertEqual(r.returncode, 2)
+        self.assertIn(os.path.join("weighted", "summary.json"), r.stderr)
+
+    def test_a_run_that_did_not_converge_gives_no_report(self):
+        runs = self.copy_runs("runs-failed")
+        path = os.path.join(runs, "time_varying", "summary.json")
+        with open(path, encoding="utf-8") as f:
+            text = f.read()
+        with open(path, "w", encoding="utf-8") as f:
+            f.write(text.replace('"converged": true', '"converged": false', 1))
+        out = os.path.join(self.root, "out-failed")
+        os.makedirs(out)
+        with open(os.path.join(out, "report.md"), "w", encoding="utf-8") as f:
+            f.write("the previous report\n")
+        r = self.paper_from(runs, out)
+        self.assertEqual(r.returncode, 1)
+        self.assertIn("time_varying", r.stderr)
+        self.assertIn("did not converge", r.stderr)
+        with open(os.path.join(out, "report.md"), encoding="utf-8") as f:
+            self.assertEqual(f.read(), "the previous report\n")  # left as it was
+        self.assertEqual(os.listdir(out), ["report.md"])
+
+    def test_bad_flags_name_the_flag_and_exit_2(self):
+        for args, flag in ((["--time-scale", "nan"], "--time-scale"),
+                           (["--time-scale", "0"], "--time-scale"),
+                           (["--domain", "999"], "--domain"),
+                           (["--from", os.path.join(self.root, "nowhere")], "--from"),
+                           (["--from", self.runs, "--runs", self.runs], "--runs")):
+            r = swarm("paper", *args, "--out", os.path.join(self.root, "never"))
+            self.assertEqual(r.returncode, 2, args)
+            self.assertIn(flag, r.stderr + r.stdout, args)
+        self.assertFalse(os.path.exists(os.path.join(self.root, "never")))
+
+
+if __name__ == "__main__":
+    if len(sys.argv) < 2:
+        print("usage: test_swarm_paper.py BUILD_BIN_DIR", file=sys.stderr)
+        sys.exit(2)
+    BIN = os.path.abspath(sys.argv.pop(1))
+    SOURCE = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", ".."))
+    unittest.main()

@@ -1,0 +1,112 @@
+#include "tools/paper_maneuvers.hpp"
+
+#include <cstdio>
+#include <filesystem>
+#include <stdexcept>
+#include <vector>
+
+#include "common/core/dynamics.hpp"
+#include "common/core/primitives.hpp"
+
+namespace qswarm {
+namespace {
+
+constexpr double kStepS = 0.002;
+constexpr int kRowEvery = 10;  // a row every 0.02 s
+
+const char* segment_name(OpenLoopManeuver::Kind k) {
+  switch (k) {
+    case OpenLoopManeuver::Kind::kHover:
+      return "hover";
+    case OpenLoopManeuver::Kind::kClimb:
+      return "climb";
+    case OpenLoopManeuver::Kind::kYaw:
+      return "yaw";
+    case OpenLoopManeuver::Kind::kBodyX:
+      return "body_x";
+  }
+  return "hover";
+}
+
+const char* segment_at(const OpenLoopManeuver& m, double t) {
+  double start = 0.0;
+  for (const auto& seg : m.segments()) {
+    if (t < start + seg.duration_s) return segment_name(seg.kind);
+    start += seg.duration_s;
+  }
+  return "hover";
+}
+
+class CsvFile {
+ public:
+  explicit CsvFile(const std::filesystem::path& path) : path_(path.string()) {
+    f_ = std::fopen(path_.c_str(), "w");
+    if (f_ == nullptr) throw std::runtime_error("cannot create " + path_);
+    std::fputs("drone,t_s,x,y,z,roll,pitch,yaw,w1,w2,w3,w4,thrust_N,yaw_torque_Nm,segment\n", f_);
+  }
+  CsvFile(const CsvFile&) = delete;
+  CsvFile& operator=(const CsvFile&) = delete;
+  ~CsvFile() {
+    if (f_ != nullptr) std::fclose(f_);
+  }
+
+  void row(unsigned drone, double t, const QuadState& s, const Airframe& af, const RotorSpeeds& w,
+           const char* segment) {
+    const TaitBryan a = tait_bryan_from_rotation(s.R_WB);
+    std::fprintf(
+        f_, "%u,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%s\n",
+        drone, t, s.p_W.x(), s.p_W.y(), s.p_W.z(), a.roll_rad, a.pitch_rad, a.yaw_rad, w[0], w[1],
+        w[2], w[3], total_thrust(af, w), rotor_torque(af, w).z(), segment);
+  }
+
+  void close() {
+    const bool bad = std::ferror(f_) != 0;
+    const int rc = std::fclose(f_);
+    f_ = nullptr;
+    if (bad || rc != 0)
+      throw std::runtime_error("cannot write " + path_ + " completely (disk full?)");
+  }
+
+ private:
+  std::string path_;
+  std::FILE* f_ = nullptr;
+};
+
+// Flies `m` from `s` for its whole duration; a row every kRowEvery steps and one at the end.
+void fly(CsvFile& csv, unsigned drone, const Airframe& af, OpenLoopManeuver m, QuadState s) {
+  const int steps = static_cast<int>(m.duration_s() / kStepS + 0.5);
+  for (int i = 0; i <= steps; ++i) {
+    const double t = i * kStepS;
+    const RotorSpeeds w = m.command(t, s);
+    if (i % kRowEvery == 0 || i == steps) csv.row(drone, t, s, af, w, segment_at(m, t));
+    if (i < steps) s = rk4_step(af, s, w, kStepS);
+  }
+  if (!s.finite())
+    throw std::runtime_error("the maneuver of drone " + std::to_string(drone) +
+                             " left finite numbers");
+}
+
+}  // namespace
+
+void write_paper_maneuvers(const RunConfig& rendezvous, const std::string& out_dir) {
+  namespace fs = std::filesystem;
+  const Airframe af;  // the paper's Table 1
+  {
+    CsvFile csv(fs::path(out_dir) / "single_agent.csv");
+    fly(csv, 1, af, OpenLoopManeuver::paper_single_agent(af), QuadState{});
+    csv.close();
+  }
+  Vec3 target = Vec3::Zero();
+  for (const AgentSpec& a : rendezvous.agents) target += a.position_W;
+  target /= static_cast<double>(rendezvous.agents.size());
+  CsvFile csv(fs::path(out_dir) / "rendezvous_dynamics.csv");
+  for (const AgentSpec& a : rendezvous.agents) {
+    QuadState s;
+    s.p_W = a.position_W;
+    s.R_WB = rotation_from_tait_bryan({0.0, 0.0, a.yaw_rad});
+    fly(csv, a.id, af, OpenLoopManeuver::yaw_then_fly(af, s, target), s);
+  }
+  csv.close();
+}
+
+}  // namespace qswarm
