@@ -1,5 +1,6 @@
 #include "tools/paper_maneuvers.hpp"
 
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <stdexcept>
@@ -74,7 +75,7 @@ class CsvFile {
 
 // Flies `m` from `s` for its whole duration; a row every kRowEvery steps and one at the end.
 void fly(CsvFile& csv, unsigned drone, const Airframe& af, OpenLoopManeuver m, QuadState s) {
-  const int steps = static_cast<int>(m.duration_s() / kStepS + 0.5);
+  const int steps = static_cast<int>(std::lround(m.duration_s() / kStepS));
   for (int i = 0; i <= steps; ++i) {
     const double t = i * kStepS;
     const RotorSpeeds w = m.command(t, s);
