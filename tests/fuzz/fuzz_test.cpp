@@ -2,7 +2,8 @@
 // person) and a state sample (from the network). Whatever the bytes, loading either ends in a
 // value that honours its invariants or a clean refusal: never a crash, a hang or another exception.
 // Runs a bounded number of mutations (CI runs it under ASan+UBSan too); the corpus is
-// scenarios/*.txtpb, scenarios/paper/*.txtpb plus tests/fuzz/corpus. QSWARM_FUZZ_ITERATIONS raises the count by hand.
+// scenarios/*.txtpb, scenarios/paper/*.txtpb plus tests/fuzz/corpus. QSWARM_FUZZ_ITERATIONS raises
+// the count by hand.
 #include <gtest/gtest.h>
 
 #include <cmath>
