@@ -29,13 +29,14 @@ const char* segment_name(OpenLoopManeuver::Kind k) {
   return "hover";
 }
 
+// The segment flown at t; the row at the very end belongs to the last segment.
 const char* segment_at(const OpenLoopManeuver& m, double t) {
   double start = 0.0;
   for (const auto& seg : m.segments()) {
     if (t < start + seg.duration_s) return segment_name(seg.kind);
     start += seg.duration_s;
   }
-  return "hover";
+  return m.segments().empty() ? "hover" : segment_name(m.segments().back().kind);
 }
 
 class CsvFile {
@@ -73,8 +74,16 @@ class CsvFile {
   std::FILE* f_ = nullptr;
 };
 
-// Flies `m` from `s` for its whole duration; a row every kRowEvery steps and one at the end.
-void fly(CsvFile& csv, unsigned drone, const Airframe& af, OpenLoopManeuver m, QuadState s) {
+// Flies `m` from `s` for its whole duration; a row every kRowEvery steps and one at the end. Each
+// segment's start and duration go to `segments` (drone,segment,start_s,duration_s,amount).
+void fly(CsvFile& csv, std::FILE* segments, unsigned drone, const Airframe& af, OpenLoopManeuver m,
+         QuadState s) {
+  double start = 0.0;
+  for (const auto& seg : m.segments()) {
+    std::fprintf(segments, "%u,%s,%.17g,%.17g,%.17g\n", drone, segment_name(seg.kind), start,
+                 seg.duration_s, seg.amount);
+    start += seg.duration_s;
+  }
   const int steps = static_cast<int>(std::lround(m.duration_s() / kStepS));
   for (int i = 0; i <= steps; ++i) {
     const double t = i * kStepS;
@@ -92,22 +101,42 @@ void fly(CsvFile& csv, unsigned drone, const Airframe& af, OpenLoopManeuver m, Q
 void write_paper_maneuvers(const RunConfig& rendezvous, const std::string& out_dir) {
   namespace fs = std::filesystem;
   const Airframe af;  // the paper's Table 1
-  {
-    CsvFile csv(fs::path(out_dir) / "single_agent.csv");
-    fly(csv, 1, af, OpenLoopManeuver::paper_single_agent(af), QuadState{});
+  const std::string seg_path = (fs::path(out_dir) / "segments.csv").string();
+  std::FILE* segments = std::fopen(seg_path.c_str(), "w");
+  if (segments == nullptr) throw std::runtime_error("cannot create " + seg_path);
+  std::fputs("drone,segment,start_s,duration_s,amount\n", segments);
+  const auto close_segments = [&] {
+    const bool bad = std::ferror(segments) != 0;
+    const int rc = std::fclose(segments);
+    segments = nullptr;
+    if (bad || rc != 0) {
+      throw std::runtime_error("cannot write " + seg_path + " completely (disk full?)");
+    }
+  };
+  try {
+    {
+      CsvFile csv(fs::path(out_dir) / "single_agent.csv");
+      std::fputs("# single_agent.csv\n", segments);
+      fly(csv, segments, 1, af, OpenLoopManeuver::paper_single_agent(af), QuadState{});
+      csv.close();
+    }
+    Vec3 target = Vec3::Zero();
+    for (const AgentSpec& a : rendezvous.agents) target += a.position_W;
+    target /= static_cast<double>(rendezvous.agents.size());
+    CsvFile csv(fs::path(out_dir) / "rendezvous_dynamics.csv");
+    std::fputs("# rendezvous_dynamics.csv\n", segments);
+    for (const AgentSpec& a : rendezvous.agents) {
+      QuadState s;
+      s.p_W = a.position_W;
+      s.R_WB = rotation_from_tait_bryan({0.0, 0.0, a.yaw_rad});
+      fly(csv, segments, a.id, af, OpenLoopManeuver::yaw_then_fly(af, s, target), s);
+    }
     csv.close();
+  } catch (...) {
+    if (segments != nullptr) std::fclose(segments);
+    throw;
   }
-  Vec3 target = Vec3::Zero();
-  for (const AgentSpec& a : rendezvous.agents) target += a.position_W;
-  target /= static_cast<double>(rendezvous.agents.size());
-  CsvFile csv(fs::path(out_dir) / "rendezvous_dynamics.csv");
-  for (const AgentSpec& a : rendezvous.agents) {
-    QuadState s;
-    s.p_W = a.position_W;
-    s.R_WB = rotation_from_tait_bryan({0.0, 0.0, a.yaw_rad});
-    fly(csv, a.id, af, OpenLoopManeuver::yaw_then_fly(af, s, target), s);
-  }
-  csv.close();
+  close_segments();
 }
 
 }  // namespace qswarm

@@ -13,6 +13,7 @@ namespace qswarm {
 //                             along body x over 4 s)
 //   rendezvous_dynamics.csv   every agent of `rendezvous` flies yaw-then-fly to the agents'
 //                             initial average (4 s yaw, then body x, then 2 s hover)
+//   segments.csv              every segment's start and duration, per file and drone
 //
 // Columns: drone, t_s, x, y, z, roll, pitch, yaw [rad], w1..w4 [rad/s], thrust_N, yaw_torque_Nm,
 // segment (hover, climb, yaw, body_x). Rows every 0.02 s of a 0.002 s RK4 integration; the numbers

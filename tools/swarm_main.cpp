@@ -252,7 +252,13 @@ int paper(const PaperOptions& opt) {
       fs::create_directories(fs::path(runs) / "maneuvers");
       write_paper_maneuvers(rc, (fs::path(runs) / "maneuvers").string());
     } catch (const RunDirError& e) {
-      std::cerr << "swarm paper: " << e.what() << "\n";
+      // claim_run_dir speaks of --out, the flag of `swarm run`; here the directory is --runs.
+      std::string what = e.what();
+      for (std::size_t at = what.find("--out"); at != std::string::npos;
+           at = what.find("--out", at + 6)) {
+        what.replace(at, 5, "--runs");
+      }
+      std::cerr << "swarm paper: " << what << "\n";
       return 2;
     } catch (const std::exception& e) {
       std::cerr << "swarm paper: " << e.what() << "\n";
@@ -364,19 +370,22 @@ int main(int argc, char** argv) {
   paper_cmd->add_option("--out", po.out, "figure and report directory (default docs/paper)");
   CLI::Option* paper_runs = paper_cmd->add_option(
       "--runs", po.runs, "directory for the runs (default runs/TIMESTAMP-paper)");
-  paper_cmd
-      ->add_option("--from", po.from,
-                   "redraw from the runs of an earlier `swarm paper`, fly nothing")
-      ->check(CLI::ExistingDirectory)
-      ->excludes(paper_runs);
+  CLI::Option* paper_from =
+      paper_cmd
+          ->add_option("--from", po.from,
+                       "redraw from the runs of an earlier `swarm paper`, fly nothing")
+          ->check(CLI::ExistingDirectory)
+          ->excludes(paper_runs);
   paper_cmd
       ->add_option("--scenarios", po.scenarios, "the paper's scenarios (default scenarios/paper)")
       ->check(CLI::ExistingDirectory);
   paper_cmd
       ->add_option("--time-scale", po.time_scale, "simulated seconds per wall second (default 4)")
-      ->check(finite_range(0.01, 100.0));
+      ->check(finite_range(0.01, 100.0))
+      ->excludes(paper_from);
   paper_cmd->add_option("--domain", po.domain, "DDS domain id for the runs")
-      ->check(CLI::Range(0, 232));
+      ->check(CLI::Range(0, 232))
+      ->excludes(paper_from);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

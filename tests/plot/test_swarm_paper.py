@@ -30,8 +30,15 @@ FIGURES = [
 ]
 RUN_NAMES = ["unweighted", "unweighted_l2", "weighted_baseline", "weighted",
              "time_varying_baseline", "time_varying", "rendezvous3", "time_varying_quadcopter"]
-PAPER_POINTS = {"unweighted": (10.25, 9.75, 29.25), "weighted": (9, 12.75, 30.25),
-                "time_varying": (15.25, 10.25, 31), "rendezvous3": (5, 6, 0)}
+PAPER_POINTS = {"unweighted": (10.25, 9.75, 29.25), "unweighted_l2": (10.25, 9.75, 29.25),
+                "weighted_baseline": (9, 12.75, 30.25), "weighted": (9, 12.75, 30.25),
+                "time_varying_baseline": (15.25, 10.25, 31), "time_varying": (15.25, 10.25, 31),
+                "rendezvous3": (5, 6, 0), "time_varying_quadcopter": (15.25, 10.25, 31)}
+# The eigenvalues of each run's initial Laplacian (tests/core holds them against the paper's
+# matrices): 2.6.1's L_1 and L_2, 2.7.1's distance weights, 2.7.2's printed L_2i, K_3.
+EIGENVALUES = {"unweighted": (0, 1, 3, 4), "unweighted_l2": (0, 0.586, 2, 3.414),
+               "weighted": (0, 13.060, 42.248, 62.558), "time_varying": (0, 6.240, 19.385, 37.655),
+               "time_varying_baseline": (0, 0.586, 2, 3.414), "rendezvous3": (0, 3, 3)}
 
 
 def lease_domain(key):
@@ -92,7 +99,7 @@ class SwarmPaperTest(unittest.TestCase):
         self.assertEqual(r.returncode, 0, r.stdout + r.stderr)
         for name in RUN_NAMES:
             self.assertTrue(os.path.isfile(os.path.join(self.runs, name, "summary.json")), name)
-        for name in ("single_agent.csv", "rendezvous_dynamics.csv"):
+        for name in ("single_agent.csv", "rendezvous_dynamics.csv", "segments.csv"):
             self.assertTrue(os.path.isfile(os.path.join(self.runs, "maneuvers", name)), name)
         listed = r.stdout.split()
         for name in FIGURES + ["report.md"]:
@@ -109,15 +116,28 @@ class SwarmPaperTest(unittest.TestCase):
             text = f.read()
         for name in FIGURES:
             self.assertIn(f"]({name})", text)
-        # The table row of each paper run: our agreed point within 1e-3 m of the paper's.
-        for stem, q in PAPER_POINTS.items():
+        rows = {}
+        for stem in PAPER_POINTS:
             row = next(line for line in text.splitlines() if line.startswith(f"| `{stem}` |"))
-            cells = [c.strip() for c in row.split("|")]
-            ours = [float(x) for x in cells[3].strip("()").split(",")]
+            rows[stem] = [c.strip() for c in row.split("|")]
+        # Every run's agreed point (measured) within 1e-3 m of the paper's.
+        for stem, q in PAPER_POINTS.items():
+            ours = [float(x) for x in rows[stem][3].strip("()").split(",")]
             for a, b in zip(ours, q):
                 self.assertAlmostEqual(a, b, delta=1e-3, msg=stem)
-        self.assertIn("{0, 6.240, 19.385, 37.655}", text)  # the eigenvalues of the paper's L_2i
-        self.assertIn("{0, 13.060, 42.248, 62.558}", text)
+        # Our eigenvalues (from each run's own scenario.txtpb) are the initial Laplacians'.
+        for stem, eig in EIGENVALUES.items():
+            ours = [float(x) for x in rows[stem][6].strip("{}").split(",")]
+            self.assertEqual(len(ours), len(eig), stem)
+            for a, b in zip(ours, eig):
+                self.assertAlmostEqual(a, b, delta=1e-3, msg=stem)
+        # Measured decay rates of the fixed unweighted graphs are near lambda_2, and each fixed
+        # graph's lockstep rate (same law without DDS) is within 5 % of lambda_2 too.
+        for stem, lam in (("unweighted", 1.0), ("unweighted_l2", 0.586), ("rendezvous3", 3.0),
+                          ("weighted", 13.06)):
+            measured, lock = (float(x) for x in rows[stem][7].split("/"))
+            self.assertAlmostEqual(lock, lam, delta=0.05 * lam, msg=stem)
+            self.assertGreater(measured, 0.5 * lam, stem)
         # The weighted network converges faster, by a ratio of decay rates near lambda_2's 13.06.
         m = re.search(r"measured decay rates ([0-9.]+) against ([0-9.]+)", text)
         self.assertIsNotNone(m)
@@ -170,12 +190,29 @@ class SwarmPaperTest(unittest.TestCase):
             self.assertEqual(f.read(), "the previous report\n")  # left as it was
         self.assertEqual(os.listdir(out), ["report.md"])
 
+    def test_an_output_that_cannot_be_written_exits_3(self):
+        blocker = os.path.join(self.root, "a-file")
+        with open(blocker, "w", encoding="utf-8") as f:
+            f.write("not a directory\n")
+        r = self.paper_from(self.runs, blocker)
+        self.assertEqual(r.returncode, 3, r.stderr)
+        self.assertIn(blocker, r.stderr)
+
+    def test_runs_that_hold_files_are_refused_naming_runs(self):
+        r = swarm("paper", "--runs", self.runs, "--out", os.path.join(self.root, "never-runs"),
+                  "--scenarios", os.path.join(SOURCE, "scenarios", "paper"))
+        self.assertEqual(r.returncode, 2)
+        self.assertIn("--runs", r.stderr)
+        self.assertNotIn("--out", r.stderr)
+        self.assertFalse(os.path.exists(os.path.join(self.root, "never-runs")))
+
     def test_bad_flags_name_the_flag_and_exit_2(self):
         for args, flag in ((["--time-scale", "nan"], "--time-scale"),
                            (["--time-scale", "0"], "--time-scale"),
                            (["--domain", "999"], "--domain"),
                            (["--from", os.path.join(self.root, "nowhere")], "--from"),
-                           (["--from", self.runs, "--runs", self.runs], "--runs")):
+                           (["--from", self.runs, "--runs", self.runs], "--runs"),
+                           (["--from", self.runs, "--time-scale", "2"], "--time-scale")):
             r = swarm("paper", *args, "--out", os.path.join(self.root, "never"))
             self.assertEqual(r.returncode, 2, args)
             self.assertIn(flag, r.stderr + r.stdout, args)
