@@ -712,14 +712,17 @@ def report(runs, spectra, single, dyn, np):
       f"{a['settle1']:.2f} s on L_1 and {b['settle1']:.2f} s on L_2.\n")
     starts = first_moves(runs["unweighted"])
     w(f"*Why ours differs.* The curves are the discrete law at 50 Hz flown by four processes, "
-      f"which start their updates when they first hear a neighbour (the paper's curves start "
-      f"together at t = 0). In this flight of L_1 the agents first moved at "
-      f"{', '.join(f'{starts[k]:.2f}' for k in sorted(starts))} s (agents "
-      f"{', '.join(str(k) for k in sorted(starts))}). Edge-flow has a process that starts late "
-      f"apply at once the flows its neighbours already pushed over their edges, which keeps the "
-      f"average exact; that is where agent 2's line bends by those {off2 * 100:.0f} cm, and "
-      f"after that it heads straight for q* again. The same law in lockstep bends it by "
-      f"{lockstep_offset(spectra['unweighted'], runs['unweighted'], 2, np) * 100:.1f} cm.\n")
+      f"each starting when it first hears a neighbour (in this flight of L_1 at "
+      f"{', '.join(f'{starts[k]:.2f}' for k in sorted(starts))} s for agents "
+      f"{', '.join(str(k) for k in sorted(starts))}; the paper's curves all start at t = 0) and "
+      f"then updating from the neighbour samples it holds at its tick, which are not always of "
+      f"that tick: a sample that arrives just after a tick waits for the next. Edge-flow applies "
+      f"each edge's flow at both ends to keep the sum exact, so such a tick's flow pushes agent "
+      f"2 off its line and the next ones pull it back: its largest distance from the line is "
+      f"{off2 * 100:.0f} cm, while the same law in lockstep (every agent at every tick from that "
+      f"tick's states) keeps it within "
+      f"{lockstep_offset(spectra['unweighted'], runs['unweighted'], 2, np) * 100:.1f} cm. The "
+      f"wobble changes from flight to flight; the meeting point does not.\n")
 
     # Figures 3 and 4.
     a, b = N["weighted_baseline"], N["weighted"]
