@@ -27,6 +27,9 @@ std::string as_json(const RunConfig& rc, const InitialGraph& g, double tau) {
     records::InspectAgent* ia = ins.add_agents();
     ia->set_id(a.id);
     for (int k = 0; k < 3; ++k) ia->add_position(a.position_W[k]);
+    const Vec3 slot = rc.initial_average() + a.offset_W;
+    for (int k = 0; k < 3; ++k) ia->add_offset(a.offset_W[k]);
+    for (int k = 0; k < 3; ++k) ia->add_slot(slot[k]);
   }
   for (const Edge& e : g.edges)
     put_row(ins.add_edges(), {static_cast<double>(rc.agents[e.i].id),
@@ -43,6 +46,12 @@ std::string as_json(const RunConfig& rc, const InitialGraph& g, double tau) {
   for (int k = 0; k < 3; ++k) ins.add_agreement_point(avg[k]);
   ins.set_time_constant_s(tau);
   return to_json(ins);
+}
+
+bool formation_in(const RunConfig& rc) {
+  for (const AgentSpec& a : rc.agents)
+    if (!a.offset_W.isZero()) return true;
+  return false;
 }
 
 std::string as_text(const RunConfig& rc, const InitialGraph& g, double tau) {
@@ -71,9 +80,26 @@ std::string as_text(const RunConfig& rc, const InitialGraph& g, double tau) {
   o << "\nlambda2 " << g.spectrum.lambda2 << ", components " << g.spectrum.components
     << (g.spectrum.components == 1 ? " (connected)"
                                    : " (NOT connected: proximity may join them later)")
-    << "\npredicted agreement point (the initial average): (" << avg.x() << ", " << avg.y() << ", "
-    << avg.z() << ")\n";
+    << "\npredicted agreement point (the initial average"
+    << (formation_in(rc) ? " of the agents' estimates of the centre" : "") << "): (" << avg.x()
+    << ", " << avg.y() << ", " << avg.z() << ")\n";
   if (tau > 0) o << "time constant 1/(k lambda2) = " << tau << " s (exact for fixed weights)\n";
+  if (formation_in(rc)) {
+    o << "formation: the agents agree on the centre above and fly to centre + slot\n";
+    o << "  agent        slot about the centre         where it ends\n";
+    int shown = 0;
+    for (const AgentSpec& a : rc.agents) {
+      if (++shown > 32) {
+        o << "  (" << n - 32 << " more not printed; --json lists every slot)\n";
+        break;
+      }
+      const Vec3 end = avg + a.offset_W;
+      char buf[160];
+      std::snprintf(buf, sizeof buf, "  %5u  (%8.3f, %8.3f, %8.3f)  (%8.3f, %8.3f, %8.3f)\n", a.id,
+                    a.offset_W.x(), a.offset_W.y(), a.offset_W.z(), end.x(), end.y(), end.z());
+      o << buf;
+    }
+  }
   return o.str();
 }
 
@@ -85,7 +111,8 @@ InitialGraph initial_graph(const RunConfig& rc) {
   for (int i = 0; i < n; ++i) {
     LinkTracker tracker(rc.agents[i].id, rc.law.topology);
     for (int j = i + 1; j < n; ++j) {
-      const double d = (rc.agents[i].position_W - rc.agents[j].position_W).norm();
+      // The law's initial states: the agents' estimates of the centre (position - slot).
+      const double d = (rc.agents[i].q0() - rc.agents[j].q0()).norm();
       if (tracker.update(rc.agents[j].id, d)) {
         g.edges.push_back({i, j, weight_for_distance(rc.law.weight, d)});
       }

@@ -6,7 +6,8 @@ namespace qswarm {
 
 records::GraphSnapshot measure_graph(double t_s, const std::vector<AgentId>& ids,
                                      const Positions& q, const Positions& p,
-                                     const LinksOf& links_of, const Vec3& initial_average) {
+                                     const LinksOf& links_of, const Vec3& initial_average,
+                                     const Positions& offsets) {
   records::GraphSnapshot g;
   g.set_t_s(t_s);
   g.set_agents(static_cast<std::uint32_t>(ids.size()));
@@ -27,12 +28,23 @@ records::GraphSnapshot measure_graph(double t_s, const std::vector<AgentId>& ids
   g.set_mean_drift_m((qbar - initial_average).norm());
   if (n > 1) {
     double min_sep = 1e300;
-    for (int i = 0; i < n; ++i)
-      for (int j = i + 1; j < n; ++j) min_sep = std::min(min_sep, (p[i] - p[j]).norm());
+    for (int i = 0; i < n; ++i) {
+      for (int j = i + 1; j < n; ++j) {
+        const double d = (p[i] - p[j]).norm();
+        if (d < min_sep) {
+          min_sep = d;
+          g.set_min_separation_a(ids[static_cast<std::size_t>(i)]);
+          g.set_min_separation_b(ids[static_cast<std::size_t>(j)]);
+        }
+      }
+    }
     g.set_min_separation_m(min_sep);
   }
   double spread = 0.0;
-  for (const Vec3& x : p) spread = std::max(spread, (x - qbar).norm());
+  for (int i = 0; i < n; ++i) {
+    const Vec3 slot = offsets.empty() ? qbar : Vec3(qbar + offsets[static_cast<std::size_t>(i)]);
+    spread = std::max(spread, (p[static_cast<std::size_t>(i)] - slot).norm());
+  }
   g.set_spread_m(spread);
   return g;
 }

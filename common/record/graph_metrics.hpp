@@ -13,10 +13,12 @@ using LinksOf = std::function<const std::vector<std::pair<AgentId, double>>&(int
 
 // One snapshot of the swarm's graph and geometry: the edges the agents hold (an edge when either
 // end holds it), lambda_2 and components of its Laplacian, disagreement of the consensus states q,
-// drift of their mean from `initial_average`, and the smallest separation and largest spread of
-// the physical positions p. Pure.
+// drift of their mean from `initial_average`, the smallest separation of the physical positions p
+// (and between whom), and their largest distance from their slots (mean of q + `offsets`, one per
+// agent; empty: no formation). Pure.
 records::GraphSnapshot measure_graph(double t_s, const std::vector<AgentId>& ids,
                                      const Positions& q, const Positions& p,
-                                     const LinksOf& links_of, const Vec3& initial_average);
+                                     const LinksOf& links_of, const Vec3& initial_average,
+                                     const Positions& offsets = {});
 
 }  // namespace qswarm

@@ -134,16 +134,22 @@ void Recorder::tick(std::int64_t now_wall_ns) {
 
 void Recorder::record_graph(const records::GraphSnapshot& g) {
   sinks_.graph(g);
-  if (g.agents() > 1)
-    tally_.min_separation_m = std::min(tally_.min_separation_m, g.min_separation_m());
+  if (g.agents() > 1 && g.min_separation_m() < tally_.min_separation_m) {
+    tally_.min_separation_m = g.min_separation_m();
+    tally_.min_separation_t_s = g.t_s();
+    tally_.min_separation_a = g.min_separation_a();
+    tally_.min_separation_b = g.min_separation_b();
+  }
 }
 
 void Recorder::initial_snapshot() {
   std::vector<AgentId> ids;
-  Positions q0;
+  Positions q0, p0, offsets;
   for (const auto& [id, a] : presence_.tracks()) {
     ids.push_back(id);
     q0.push_back(a.last.view.q0);
+    offsets.push_back(offset_of(id));
+    p0.push_back(q0.back() + offsets.back());
   }
   // The swarm at t = 0: the links each agent's law started with, weighed at q(0) by the run's
   // weight policy (an agent whose law started a tick after a peer's saw that peer already moved).
@@ -158,26 +164,27 @@ void Recorder::initial_snapshot() {
     }
   }
   first_full_ = measure_graph(
-      0.0, ids, q0, q0, [&](int i) -> const auto& { return links[static_cast<size_t>(i)]; },
-      rc_.initial_average());
+      0.0, ids, q0, p0, [&](int i) -> const auto& { return links[static_cast<size_t>(i)]; },
+      rc_.initial_average(), offsets);
   record_graph(*first_full_);
   last_ = first_full_;  // so that the live line shows the initial graph too
 }
 
 void Recorder::snapshot() {
   std::vector<AgentId> ids;
-  Positions q, p;
+  Positions q, p, offsets;
   for (const auto& [id, a] : presence_.tracks()) {
     if (presence_.running(id)) {
       ids.push_back(id);
       q.push_back(a.last.view.q);
       p.push_back(a.last.p_W);
+      offsets.push_back(offset_of(id));
     }
   }
   last_ = measure_graph(
       t_s_, ids, q, p,
       [&](int i) -> const auto& { return presence_.track(ids[static_cast<size_t>(i)]).last.links; },
-      rc_.initial_average());
+      rc_.initial_average(), offsets);
   record_graph(*last_);
   const ConvergenceJudge::Verdict v = judge_.update(t_s_, *last_, presence_);
   if (v == ConvergenceJudge::Verdict::kNone) return;
@@ -189,6 +196,11 @@ void Recorder::snapshot() {
   } else {
     event("agreed_without", 0, missing_text() + " missing; " + buf);
   }
+}
+
+Vec3 Recorder::offset_of(AgentId id) const {
+  const AgentSpec* spec = rc_.agent(id);
+  return spec ? spec->offset_W : Vec3::Zero();
 }
 
 std::string Recorder::missing_text() const {

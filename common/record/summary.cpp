@@ -57,6 +57,11 @@ records::Summary build_summary(const RunConfig& rc, const Presence& presence,
   s.set_joins(tally.joins);
   s.set_departures(tally.departures);
   s.set_min_separation_m(tally.min_separation_m < 1e299 ? tally.min_separation_m : 0.0);
+  if (tally.min_separation_m < 1e299) {
+    s.set_min_separation_t_s(tally.min_separation_t_s);
+    s.add_min_separation_agents(tally.min_separation_a);
+    s.add_min_separation_agents(tally.min_separation_b);
+  }
   put_vec3(s.mutable_initial_average(), rc.initial_average());
 
   Positions final_q, final_p;
@@ -99,6 +104,18 @@ records::Summary build_summary(const RunConfig& rc, const Presence& presence,
   msg.set_rate_hz(rate_n ? rate_sum / rate_n : 0.0);
   const Vec3 mean = average(final_q);
   put_vec3(s.mutable_final_consensus_mean(), mean);
+  // Every agent's slot about the agreed centre, and how far from it the agent ended.
+  double max_slot_error = 0.0;
+  for (records::AgentSummary& as : *s.mutable_agents()) {
+    const AgentSpec* spec = rc.agent(as.id());
+    const Vec3 offset = spec ? spec->offset_W : Vec3::Zero();
+    put_vec3(as.mutable_offset(), offset);
+    if (as.final_position_size() != 3 || final_q.empty()) continue;
+    const Vec3 p(as.final_position(0), as.final_position(1), as.final_position(2));
+    as.set_slot_error_m((p - (mean + offset)).norm());
+    max_slot_error = std::max(max_slot_error, as.slot_error_m());
+  }
+  s.set_max_slot_error_m(max_slot_error);
   s.set_average_drift_m(final_q.empty() ? 0.0 : (mean - rc.initial_average()).norm());
   double spread = 0.0;
   for (const Vec3& x : final_p) spread = std::max(spread, (x - average(final_p)).norm());
@@ -177,7 +194,18 @@ std::string summary_text(const records::Summary& s, const RunConfig& rc, const s
     << fmt("%.6f", mean.z()) << ")  drift " << fmt("%.3e", s.average_drift_m()) << " m\n";
   h << "final disagreement " << fmt("%.3e", s.final_disagreement_m()) << " m, physical spread "
     << fmt("%.3e", s.max_final_spread_m()) << " m, min separation "
-    << fmt("%.3f", s.min_separation_m()) << " m\n";
+    << fmt("%.3f", s.min_separation_m()) << " m";
+  if (s.min_separation_agents_size() == 2) {
+    h << " (agents " << s.min_separation_agents(0) << " and " << s.min_separation_agents(1)
+      << " at t = " << fmt("%.2f", s.min_separation_t_s()) << " s)";
+  }
+  h << "\n";
+  bool formation = false;
+  for (const AgentSpec& a : rc.agents) formation = formation || !a.offset_W.isZero();
+  if (formation) {
+    h << "formation: every agent within " << fmt("%.3f", s.max_slot_error_m())
+      << " m of its slot about the agreed centre\n";
+  }
   h << "lambda2 " << fmt("%.4f", s.lambda2_initial()) << " -> " << fmt("%.4f", s.lambda2_final())
     << ", edges " << s.edges_initial_size() << " -> " << s.edges_final_size() << "\n";
   h << "messages: published " << msg.published() << ", received " << msg.received() << ", dropped "

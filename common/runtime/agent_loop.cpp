@@ -66,6 +66,7 @@ AgentParams make_agent_params(const RunConfig& rc, const AgentSpec& spec) {
   p.id = spec.id;
   p.p0_W = spec.position_W;
   p.yaw0_rad = spec.yaw_rad;
+  p.offset_W = spec.offset_W;
   p.mode = rc.mode;
   p.law = rc.law;
   p.physics_hz = rc.physics_hz;

@@ -17,7 +17,7 @@ Vec3 clamp_norm(const Vec3& v, double max) {
 }  // namespace
 
 AgentRuntime::AgentRuntime(AgentParams p, NeighborBus& bus)
-    : p_(std::move(p)), bus_(bus), law_(make_law(p_.id, p_.p0_W, p_.law)) {
+    : p_(std::move(p)), bus_(bus), law_(make_law(p_.id, p_.p0_W - p_.offset_W, p_.law)) {
   if (!(p_.physics_hz > 0.0) || !(p_.consensus_hz > 0.0) || p_.consensus_hz > p_.physics_hz) {
     throw std::invalid_argument("rates: need 0 < consensus_hz <= physics_hz");
   }
@@ -39,7 +39,7 @@ void AgentRuntime::set_start_time(double t_s) {
 }
 
 Vec3 AgentRuntime::position() const {
-  return p_.mode == AgentMode::kQuadcopter ? quad_.p_W : law_->state();
+  return p_.mode == AgentMode::kQuadcopter ? quad_.p_W : Vec3(law_->state() + p_.offset_W);
 }
 
 void AgentRuntime::publish(std::uint8_t phase) {
@@ -110,7 +110,7 @@ void AgentRuntime::physics(double dt) {
   if (p_.mode != AgentMode::kQuadcopter) return;
   // The consensus state is the goal; the reference moves toward it within speed and acceleration
   // limits so that it stays flyable, and the controller tracks the reference.
-  const Vec3 goal = law_->state();
+  const Vec3 goal = law_->state() + p_.offset_W;  // its slot about its estimate of the centre
   const Vec3 v_des = clamp_norm(1.5 * (goal - ref_p_W_), p_.reference_speed_mps);
   const Vec3 a = clamp_norm((v_des - ref_v_W_) / std::max(dt, 1e-9), p_.reference_accel_mps2);
   ref_v_W_ += a * dt;

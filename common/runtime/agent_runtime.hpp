@@ -21,6 +21,9 @@ struct AgentParams {
   AgentId id = 0;
   Vec3 p0_W = Vec3::Zero();
   double yaw0_rad = 0.0;
+  // Its formation slot: the law runs on p - offset (its estimate of the centre) and the agent
+  // flies to the agreed centre + offset.
+  Vec3 offset_W = Vec3::Zero();
   AgentMode mode = AgentMode::kParticle;
   LawConfig law;
   double physics_hz = 500.0;

@@ -1,12 +1,14 @@
 #include "common/runtime/run_config.hpp"
 
+#include <cmath>
+#include <numbers>
 #include <random>
 
 namespace qswarm {
 
 Vec3 RunConfig::initial_average() const {
   Vec3 sum = Vec3::Zero();
-  for (const AgentSpec& a : agents) sum += a.position_W;
+  for (const AgentSpec& a : agents) sum += a.q0();
   return agents.empty() ? sum : Vec3(sum / static_cast<double>(agents.size()));
 }
 
@@ -32,6 +34,55 @@ std::set<AgentId> RunConfig::start_peers(AgentId id) const {
   }
   for (const AgentId late : faults.late_joiners()) peers.erase(late);
   return peers;
+}
+
+std::vector<Vec3> formation_slots(int shape, int n, double spacing_m) {
+  // Shapes as in proto/scenario.proto: 2 line, 3 grid, 4 circle, 5 lattice; else none.
+  std::vector<Vec3> out;
+  if (n <= 0) return out;
+  const double s = spacing_m;
+  const auto centred = [](int k, int count) { return k - (count - 1) / 2.0; };
+  switch (shape) {
+    case 2:
+      for (int k = 0; k < n; ++k) out.emplace_back(centred(k, n) * s, 0.0, 0.0);
+      break;
+    case 3: {
+      const int cols = static_cast<int>(std::ceil(std::sqrt(static_cast<double>(n))));
+      const int rows = (n + cols - 1) / cols;
+      for (int k = 0; k < n; ++k)
+        out.emplace_back(centred(k % cols, cols) * s, centred(k / cols, rows) * s, 0.0);
+      break;
+    }
+    case 4: {
+      // Neighbouring slots spacing_m apart: the chord 2 R sin(pi / n) equals the spacing.
+      const double r = n == 1 ? 0.0 : n == 2 ? s / 2.0 : s / (2.0 * std::sin(std::numbers::pi / n));
+      for (int k = 0; k < n; ++k) {
+        const double a = 2.0 * std::numbers::pi * k / n;
+        out.emplace_back(r * std::cos(a), r * std::sin(a), 0.0);
+      }
+      break;
+    }
+    case 5: {
+      int side = static_cast<int>(std::ceil(std::cbrt(static_cast<double>(n))));
+      while (side * side * side < n) ++side;  // cbrt's rounding
+      const int layers = (n + side * side - 1) / (side * side);
+      const int rows = std::min(side, (n + side - 1) / side);
+      for (int k = 0; k < n; ++k) {
+        out.emplace_back(centred(k % side, side) * s, centred((k / side) % side, rows) * s,
+                         centred(k / (side * side), layers) * s);
+      }
+      break;
+    }
+    default:
+      out.assign(static_cast<std::size_t>(n), Vec3::Zero());
+      return out;
+  }
+  // The formation's centroid is the agreed centre.
+  Vec3 mean = Vec3::Zero();
+  for (const Vec3& v : out) mean += v;
+  mean /= static_cast<double>(n);
+  for (Vec3& v : out) v -= mean;
+  return out;
 }
 
 std::vector<AgentSpec> random_agent_specs(int n, std::uint64_t seed, double box_m) {

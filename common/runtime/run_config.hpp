@@ -18,6 +18,9 @@ struct AgentSpec {
   AgentId id = 0;
   Vec3 position_W = Vec3::Zero();
   double yaw_rad = 0.0;
+  Vec3 offset_W = Vec3::Zero();  // its slot relative to the swarm's centre (formation)
+  // Its initial consensus state: its estimate of the centre.
+  Vec3 q0() const { return position_W - offset_W; }
 };
 
 // A scenario with every default filled in and random agents resolved: what a run actually uses.
@@ -44,6 +47,8 @@ struct RunConfig {
   FaultPlan faults;
   scenario::Scenario resolved;  // the scenario as run (agents listed, defaults explicit)
 
+  // The average of the agents' initial consensus states (their estimates of the centre): the
+  // point the swarm agrees on.
   Vec3 initial_average() const;
   const AgentSpec* agent(AgentId id) const;
   std::set<AgentId> ids() const;
@@ -52,6 +57,10 @@ struct RunConfig {
   // agent that the fault plan has joining late.
   std::set<AgentId> start_peers(AgentId id) const;
 };
+
+// The slots of a generated formation for n agents (scenario Formation.Shape as an int), centred on
+// the origin, in the order the agents are assigned them (by ascending id).
+std::vector<Vec3> formation_slots(int shape, int n, double spacing_m);
 
 // n agents uniformly in a cube of side box_m, ids 1..n, from the seed.
 std::vector<AgentSpec> random_agent_specs(int n, std::uint64_t seed, double box_m);

@@ -1,5 +1,7 @@
 // resolve_scenario: a parsed scenario -> the RunConfig a run uses, every field checked and named.
+#include <algorithm>
 #include <cmath>
+#include <map>
 #include <numbers>
 #include <set>
 #include <sstream>
@@ -105,6 +107,46 @@ void resolve_agents(const scenario::Scenario& s, RunConfig& rc) {
       fail(f + ".yaw_deg", "a finite angle within +-3600 deg", num(a.yaw_deg()));
     rc.agents.push_back({a.id(), p, a.yaw_deg() * std::numbers::pi / 180.0});
   }
+}
+
+// Slots: the shape's, by ascending id, overridden by an agent's own offset.
+void resolve_formation(scenario::Scenario& s, RunConfig& rc) {
+  const scenario::Formation& f = s.formation();
+  const double spacing =
+      positive("formation.spacing_m", f.has_spacing_m(), f.spacing_m(), 3.0, 1e4);
+  std::vector<AgentId> ids;
+  for (const AgentSpec& a : rc.agents) ids.push_back(a.id);
+  std::sort(ids.begin(), ids.end());
+  const std::vector<Vec3> slots =
+      formation_slots(static_cast<int>(f.shape()), static_cast<int>(ids.size()), spacing);
+  std::map<AgentId, Vec3> slot_of;
+  for (std::size_t k = 0; k < ids.size(); ++k) slot_of[ids[k]] = slots[k];
+  bool any =
+      f.shape() != scenario::Formation::SHAPE_UNSPECIFIED && f.shape() != scenario::Formation::NONE;
+  for (int i = 0; i < s.agents_size(); ++i) {
+    AgentSpec& a = rc.agents[static_cast<std::size_t>(i)];
+    a.offset_W = slot_of[a.id];
+    if (!s.agents(i).has_offset()) continue;
+    const Vec3 o = vec(s.agents(i).offset());
+    if (!o.allFinite() || o.cwiseAbs().maxCoeff() > 1e4) {
+      fail("agents[" + std::to_string(i) + "].offset", "finite coordinates within 10 km",
+           "(" + num(o.x()) + ", " + num(o.y()) + ", " + num(o.z()) + ")");
+    }
+    a.offset_W = o;
+    any = true;
+  }
+  if (!any) return;
+  // Two agents on one slot would be flown into each other on purpose.
+  for (std::size_t i = 0; i < rc.agents.size(); ++i) {
+    for (std::size_t j = i + 1; j < rc.agents.size(); ++j) {
+      if ((rc.agents[i].offset_W - rc.agents[j].offset_W).norm() < 1e-6) {
+        fail("formation", "a different slot for every agent",
+             "agents " + std::to_string(rc.agents[i].id) + " and " +
+                 std::to_string(rc.agents[j].id) + " on one slot");
+      }
+    }
+  }
+  s.mutable_formation()->set_spacing_m(spacing);
 }
 
 void resolve_law(const scenario::Scenario& s, RunConfig& rc) {
@@ -385,6 +427,7 @@ RunConfig resolve_scenario(scenario::Scenario s, const ScenarioOverrides& o) {
   rc.name = s.name().empty() ? "unnamed" : s.name();
   expand_random_agents(s, rc.seed);
   resolve_agents(s, rc);
+  resolve_formation(s, rc);
   rc.mode = s.mode() == scenario::QUADCOPTER ? AgentMode::kQuadcopter : AgentMode::kParticle;
   resolve_law(s, rc);
   resolve_rates(s.rates(), rc);
