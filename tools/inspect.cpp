@@ -111,9 +111,13 @@ InitialGraph initial_graph(const RunConfig& rc) {
   for (int i = 0; i < n; ++i) {
     LinkTracker tracker(rc.agents[i].id, rc.law.topology);
     for (int j = i + 1; j < n; ++j) {
-      // The law's initial states: the agents' estimates of the centre (position - slot).
+      // The law's initial states: the agents' estimates of the centre (position - slot). Under
+      // RANGE, links follow the physical distance; weights always follow the states.
       const double d = (rc.agents[i].q0() - rc.agents[j].q0()).norm();
-      if (tracker.update(rc.agents[j].id, d)) {
+      const double link_d = rc.law.topology.policy == TopologyPolicy::kRange
+                                ? (rc.agents[i].position_W - rc.agents[j].position_W).norm()
+                                : d;
+      if (tracker.update(rc.agents[j].id, link_d)) {
         g.edges.push_back({i, j, weight_for_distance(rc.law.weight, d)});
       }
     }

@@ -41,6 +41,8 @@ std::string to_string(TopologyPolicy p) {
       return "proximity";
     case TopologyPolicy::kStickyProximity:
       return "sticky_proximity";
+    case TopologyPolicy::kRange:
+      return "range";
   }
   return "?";
 }
@@ -56,12 +58,12 @@ WeightPolicy parse_weight_policy(const std::string& s) {
 }
 
 TopologyPolicy parse_topology_policy(const std::string& s) {
-  for (TopologyPolicy p :
-       {TopologyPolicy::kFixed, TopologyPolicy::kProximity, TopologyPolicy::kStickyProximity}) {
+  for (TopologyPolicy p : {TopologyPolicy::kFixed, TopologyPolicy::kProximity,
+                           TopologyPolicy::kStickyProximity, TopologyPolicy::kRange}) {
     if (s == to_string(p)) return p;
   }
   throw std::invalid_argument("topology policy '" + s +
-                              "': expected fixed, proximity or sticky_proximity");
+                              "': expected fixed, proximity, sticky_proximity or range");
 }
 
 std::set<AgentId> listed_peers(const TopologyConfig& cfg, AgentId self) {
@@ -95,6 +97,7 @@ bool LinkTracker::update(AgentId peer, double d) {
         link = false;
         break;
       case TopologyPolicy::kProximity:
+      case TopologyPolicy::kRange:
         link =
             linked_.count(peer) ? d <= cfg_.threshold_m + cfg_.hysteresis_m : d <= cfg_.threshold_m;
         break;

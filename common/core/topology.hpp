@@ -33,6 +33,8 @@ enum class TopologyPolicy {
                      // threshold + hysteresis)
   kStickyProximity,  // listed edges, plus any edge once distance <= threshold; added edges stay
                      // (the paper's time-varying example)
+  kRange,            // like kProximity, but on the agents' physical distance (radio range), which
+                     // the runtime gives the law (NeighborView::link_distance_m)
 };
 
 struct TopologyConfig {

@@ -65,7 +65,10 @@ std::vector<double> UpdateLaw::update_links(const std::vector<NeighborView>& nei
     const NeighborView& n = neighbors[k];
     if (n.id == self_) continue;
     const double d = (q - n.q).norm();
-    if (!tracker_.update(n.id, d)) continue;
+    const bool by_range = cfg_.topology.policy == TopologyPolicy::kRange;
+    // Under kRange a view without a physical distance (not set by the runtime) is not linked.
+    if (by_range && !(n.link_distance_m >= 0.0)) continue;
+    if (!tracker_.update(n.id, by_range ? n.link_distance_m : d)) continue;
     // The paper's "weights due to initial distance" use |q_i(0) - q_j(0)|, whenever the link forms.
     const double w = weight_for_distance(
         cfg_.weight,

@@ -29,6 +29,9 @@ struct NeighborView {
   std::vector<FlowEntry> flows;   // flows the sender owns (peer = the other end)
   std::vector<FlowEntry> copies;  // copies the sender holds of flows owned by others (peer = owner)
   std::uint64_t seq = 0;          // sender's tick count: a new message has a larger one
+  // Not on the wire: under TopologyPolicy::kRange the receiver's runtime sets the physical distance
+  // between the two agents here, and links follow it instead of the states' distance.
+  double link_distance_m = -1.0;
 };
 
 // Returns an empty string if a received view is usable, else why not (NaN, absurd magnitude, ...).

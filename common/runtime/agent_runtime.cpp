@@ -89,6 +89,10 @@ void AgentRuntime::consensus_tick(std::vector<AgentEvent>& events) {
       continue;
     }
     views.push_back(m.view);
+    // Radio range: the physical distance as this agent sees it (its own position, the
+    // neighbour's last sample).
+    if (p_.law.topology.policy == TopologyPolicy::kRange)
+      views.back().link_distance_m = (position() - m.p_W).norm();
   }
   if (!started_) {
     if (views.size() < p_.expected_peers && t < p_.start_time_s + p_.start_grace_s) {

@@ -1,5 +1,6 @@
 #include "common/runtime/run_config.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <random>
@@ -63,8 +64,10 @@ std::vector<Vec3> formation_slots(int shape, int n, double spacing_m) {
       break;
     }
     case 5: {
-      int side = static_cast<int>(std::ceil(std::cbrt(static_cast<double>(n))));
-      while (side * side * side < n) ++side;  // cbrt's rounding
+      // The smallest side whose cube holds n (cbrt(27) is 3.0000000000000004: no ceil of it).
+      int side = std::max(1, static_cast<int>(std::lround(std::cbrt(static_cast<double>(n)))));
+      while (side * side * side < n) ++side;
+      while (side > 1 && (side - 1) * (side - 1) * (side - 1) >= n) --side;
       const int layers = (n + side * side - 1) / (side * side);
       const int rows = std::min(side, (n + side - 1) / side);
       for (int k = 0; k < n; ++k) {

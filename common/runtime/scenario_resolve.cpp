@@ -175,6 +175,9 @@ void resolve_law(const scenario::Scenario& s, RunConfig& rc) {
     case scenario::PROXIMITY:
       rc.law.topology.policy = TopologyPolicy::kProximity;
       break;
+    case scenario::RANGE:
+      rc.law.topology.policy = TopologyPolicy::kRange;
+      break;
     default:
       rc.law.topology.policy = TopologyPolicy::kStickyProximity;
       break;

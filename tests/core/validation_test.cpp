@@ -123,5 +123,39 @@ TEST(Topology, ProximityWithHysteresisAndStickyLinks) {
   EXPECT_TRUE(listed.update(3, 1e4));
 }
 
+TEST(Topology, RangeLinksFollowThePhysicalDistanceAndWeightsTheStates) {
+  // Two agents whose consensus states are 1 m apart but whose quadcopters are 20 m apart (a
+  // formation's slots): under kRange they are not linked until the runtime says they are close.
+  LawConfig cfg;
+  cfg.kind = LawKind::kEdgeFlow;
+  cfg.weight.policy = WeightPolicy::kDistance;
+  cfg.topology.policy = TopologyPolicy::kRange;
+  cfg.topology.threshold_m = 8.0;
+  cfg.topology.hysteresis_m = 0.5;
+  const std::unique_ptr<UpdateLaw> law = make_law(1, Vec3(0, 0, 0), cfg);
+  NeighborView v;
+  v.id = 2;
+  v.q = Vec3(1, 0, 0);
+  v.q0 = v.q;
+  v.link_distance_m = 20.0;
+  law->observe({v});
+  EXPECT_TRUE(law->links().empty());  // 1 m apart in state, 20 m in the air: no link
+  v.link_distance_m = 7.9;
+  const double state_distance = (law->state() - v.q).norm();
+  law->step(0.02, {v});
+  ASSERT_EQ(law->links().size(), 1u);
+  EXPECT_NEAR(law->links().begin()->second, state_distance, 1e-12);  // w: the states' 1 m
+  v.link_distance_m = 8.4;  // within the hysteresis band: kept
+  law->step(0.02, {v});
+  EXPECT_EQ(law->links().size(), 1u);
+  v.link_distance_m = 8.6;  // beyond: dropped
+  law->step(0.02, {v});
+  EXPECT_TRUE(law->links().empty());
+  v.link_distance_m = -1.0;  // no physical distance given (not the runtime's view): never linked
+  law->step(0.02, {v});
+  EXPECT_TRUE(law->links().empty());
+  EXPECT_EQ(parse_topology_policy("range"), TopologyPolicy::kRange);
+}
+
 }  // namespace
 }  // namespace qswarm

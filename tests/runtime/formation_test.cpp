@@ -2,7 +2,9 @@
 // on the centre, it flies to its slot) and what the record says about slots and separation.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 #include "common/record/graph_metrics.hpp"
 #include "common/runtime/scenario.hpp"
@@ -42,10 +44,13 @@ TEST(FormationSlots, EveryShapeKeepsItsSpacingAndIsCentredOnTheAgreedPoint) {
     EXPECT_LE(std::abs(v.y()), 4.5 + 1e-9);
     EXPECT_EQ(v.z(), 0.0);
   }
-  // A lattice of 64 is 4 x 4 x 4.
+  // A lattice of 64 is 4 x 4 x 4, and of 27 is 3 x 3 x 3 (not 4 wide: cbrt(27) > 3 in doubles).
   double zmax = 0.0;
   for (const Vec3& v : formation_slots(kLattice, 64, 2.0)) zmax = std::max(zmax, v.z());
   EXPECT_NEAR(zmax, 3.0, 1e-9);
+  double xmax = 0.0;
+  for (const Vec3& v : formation_slots(kLattice, 27, 3.0)) xmax = std::max(xmax, v.x());
+  EXPECT_NEAR(xmax, 3.0, 1e-9);
   EXPECT_EQ(formation_slots(kGrid, 1, 3.0), std::vector<Vec3>{Vec3::Zero()});
 }
 
@@ -169,6 +174,50 @@ TEST(FormationSwarm, AKilledAndRestartedAgentStillFindsItsSlotAndTheCentreStaysE
   const Vec3 centre = average(swarm.running_states());
   EXPECT_LT((centre - rc.initial_average()).norm() / rc.initial_average().norm(), 1e-9);
   EXPECT_LT((position_of(swarm, 6) - (centre + rc.agent(6)->offset_W)).norm(), 1e-7);
+}
+
+// The degree of every running agent at the end: how many links its law holds.
+std::vector<std::size_t> degrees(const InProcessSwarm& s) {
+  std::vector<std::size_t> out;
+  for (const AgentSpec& a : s.config().agents)
+    out.push_back(s.agent(a.id)->runtime().law().links().size());
+  return out;
+}
+
+TEST(FormationSwarm, ALatticeOverRadioRangeKeepsASparseGraph) {
+  // 27 point agents from seeded random starts in a 9 m cube (connected at 4.5 m radio range) into
+  // a 3 x 3 x 3 lattice, 3 m apart: links follow the physical distance, so at the end each agent
+  // hears only its lattice neighbours within 5 m (range + hysteresis; at most 6 at 3 m and 12 at
+  // 4.24 m), never all 26. (scenarios/formation_lattice64.txtpb is the 64-agent run.)
+  InProcessSwarm swarm(resolve_scenario(parse_scenario_text(R"(
+    name: "lattice27"
+    random_agents { count: 27 box_m: 9 }
+    mode: PARTICLE
+    law: EDGE_FLOW
+    weight { policy: UNWEIGHTED }
+    topology { policy: RANGE threshold_m: 4.5 hysteresis_m: 0.5 }
+    formation { shape: LATTICE spacing_m: 3 }
+    duration_s: 120
+    seed: 4)",
+                                                            "lattice27")));
+  ASSERT_TRUE(swarm.run_until(
+      [&] { return swarm.wall_s() > 1.0 && swarm.disagreement_running() < 1e-7; }, 120.0));
+  const RunConfig& rc = swarm.config();
+  const Vec3 centre = average(swarm.running_states());
+  EXPECT_LT((centre - rc.initial_average()).norm() / rc.initial_average().norm(), 1e-9);
+  double worst = 0.0;
+  for (const AgentSpec& a : rc.agents)
+    worst = std::max(worst, (position_of(swarm, a.id) - (centre + a.offset_W)).norm());
+  EXPECT_LT(worst, 1e-5);
+  const std::vector<std::size_t> d = degrees(swarm);
+  const std::size_t largest = *std::max_element(d.begin(), d.end());
+  double mean = 0.0;
+  for (const std::size_t x : d) mean += static_cast<double>(x) / static_cast<double>(d.size());
+  std::printf("lattice of 27 at 4.5 m radio range: mean degree %.2f, largest %zu (complete: 26)\n",
+              mean, largest);
+  // In a 3 m lattice the body diagonal (5.2 m) is beyond range + hysteresis.
+  EXPECT_LE(largest, 18u);
+  EXPECT_GE(*std::min_element(d.begin(), d.end()), 6u);  // a corner: 3 at 3 m, 3 at 4.24 m
 }
 
 TEST(FormationRecord, SpreadIsMeasuredFromTheSlotsAndTheClosestPairIsNamed) {
