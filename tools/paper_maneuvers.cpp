@@ -39,12 +39,14 @@ const char* segment_at(const OpenLoopManeuver& m, double t) {
   return m.segments().empty() ? "hover" : segment_name(m.segments().back().kind);
 }
 
+// A CSV file whose every write is checked when it is closed (a full disk is an error, not a
+// short file).
 class CsvFile {
  public:
-  explicit CsvFile(const std::filesystem::path& path) : path_(path.string()) {
+  CsvFile(const std::filesystem::path& path, const char* header) : path_(path.string()) {
     f_ = std::fopen(path_.c_str(), "w");
     if (f_ == nullptr) throw std::runtime_error("cannot create " + path_);
-    std::fputs("drone,t_s,x,y,z,roll,pitch,yaw,w1,w2,w3,w4,thrust_N,yaw_torque_Nm,segment\n", f_);
+    std::fputs(header, f_);
   }
   CsvFile(const CsvFile&) = delete;
   CsvFile& operator=(const CsvFile&) = delete;
@@ -52,14 +54,7 @@ class CsvFile {
     if (f_ != nullptr) std::fclose(f_);
   }
 
-  void row(unsigned drone, double t, const QuadState& s, const Airframe& af, const RotorSpeeds& w,
-           const char* segment) {
-    const TaitBryan a = tait_bryan_from_rotation(s.R_WB);
-    std::fprintf(
-        f_, "%u,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%s\n",
-        drone, t, s.p_W.x(), s.p_W.y(), s.p_W.z(), a.roll_rad, a.pitch_rad, a.yaw_rad, w[0], w[1],
-        w[2], w[3], total_thrust(af, w), rotor_torque(af, w).z(), segment);
-  }
+  std::FILE* get() { return f_; }
 
   void close() {
     const bool bad = std::ferror(f_) != 0;
@@ -74,13 +69,25 @@ class CsvFile {
   std::FILE* f_ = nullptr;
 };
 
+constexpr const char* kFlightHeader =
+    "drone,t_s,x,y,z,roll,pitch,yaw,w1,w2,w3,w4,thrust_N,yaw_torque_Nm,segment\n";
+
+void flight_row(std::FILE* f, unsigned drone, double t, const QuadState& s, const Airframe& af,
+                const RotorSpeeds& w, const char* segment) {
+  const TaitBryan a = tait_bryan_from_rotation(s.R_WB);
+  std::fprintf(
+      f, "%u,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%s\n",
+      drone, t, s.p_W.x(), s.p_W.y(), s.p_W.z(), a.roll_rad, a.pitch_rad, a.yaw_rad, w[0], w[1],
+      w[2], w[3], total_thrust(af, w), rotor_torque(af, w).z(), segment);
+}
+
 // Flies `m` from `s` for its whole duration; a row every kRowEvery steps and one at the end. Each
 // segment's start and duration go to `segments` (drone,segment,start_s,duration_s,amount).
-void fly(CsvFile& csv, std::FILE* segments, unsigned drone, const Airframe& af, OpenLoopManeuver m,
+void fly(CsvFile& csv, CsvFile& segments, unsigned drone, const Airframe& af, OpenLoopManeuver m,
          QuadState s) {
   double start = 0.0;
   for (const auto& seg : m.segments()) {
-    std::fprintf(segments, "%u,%s,%.17g,%.17g,%.17g\n", drone, segment_name(seg.kind), start,
+    std::fprintf(segments.get(), "%u,%s,%.17g,%.17g,%.17g\n", drone, segment_name(seg.kind), start,
                  seg.duration_s, seg.amount);
     start += seg.duration_s;
   }
@@ -88,12 +95,14 @@ void fly(CsvFile& csv, std::FILE* segments, unsigned drone, const Airframe& af, 
   for (int i = 0; i <= steps; ++i) {
     const double t = i * kStepS;
     const RotorSpeeds w = m.command(t, s);
-    if (i % kRowEvery == 0 || i == steps) csv.row(drone, t, s, af, w, segment_at(m, t));
+    if (i % kRowEvery == 0 || i == steps)
+      flight_row(csv.get(), drone, t, s, af, w, segment_at(m, t));
     if (i < steps) s = rk4_step(af, s, w, kStepS);
   }
-  if (!s.finite())
+  if (!s.finite()) {
     throw std::runtime_error("the maneuver of drone " + std::to_string(drone) +
-                             " left finite numbers");
+                             " produced non-finite numbers");
+  }
 }
 
 }  // namespace
@@ -101,42 +110,26 @@ void fly(CsvFile& csv, std::FILE* segments, unsigned drone, const Airframe& af, 
 void write_paper_maneuvers(const RunConfig& rendezvous, const std::string& out_dir) {
   namespace fs = std::filesystem;
   const Airframe af;  // the paper's Table 1
-  const std::string seg_path = (fs::path(out_dir) / "segments.csv").string();
-  std::FILE* segments = std::fopen(seg_path.c_str(), "w");
-  if (segments == nullptr) throw std::runtime_error("cannot create " + seg_path);
-  std::fputs("drone,segment,start_s,duration_s,amount\n", segments);
-  const auto close_segments = [&] {
-    const bool bad = std::ferror(segments) != 0;
-    const int rc = std::fclose(segments);
-    segments = nullptr;
-    if (bad || rc != 0) {
-      throw std::runtime_error("cannot write " + seg_path + " completely (disk full?)");
-    }
-  };
-  try {
-    {
-      CsvFile csv(fs::path(out_dir) / "single_agent.csv");
-      std::fputs("# single_agent.csv\n", segments);
-      fly(csv, segments, 1, af, OpenLoopManeuver::paper_single_agent(af), QuadState{});
-      csv.close();
-    }
-    Vec3 target = Vec3::Zero();
-    for (const AgentSpec& a : rendezvous.agents) target += a.position_W;
-    target /= static_cast<double>(rendezvous.agents.size());
-    CsvFile csv(fs::path(out_dir) / "rendezvous_dynamics.csv");
-    std::fputs("# rendezvous_dynamics.csv\n", segments);
-    for (const AgentSpec& a : rendezvous.agents) {
-      QuadState s;
-      s.p_W = a.position_W;
-      s.R_WB = rotation_from_tait_bryan({0.0, 0.0, a.yaw_rad});
-      fly(csv, segments, a.id, af, OpenLoopManeuver::yaw_then_fly(af, s, target), s);
-    }
+  CsvFile segments(fs::path(out_dir) / "segments.csv", "drone,segment,start_s,duration_s,amount\n");
+  {
+    CsvFile csv(fs::path(out_dir) / "single_agent.csv", kFlightHeader);
+    std::fputs("# single_agent.csv\n", segments.get());
+    fly(csv, segments, 1, af, OpenLoopManeuver::paper_single_agent(af), QuadState{});
     csv.close();
-  } catch (...) {
-    if (segments != nullptr) std::fclose(segments);
-    throw;
   }
-  close_segments();
+  Vec3 target = Vec3::Zero();
+  for (const AgentSpec& a : rendezvous.agents) target += a.position_W;
+  target /= static_cast<double>(rendezvous.agents.size());
+  CsvFile csv(fs::path(out_dir) / "rendezvous_dynamics.csv", kFlightHeader);
+  std::fputs("# rendezvous_dynamics.csv\n", segments.get());
+  for (const AgentSpec& a : rendezvous.agents) {
+    QuadState s;
+    s.p_W = a.position_W;
+    s.R_WB = rotation_from_tait_bryan({0.0, 0.0, a.yaw_rad});
+    fly(csv, segments, a.id, af, OpenLoopManeuver::yaw_then_fly(af, s, target), s);
+  }
+  csv.close();
+  segments.close();
 }
 
 }  // namespace qswarm
