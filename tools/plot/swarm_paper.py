@@ -20,7 +20,6 @@ malformed run, named); 3 when OUT could not be written.
 import argparse
 import csv
 import json
-import logging
 import math
 import os
 import re
@@ -51,7 +50,6 @@ PAPER_L2F_OFFDIAG = 0.0499  # mean |off-diagonal| of the paper's printed L_2f
 
 MANEUVER_COLUMNS = ["drone", "t_s", "x", "y", "z", "roll", "pitch", "yaw", "w1", "w2", "w3", "w4",
                     "thrust_N", "yaw_torque_Nm", "segment"]
-DPI = 110
 SOLID, DASHED = "-", "--"
 COLORS = ["tab:blue", "tab:orange", "tab:green", "tab:red"]
 
@@ -127,22 +125,6 @@ def load(runs, stem, np):
     run["fixed"] = re.search(r"^\s*policy:\s*FIXED", text, re.M) is not None
     run["dir"] = run_dir
     return run
-
-
-def full_track(run, np, agent):
-    """t, q (n x 3) of one agent's consensus state at full rate (running samples only)."""
-    path = os.path.join(run["dir"], "telemetry.csv")
-    try:
-        with open(path, encoding="utf-8") as f:
-            rows = [r for r in csv.DictReader(f) if r["id"] == str(agent) and r["phase"] == "1"]
-        rows.sort(key=lambda r: (float(r["stamp_s"]), int(r["seq"])))
-        t = np.array([float(r["stamp_s"]) for r in rows])
-        q = np.array([[float(r["qx"]), float(r["qy"]), float(r["qz"])] for r in rows])
-    except OSError as e:
-        raise Failure(2, f"{path}: {e.strerror}") from None
-    except (KeyError, ValueError, TypeError):
-        raise Failure(2, f"{path}: malformed telemetry (swarm plot names the line)") from None
-    return t, q
 
 
 def read_maneuver(path, np):
@@ -318,9 +300,7 @@ class Figures:
         self.written = []
 
     def save(self, fig, name):
-        path = os.path.join(self.out, name)
-        fig.savefig(path, dpi=DPI, metadata={"Software": None})
-        self.plt.close(fig)
+        swarm_plot.save_figure(self.plt, fig, os.path.join(self.out, name))
         self.written.append(name)
 
     def rendezvous_3d(self, name, title, a, b, label_a, label_b, q):
@@ -515,16 +495,10 @@ def main(argv):
     ap.add_argument("--time-scale", type=float, default=4.0)
     ap.add_argument("--domain", type=int)
     args = ap.parse_args(argv)
-    logging.getLogger("matplotlib").setLevel(logging.ERROR)
-    try:
-        import numpy as np
-        import matplotlib
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-    except ImportError as e:
-        print(f"{PROG}: needs numpy and matplotlib for {sys.executable} ({e}); on Debian: "
-              "apt-get install python3-matplotlib python3-numpy", file=sys.stderr)
+    libs = swarm_plot.import_matplotlib(PROG)
+    if libs is None:
         return 2
+    np, plt = libs
     try:
         return run(args, np, plt)
     except Failure as e:
@@ -542,8 +516,8 @@ def run(args, np, plt):
     runs, spectra = {}, {}
     for stem in RUNS:
         runs[stem] = load(args.runs, stem, np)
-        runs[stem]["tracks_full"] = {a: full_track(runs[stem], np, a)
-                                     for a in sorted(tr.id for tr in runs[stem]["tracks"])}
+        # Every agent's consensus state at full rate (running samples, time-sorted).
+        runs[stem]["tracks_full"] = {tr.id: (tr.t_full, tr.q_full) for tr in runs[stem]["tracks"]}
         spectra[stem] = inspect(args.swarm, runs[stem]["dir"])
     man = os.path.join(args.runs, "maneuvers")
     single = read_maneuver(os.path.join(man, "single_agent.csv"), np)

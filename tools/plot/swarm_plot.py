@@ -72,6 +72,27 @@ FAULT_STYLE = {  # kind of window -> (colour, alpha, legend label)
 }
 
 
+def import_matplotlib(prog):
+    """(numpy, pyplot on the Agg backend), or None after telling the user what to install."""
+    logging.getLogger("matplotlib").setLevel(logging.ERROR)  # no config/font-cache chatter
+    try:
+        import numpy as np
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError as e:
+        print(f"{prog}: needs numpy and matplotlib for {sys.executable} ({e}); on Debian: "
+              "apt-get install python3-matplotlib python3-numpy", file=sys.stderr)
+        return None
+    return np, plt
+
+
+def save_figure(plt, fig, path):
+    """Writes and closes a figure; no software tag or date, so the same data gives the same bytes."""
+    fig.savefig(path, dpi=DPI, metadata={"Software": None})
+    plt.close(fig)
+
+
 class RunError(Exception):
     """A problem with one file of the run directory (exit 2)."""
 
@@ -325,6 +346,7 @@ def build_tracks(tel, np):
         # Full-rate arrays for position look-ups (graph snapshots).
         tracks[-1].t_full = t
         tracks[-1].p_full = (cols["px"][a:b], cols["py"][a:b])
+        tracks[-1].q_full = np.column_stack((cols["qx"][a:b], cols["qy"][a:b], cols["qz"][a:b]))
     return tracks, quad
 
 
@@ -501,8 +523,7 @@ class Plotter:
 
     def save(self, fig, name):
         path = os.path.join(self.out_dir, name)
-        fig.savefig(path, dpi=DPI, metadata={"Software": None})
-        self.plt.close(fig)
+        save_figure(self.plt, fig, path)
         self.written.append(path)
 
     # -- figures
@@ -869,16 +890,10 @@ def main(argv):
     args = parser.parse_args(argv)  # exits 2 on a bad command line
     run_dir = args.run_dir
 
-    logging.getLogger("matplotlib").setLevel(logging.ERROR)  # no config/font-cache chatter
-    try:
-        import numpy as np
-        import matplotlib
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-    except ImportError as e:
-        print(f"{PROG}: needs numpy and matplotlib for {sys.executable} ({e}); on Debian: "
-              "apt-get install python3-matplotlib python3-numpy", file=sys.stderr)
+    libs = import_matplotlib(PROG)
+    if libs is None:
         return 2
+    np, plt = libs
 
     try:
         run = load_run(run_dir, np)
