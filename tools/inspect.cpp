@@ -48,12 +48,6 @@ std::string as_json(const RunConfig& rc, const InitialGraph& g, double tau) {
   return to_json(ins);
 }
 
-bool formation_in(const RunConfig& rc) {
-  for (const AgentSpec& a : rc.agents)
-    if (!a.offset_W.isZero()) return true;
-  return false;
-}
-
 std::string as_text(const RunConfig& rc, const InitialGraph& g, double tau) {
   const Vec3 avg = rc.initial_average();
   const int n = static_cast<int>(rc.agents.size());
@@ -81,10 +75,10 @@ std::string as_text(const RunConfig& rc, const InitialGraph& g, double tau) {
     << (g.spectrum.components == 1 ? " (connected)"
                                    : " (NOT connected: proximity may join them later)")
     << "\npredicted agreement point (the initial average"
-    << (formation_in(rc) ? " of the agents' estimates of the centre" : "") << "): (" << avg.x()
+    << (rc.has_formation() ? " of the agents' estimates of the centre" : "") << "): (" << avg.x()
     << ", " << avg.y() << ", " << avg.z() << ")\n";
   if (tau > 0) o << "time constant 1/(k lambda2) = " << tau << " s (exact for fixed weights)\n";
-  if (formation_in(rc)) {
+  if (rc.has_formation()) {
     o << "formation: the agents agree on the centre above and fly to centre + slot\n";
     o << "  agent        slot about the centre         where it ends\n";
     int shown = 0;

@@ -200,9 +200,7 @@ std::string summary_text(const records::Summary& s, const RunConfig& rc, const s
       << " at t = " << fmt("%.2f", s.min_separation_t_s()) << " s)";
   }
   h << "\n";
-  bool formation = false;
-  for (const AgentSpec& a : rc.agents) formation = formation || !a.offset_W.isZero();
-  if (formation) {
+  if (rc.has_formation()) {
     h << "formation: every agent within " << fmt("%.3f", s.max_slot_error_m())
       << " m of its slot about the agreed centre\n";
   }

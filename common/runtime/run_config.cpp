@@ -13,6 +13,12 @@ Vec3 RunConfig::initial_average() const {
   return agents.empty() ? sum : Vec3(sum / static_cast<double>(agents.size()));
 }
 
+bool RunConfig::has_formation() const {
+  for (const AgentSpec& a : agents)
+    if (!a.offset_W.isZero()) return true;
+  return false;
+}
+
 const AgentSpec* RunConfig::agent(AgentId id) const {
   for (const AgentSpec& a : agents)
     if (a.id == id) return &a;

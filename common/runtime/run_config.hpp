@@ -51,6 +51,8 @@ struct RunConfig {
   // point the swarm agrees on.
   Vec3 initial_average() const;
   const AgentSpec* agent(AgentId id) const;
+  // Whether any agent has a formation slot (else every agent flies to the agreed point).
+  bool has_formation() const;
   std::set<AgentId> ids() const;
   // The one definition of the peers agent `id` waits for at the start (the barrier, and the law's
   // first tick): its listed neighbours on a FIXED graph, every other agent otherwise, and never an
