@@ -19,6 +19,7 @@ malformed run, named); 3 when OUT could not be written.
 
 import argparse
 import csv
+import fcntl
 import json
 import math
 import os
@@ -537,8 +538,15 @@ def run(args, np, plt):
     os.makedirs(stage, exist_ok=True)
     try:
         written = draw_all(args, np, plt, runs, spectra, single, dyn, stage)
-        for name in written:
-            os.replace(os.path.join(stage, name), os.path.join(args.out, name))
+        # Two `swarm paper` at once: each moves its whole set under a lock on OUT, so OUT ends as
+        # one complete set, never figures of one and the report of the other.
+        out_fd = os.open(args.out, os.O_RDONLY)
+        try:
+            fcntl.flock(out_fd, fcntl.LOCK_EX)
+            for name in written:
+                os.replace(os.path.join(stage, name), os.path.join(args.out, name))
+        finally:
+            os.close(out_fd)
     finally:
         for name in os.listdir(stage):
             os.remove(os.path.join(stage, name))
