@@ -1,0 +1,184 @@
+#include "common/core/avoidance.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+#include <Eigen/Dense>
+
+namespace qswarm {
+namespace {
+
+// Constraints kept per step: the nearest ones (farther ones are implied in practice, and the
+// enumeration grows with the cube of the count).
+constexpr std::size_t kMaxConstraints = 8;
+
+struct Halfspace {  // a . v >= b
+  Vec3 a;
+  double b;
+};
+
+Vec3 clamp_norm(const Vec3& v, double max) {
+  const double n = v.norm();
+  return n > max ? Vec3(v * (max / n)) : v;
+}
+
+double worst_violation(const std::vector<Halfspace>& hs, const Vec3& v) {
+  double worst = 0.0;
+  for (const Halfspace& h : hs) worst = std::max(worst, h.b - h.a.dot(v));
+  return worst;
+}
+
+// The point closest to u on the intersection of the planes a_k . v = b_k (k in idx), or nothing
+// when they are degenerate (parallel normals).
+bool project_on_planes(const std::vector<Halfspace>& hs, const std::vector<std::size_t>& idx,
+                       const Vec3& u, Vec3& out) {
+  const auto m = static_cast<Eigen::Index>(idx.size());
+  Eigen::MatrixXd A(m, 3);
+  Eigen::VectorXd r(m);
+  for (Eigen::Index k = 0; k < m; ++k) {
+    const Halfspace& h = hs[idx[static_cast<std::size_t>(k)]];
+    A.row(k) = h.a.transpose();
+    r(k) = h.b - h.a.dot(u);
+  }
+  const Eigen::MatrixXd G = A * A.transpose();
+  Eigen::FullPivLU<Eigen::MatrixXd> lu(G);
+  if (lu.rank() < m || std::abs(G.determinant()) < 1e-12) return false;
+  out = u + A.transpose() * lu.solve(r);
+  return out.allFinite();
+}
+
+}  // namespace
+
+void AvoidanceConfig::validate() const {
+  const auto positive = [](double v, const char* name, double max) {
+    if (!std::isfinite(v) || v <= 0.0 || v > max) {
+      throw std::invalid_argument(std::string("avoidance.") + name + " = " + std::to_string(v) +
+                                  ": expected a value in (0, " + std::to_string(max) + "]");
+    }
+  };
+  positive(safe_distance_m, "safe_distance_m", 100.0);
+  if (!std::isfinite(margin_m) || margin_m < 0.0 || margin_m > 100.0)
+    throw std::invalid_argument("avoidance.margin_m = " + std::to_string(margin_m) +
+                                ": expected a value in [0, 100]");
+  positive(rate_hz, "rate_hz", 100.0);
+  positive(brake_mps2, "brake_mps2", 100.0);
+}
+
+SafeVelocity safe_velocity(AgentId self, const Vec3& p_W, const Vec3& v_des, const Vec3& goal_W,
+                           const std::vector<Obstacle>& others, const AvoidanceConfig& c) {
+  SafeVelocity out;
+  out.v_W = v_des;
+  const double D = c.filter_distance_m();
+  const double speed = v_des.norm();
+  // The constraints that can bind: the allowed approach speed rate (d - D) / 2 is below the
+  // desired speed (or negative: inside, pushed apart).
+  struct Near {
+    AgentId id;
+    double d;
+    Halfspace h;
+  };
+  std::vector<Near> near;
+  for (const Obstacle& o : others) {
+    if (o.id == self) continue;
+    Vec3 n = p_W - o.p_W;
+    double d = n.norm();
+    if (!std::isfinite(d)) continue;
+    if (0.5 * c.rate_hz * (d - D) > speed + 1e-9) continue;
+    if (d > 1e-9) {
+      n /= d;
+    } else {  // on top of each other: split along x, the lower id to -x
+      n = self < o.id ? Vec3(-1, 0, 0) : Vec3(1, 0, 0);
+      d = 0.0;
+    }
+    near.push_back({o.id, d, {n, -0.5 * c.rate_hz * (d - D)}});
+  }
+  if (near.empty()) return out;
+  std::sort(near.begin(), near.end(), [](const Near& a, const Near& b) { return a.d < b.d; });
+  if (near.size() > kMaxConstraints) near.resize(kMaxConstraints);
+  std::vector<Halfspace> hs;
+  for (const Near& n : near) hs.push_back(n.h);
+
+  // Pass on the right: a neighbour between the agent and a goal beyond it turns the desired
+  // velocity by the part the constraint would remove, sideways (right of the heading, about z).
+  Vec3 u = v_des;
+  for (const Near& n : near) {
+    const double deficit = n.h.b - n.h.a.dot(v_des);
+    if (deficit <= 0.0) continue;
+    if ((goal_W - p_W).dot(-n.h.a) <= n.d) continue;  // the goal is not beyond the neighbour
+    Vec3 side = Vec3::UnitZ().cross(n.h.a);
+    if (side.norm() < 0.1) side = Vec3::UnitX().cross(n.h.a);  // one above the other
+    // And apart in height, the lower id down: with three or more meeting at once, turning right
+    // alone can circle into a deadlock (each blocked by the next); the heights break the tie.
+    side = side.normalized() + Vec3(0, 0, self < n.id ? -0.5 : 0.5);
+    u += side.normalized() * deficit;
+  }
+  if (speed > 0.0) u = clamp_norm(u, speed);
+
+  if (worst_violation(hs, u) <= 1e-12) {
+    out.v_W = u;
+    return out;
+  }
+  // Exact QP: min |v - u|^2 over the halfspaces. The optimum lies on the intersection of at most 3
+  // active planes; every feasible candidate is at least as far from u as the optimum, so the
+  // nearest feasible candidate is the optimum.
+  const std::size_t m = hs.size();
+  double best = std::numeric_limits<double>::infinity();
+  double least_violation = std::numeric_limits<double>::infinity();
+  Vec3 least_violating = Vec3::Zero();
+  const auto consider = [&](const std::vector<std::size_t>& idx) {
+    Vec3 v;
+    if (!project_on_planes(hs, idx, u, v)) return;
+    const double viol = worst_violation(hs, v);
+    if (viol <= 1e-9) {
+      const double cost = (v - u).squaredNorm();
+      if (cost < best) {
+        best = cost;
+        out.v_W = v;
+        out.active = static_cast<int>(idx.size());
+      }
+    } else if (viol < least_violation) {
+      least_violation = viol;
+      least_violating = v;
+    }
+  };
+  for (std::size_t i = 0; i < m; ++i) {
+    consider({i});
+    for (std::size_t j = i + 1; j < m; ++j) {
+      consider({i, j});
+      for (std::size_t k = j + 1; k < m; ++k) consider({i, j, k});
+    }
+  }
+  if (!std::isfinite(best)) {
+    out.feasible = false;
+    out.v_W = worst_violation(hs, Vec3::Zero()) < least_violation ? Vec3::Zero() : least_violating;
+    out.active = static_cast<int>(m);
+  }
+  return out;
+}
+
+TrackingReference ReferenceGenerator::step(const Vec3& goal_W, double dt, AgentId self,
+                                           const Vec3& self_p_W,
+                                           const std::vector<Obstacle>& others,
+                                           const AvoidanceConfig& avoid) {
+  const double h = std::max(dt, 1e-9);
+  const Vec3 v_des = clamp_norm(1.5 * (goal_W - p_W_), speed_);
+  Vec3 a = clamp_norm((v_des - v_W_) / h, accel_);
+  if (avoid.enabled) {
+    const Vec3 v_cmd = v_W_ + a * dt;
+    const SafeVelocity s = safe_velocity(self, self_p_W, v_cmd, goal_W, others, avoid);
+    // Meeting a constraint may take harder braking than the comfortable limit, up to brake_mps2.
+    a = clamp_norm((s.v_W - v_W_) / h, std::max(accel_, avoid.brake_mps2));
+  }
+  v_W_ += a * dt;
+  p_W_ += v_W_ * dt;
+  TrackingReference ref;
+  ref.p_W = p_W_;
+  ref.v_W = v_W_;
+  ref.a_W = a;
+  return ref;
+}
+
+}  // namespace qswarm
