@@ -75,6 +75,7 @@ AgentParams make_agent_params(const RunConfig& rc, const AgentSpec& spec) {
   p.gains = rc.gains;
   p.reference_speed_mps = rc.reference_speed_mps;
   p.reference_accel_mps2 = rc.reference_accel_mps2;
+  p.avoidance = rc.avoidance;
   p.neighbor_timeout_s = rc.neighbor_timeout_s;
   p.run_id = rc.run_id;
   p.expected_peers = rc.start_peers(spec.id).size();

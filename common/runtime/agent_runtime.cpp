@@ -7,17 +7,11 @@
 #include "common/core/primitives.hpp"
 
 namespace qswarm {
-namespace {
-
-Vec3 clamp_norm(const Vec3& v, double max) {
-  const double n = v.norm();
-  return n > max ? Vec3(v * (max / n)) : v;
-}
-
-}  // namespace
-
 AgentRuntime::AgentRuntime(AgentParams p, NeighborBus& bus)
-    : p_(std::move(p)), bus_(bus), law_(make_law(p_.id, p_.p0_W - p_.offset_W, p_.law)) {
+    : p_(std::move(p)),
+      bus_(bus),
+      law_(make_law(p_.id, p_.p0_W - p_.offset_W, p_.law)),
+      reference_(p_.p0_W, p_.reference_speed_mps, p_.reference_accel_mps2) {
   if (!(p_.physics_hz > 0.0) || !(p_.consensus_hz > 0.0) || p_.consensus_hz > p_.physics_hz) {
     throw std::invalid_argument("rates: need 0 < consensus_hz <= physics_hz");
   }
@@ -29,8 +23,8 @@ AgentRuntime::AgentRuntime(AgentParams p, NeighborBus& bus)
   }
   quad_.p_W = p_.p0_W;
   quad_.R_WB = rotation_from_tait_bryan({0.0, 0.0, p_.yaw0_rad});
-  ref_p_W_ = p_.p0_W;
   if (p_.mode == AgentMode::kQuadcopter) rotors_ = hover_rotors(p_.airframe);
+  if (p_.avoidance.enabled) p_.avoidance.validate();
 }
 
 void AgentRuntime::set_start_time(double t_s) {
@@ -69,10 +63,37 @@ void AgentRuntime::publish(std::uint8_t phase) {
   bus_.publish(m);
 }
 
+void AgentRuntime::hear_obstacles(const std::vector<StateMessage>& samples, double t) {
+  for (const StateMessage& m : samples) {
+    const AgentId peer = m.view.id;
+    if (peer == p_.id) continue;
+    if (m.phase == kStopping) {
+      heard_.erase(peer);
+      continue;
+    }
+    Heard& h = heard_[peer];
+    if (m.incarnation != h.incarnation || m.seq != h.seq) {
+      h.seq = m.seq;
+      h.incarnation = m.incarnation;
+      h.last_new_s = t;
+      h.p_W = m.p_W;
+      h.v_W = m.v_W;
+      // The position is for the sender's stamp when both run on the swarm's clock; a waiting
+      // agent's is for now (it is not moving).
+      h.at_s = m.phase == kRunning ? std::clamp(m.stamp_s, t - p_.neighbor_timeout_s, t) : t;
+    }
+  }
+  for (auto it = heard_.begin(); it != heard_.end();) {
+    it = t - it->second.last_new_s > p_.neighbor_timeout_s ? heard_.erase(it) : std::next(it);
+  }
+}
+
 void AgentRuntime::consensus_tick(std::vector<AgentEvent>& events) {
   const double t = time_s();
   std::vector<NeighborView> views;
-  for (const StateMessage& m : bus_.latest(p_.id)) {
+  const std::vector<StateMessage> samples = bus_.latest(p_.id);
+  if (p_.mode == AgentMode::kQuadcopter && p_.avoidance.enabled) hear_obstacles(samples, t);
+  for (const StateMessage& m : samples) {
     const AgentId peer = m.view.id;
     if (m.phase != kRunning) continue;
     if (!listen_to_.empty() && !listen_to_.count(peer))
@@ -115,14 +136,12 @@ void AgentRuntime::physics(double dt) {
   // The consensus state is the goal; the reference moves toward it within speed and acceleration
   // limits so that it stays flyable, and the controller tracks the reference.
   const Vec3 goal = law_->state() + p_.offset_W;  // its slot about its estimate of the centre
-  const Vec3 v_des = clamp_norm(1.5 * (goal - ref_p_W_), p_.reference_speed_mps);
-  const Vec3 a = clamp_norm((v_des - ref_v_W_) / std::max(dt, 1e-9), p_.reference_accel_mps2);
-  ref_v_W_ += a * dt;
-  ref_p_W_ += ref_v_W_ * dt;
-  TrackingReference ref;
-  ref.p_W = ref_p_W_;
-  ref.v_W = ref_v_W_;
-  ref.a_W = a;
+  obstacles_.clear();
+  if (p_.avoidance.enabled) {
+    const double t = time_s();
+    for (const auto& [peer, h] : heard_) obstacles_.push_back({peer, h.p_W + h.v_W * (t - h.at_s)});
+  }
+  TrackingReference ref = reference_.step(goal, dt, p_.id, quad_.p_W, obstacles_, p_.avoidance);
   ref.yaw_rad = p_.yaw0_rad;
   rotors_ = track(p_.airframe, p_.gains, quad_, ref).allocation.omega_radps;
   quad_ = rk4_step(p_.airframe, quad_, rotors_, dt);

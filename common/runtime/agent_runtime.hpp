@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "common/core/airframe.hpp"
+#include "common/core/avoidance.hpp"
 #include "common/core/dynamics.hpp"
 #include "common/core/tracking_controller.hpp"
 #include "common/core/update_law.hpp"
@@ -32,6 +33,7 @@ struct AgentParams {
   TrackingGains gains;
   double reference_speed_mps = 3.0;
   double reference_accel_mps2 = 2.0;
+  AvoidanceConfig avoidance;  // quadcopter mode: filter the reference against the agents heard
   double neighbor_timeout_s = 1.0;  // simulated seconds without a new message
   std::int64_t incarnation = 0;
   std::uint64_t run_id = 0;
@@ -92,6 +94,7 @@ class AgentRuntime {
 
  private:
   void consensus_tick(std::vector<AgentEvent>& events);
+  void hear_obstacles(const std::vector<StateMessage>& samples, double t);
   void physics(double dt);
 
   AgentParams p_;
@@ -105,8 +108,18 @@ class AgentRuntime {
   double law_start_s_ = -1.0;
   QuadState quad_;
   RotorSpeeds rotors_ = RotorSpeeds::Zero();
-  Vec3 ref_p_W_ = Vec3::Zero();  // rate-limited reference that the quadcopter tracks
-  Vec3 ref_v_W_ = Vec3::Zero();
+  ReferenceGenerator reference_;  // the rate-limited reference the quadcopter tracks
+  // Collision avoidance: every agent heard (any phase but stopping), its last sample's position and
+  // velocity and the swarm time that position is for; forgotten after the neighbour timeout.
+  struct Heard {
+    std::uint64_t seq = 0;
+    std::int64_t incarnation = 0;
+    double last_new_s = 0.0;
+    Vec3 p_W = Vec3::Zero(), v_W = Vec3::Zero();
+    double at_s = 0.0;
+  };
+  std::map<AgentId, Heard> heard_;
+  std::vector<Obstacle> obstacles_;  // scratch, reused every physics step
   struct Peer {
     std::uint64_t seq = 0;
     std::int64_t incarnation = 0;

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <numbers>
 #include <random>
+#include <stdexcept>
+#include <string>
 
 namespace qswarm {
 
@@ -94,13 +96,26 @@ std::vector<Vec3> formation_slots(int shape, int n, double spacing_m) {
   return out;
 }
 
-std::vector<AgentSpec> random_agent_specs(int n, std::uint64_t seed, double box_m) {
+std::vector<AgentSpec> random_agent_specs(int n, std::uint64_t seed, double box_m,
+                                          double min_separation_m) {
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> u(0.0, box_m);
   std::vector<AgentSpec> out;
   for (int i = 0; i < n; ++i) {
-    const double x = u(rng), y = u(rng), z = u(rng);
-    out.push_back({static_cast<AgentId>(i + 1), Vec3(x, y, z), 0.0});
+    for (int attempt = 0;; ++attempt) {
+      if (attempt == 10000) {
+        throw std::runtime_error("no room for " + std::to_string(n) + " agents " +
+                                 std::to_string(min_separation_m) + " m apart");
+      }
+      const double x = u(rng), y = u(rng), z = u(rng);
+      const Vec3 p(x, y, z);
+      const bool clear = std::all_of(out.begin(), out.end(), [&](const AgentSpec& a) {
+        return (a.position_W - p).norm() >= min_separation_m;
+      });
+      if (!clear) continue;
+      out.push_back({static_cast<AgentId>(i + 1), p, 0.0});
+      break;
+    }
   }
   return out;
 }

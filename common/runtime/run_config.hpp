@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "common/core/airframe.hpp"
+#include "common/core/avoidance.hpp"
 #include "common/core/tracking_controller.hpp"
 #include "common/core/update_law.hpp"
 #include "common/runtime/fault_plan.hpp"
@@ -35,6 +36,9 @@ struct RunConfig {
   TrackingGains gains;
   double reference_speed_mps = 3.0;
   double reference_accel_mps2 = 2.0;
+  // Collision avoidance (enabled: quadcopters filter their references) and the safe distance the
+  // record judges separation by, in every mode.
+  AvoidanceConfig avoidance;
   double tolerance_m = 0.01;
   double hold_s = 1.0;
   double duration_s = 60.0;
@@ -64,7 +68,10 @@ struct RunConfig {
 // the origin, in the order the agents are assigned them (by ascending id).
 std::vector<Vec3> formation_slots(int shape, int n, double spacing_m);
 
-// n agents uniformly in a cube of side box_m, ids 1..n, from the seed.
-std::vector<AgentSpec> random_agent_specs(int n, std::uint64_t seed, double box_m);
+// n agents uniformly in a cube of side box_m, ids 1..n, from the seed. With min_separation_m > 0 a
+// draw closer than that to an earlier agent is drawn again (std::runtime_error when the cube has no
+// room after many draws); 0 gives the plain uniform draw.
+std::vector<AgentSpec> random_agent_specs(int n, std::uint64_t seed, double box_m,
+                                          double min_separation_m = 0.0);
 
 }  // namespace qswarm

@@ -5,6 +5,7 @@
 #include <numbers>
 #include <set>
 #include <sstream>
+#include <stdexcept>
 
 #include "common/runtime/scenario.hpp"
 
@@ -61,7 +62,8 @@ void apply_overrides(scenario::Scenario& s, const ScenarioOverrides& o) {
 }
 
 // Random agents become a listed swarm (the scenario as run lists them).
-void expand_random_agents(scenario::Scenario& s, std::uint64_t seed) {
+// With avoidance on, random starts keep the safe distance (a run must not start in a violation).
+void expand_random_agents(scenario::Scenario& s, std::uint64_t seed, double min_separation_m) {
   if (s.agents_size() > 0 && s.random_agents().count() > 0) {
     fail("random_agents", "either agents or random_agents, not both", "both");
   }
@@ -72,7 +74,16 @@ void expand_random_agents(scenario::Scenario& s, std::uint64_t seed) {
   const double box = s.random_agents().box_m() == 0.0 ? 30.0 : s.random_agents().box_m();
   if (!std::isfinite(box) || box <= 0.0 || box > 1e5)
     fail("random_agents.box_m", "a finite value in (0, 100000]", num(box));
-  for (const AgentSpec& a : random_agent_specs(static_cast<int>(n), seed, box)) {
+  std::vector<AgentSpec> specs;
+  try {
+    specs = random_agent_specs(static_cast<int>(n), seed, box, min_separation_m);
+  } catch (const std::runtime_error& e) {
+    fail("random_agents.box_m",
+         "a cube with room for " + std::to_string(n) + " agents avoidance.safe_distance_m (" +
+             num(min_separation_m) + " m) apart",
+         num(box) + " (" + e.what() + ")");
+  }
+  for (const AgentSpec& a : specs) {
     scenario::Agent* pa = s.add_agents();
     pa->set_id(a.id);
     pa->mutable_position()->set_x(a.position_W.x());
@@ -106,6 +117,37 @@ void resolve_agents(const scenario::Scenario& s, RunConfig& rc) {
     if (!std::isfinite(a.yaw_deg()) || std::abs(a.yaw_deg()) > 3600.0)
       fail(f + ".yaw_deg", "a finite angle within +-3600 deg", num(a.yaw_deg()));
     rc.agents.push_back({a.id(), p, a.yaw_deg() * std::numbers::pi / 180.0});
+  }
+}
+
+void resolve_avoidance(const scenario::Scenario& s, RunConfig& rc) {
+  const scenario::Avoidance& a = s.avoidance();
+  const bool quad = s.mode() == scenario::QUADCOPTER;
+  if (a.has_enabled() && a.enabled() && !quad) {
+    fail("avoidance.enabled",
+         "false or unset in PARTICLE mode (a point agent flies its consensus state, which the "
+         "filter must never change; use mode: QUADCOPTER)",
+         "true");
+  }
+  rc.avoidance.enabled = a.has_enabled() ? a.enabled() : quad;
+  rc.avoidance.safe_distance_m = positive("avoidance.safe_distance_m", a.has_safe_distance_m(),
+                                          a.safe_distance_m(), 1.0, 100.0);
+}
+
+// With avoidance on, listed starts must keep the safe distance: the run would begin in a violation.
+void check_start_separation(const scenario::Scenario& s, const RunConfig& rc) {
+  if (!rc.avoidance.enabled) return;
+  for (std::size_t i = 0; i < rc.agents.size(); ++i) {
+    for (std::size_t j = 0; j < i; ++j) {
+      const double d = (rc.agents[i].position_W - rc.agents[j].position_W).norm();
+      if (d < rc.avoidance.safe_distance_m) {
+        fail("agents[" + std::to_string(i) + "].position",
+             "at least avoidance.safe_distance_m (" + num(rc.avoidance.safe_distance_m) +
+                 " m) from every other start, or avoidance { enabled: false }",
+             num(d) + " m from agent " + std::to_string(rc.agents[j].id) + " (of " +
+                 std::to_string(s.agents_size()) + ")");
+      }
+    }
   }
 }
 
@@ -417,6 +459,8 @@ void write_back_defaults(scenario::Scenario& s, const RunConfig& rc) {
   s.mutable_topology()->set_threshold_m(rc.law.topology.threshold_m);
   s.mutable_topology()->set_hysteresis_m(rc.law.topology.hysteresis_m);
   s.mutable_weight()->set_scale(rc.law.weight.scale);
+  s.mutable_avoidance()->set_enabled(rc.avoidance.enabled);
+  s.mutable_avoidance()->set_safe_distance_m(rc.avoidance.safe_distance_m);
 }
 
 }  // namespace
@@ -428,8 +472,10 @@ RunConfig resolve_scenario(scenario::Scenario s, const ScenarioOverrides& o) {
   if (rc.seed > 0xFFFFFFFFull) fail("seed", "a value below 2^32", std::to_string(rc.seed));
   s.set_seed(rc.seed);
   rc.name = s.name().empty() ? "unnamed" : s.name();
-  expand_random_agents(s, rc.seed);
+  resolve_avoidance(s, rc);
+  expand_random_agents(s, rc.seed, rc.avoidance.enabled ? rc.avoidance.safe_distance_m : 0.0);
   resolve_agents(s, rc);
+  check_start_separation(s, rc);
   resolve_formation(s, rc);
   rc.mode = s.mode() == scenario::QUADCOPTER ? AgentMode::kQuadcopter : AgentMode::kParticle;
   resolve_law(s, rc);

@@ -59,6 +59,15 @@ TEST(Scenario, EveryBadFieldIsRefusedWithItsName) {
        "faults.late_join[1].agent"},
       {"random_agents { count: 513 }\n", "random_agents.count"},
       {"random_agents { count: 3 box_m: nan }\n", "random_agents.box_m"},
+      // Collision avoidance: a point agent cannot have it; the distance must be one a run honours;
+      // a run must not start in a violation (listed or random starts).
+      {kTwo + "avoidance { enabled: true }\n", "avoidance.enabled"},
+      {kTwo + "mode: QUADCOPTER\navoidance { safe_distance_m: nan }\n",
+       "avoidance.safe_distance_m"},
+      {kTwo + "avoidance { safe_distance_m: 0 }\n", "avoidance.safe_distance_m"},
+      {kTwo + "avoidance { safe_distance_m: 1e9 }\n", "avoidance.safe_distance_m"},
+      {kTwo + "mode: QUADCOPTER\navoidance { safe_distance_m: 1.5 }\n", "agents[1].position"},
+      {"mode: QUADCOPTER\nrandom_agents { count: 64 box_m: 2 }\n", "random_agents.box_m"},
   };
   for (const Case& c : cases) {
     const std::string why = error_of(c.text);
@@ -66,6 +75,33 @@ TEST(Scenario, EveryBadFieldIsRefusedWithItsName) {
         << "scenario:\n"
         << c.text << "expected '" << c.expect << "' in: '" << why << "'";
   }
+}
+
+TEST(Scenario, AvoidanceIsOnForQuadcoptersOffForParticlesAndKeepsRandomStartsApart) {
+  const RunConfig quad = resolve_scenario(parse_scenario_text(
+      "mode: QUADCOPTER\nrandom_agents { count: 40 box_m: 6 }\nseed: 3\n", "s"));
+  EXPECT_TRUE(quad.avoidance.enabled);
+  EXPECT_EQ(quad.avoidance.safe_distance_m, 1.0);
+  double closest = 1e300;
+  for (const AgentSpec& a : quad.agents)
+    for (const AgentSpec& b : quad.agents)
+      if (a.id != b.id) closest = std::min(closest, (a.position_W - b.position_W).norm());
+  EXPECT_GE(closest, 1.0);  // 40 in a 6 m cube: a plain draw would put some closer
+  EXPECT_TRUE(quad.resolved.avoidance().enabled());  // the record's scenario says what ran
+  EXPECT_EQ(quad.resolved.avoidance().safe_distance_m(), 1.0);
+
+  const RunConfig particle = resolve_scenario(parse_scenario_text(kTwo, "s"));
+  EXPECT_FALSE(particle.avoidance.enabled);
+  const RunConfig off = resolve_scenario(parse_scenario_text(
+      kTwo + "mode: QUADCOPTER\navoidance { enabled: false safe_distance_m: 2 }\n", "s"));
+  EXPECT_FALSE(off.avoidance.enabled);  // and listed starts closer than 2 m are then allowed
+  EXPECT_EQ(off.avoidance.safe_distance_m, 2.0);  // still what the record judges by
+  // Without avoidance the random draw is the plain one (the paper's scenarios keep their starts).
+  const RunConfig plain =
+      resolve_scenario(parse_scenario_text("random_agents { count: 40 box_m: 6 }\nseed: 3\n", "s"));
+  const std::vector<AgentSpec> uniform = random_agent_specs(40, 3, 6.0);
+  for (std::size_t i = 0; i < uniform.size(); ++i)
+    EXPECT_EQ(plain.agents[i].position_W, uniform[i].position_W);
 }
 
 TEST(Scenario, SwarmsBeyondWhatTheWireCarriesAreRefusedAndTheBoundItselfIsAccepted) {
