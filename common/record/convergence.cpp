@@ -22,7 +22,8 @@ ConvergenceJudge::Verdict ConvergenceJudge::update(double t_s, const records::Gr
   for (const auto& [id, track] : presence.tracks())
     planned_back &= !plan_.due_back(id, t_s) || presence.running(id);
   const bool agree = g.agents() > 0 && planned_back && t_s >= plan_.last_fault_end_s() &&
-                     g.disagreement_m() < tolerance_m_ && g.spread_m() < tolerance_m_;
+                     g.disagreement_m() < tolerance_m_ && g.spread_m() < tolerance_m_ &&
+                     g.held_speed_mps() < tolerance_m_;  // held agents: tolerance_m per second
   if (!agree) {
     hold_start_s_ = -1.0;
     return Verdict::kNone;

@@ -7,7 +7,7 @@ namespace qswarm {
 records::GraphSnapshot measure_graph(double t_s, const std::vector<AgentId>& ids,
                                      const Positions& q, const Positions& p,
                                      const LinksOf& links_of, const Vec3& initial_average,
-                                     const Positions& offsets) {
+                                     const Positions& offsets, const std::vector<bool>& held) {
   records::GraphSnapshot g;
   g.set_t_s(t_s);
   g.set_agents(static_cast<std::uint32_t>(ids.size()));
@@ -42,6 +42,7 @@ records::GraphSnapshot measure_graph(double t_s, const std::vector<AgentId>& ids
   }
   double spread = 0.0;
   for (int i = 0; i < n; ++i) {
+    if (!held.empty() && held[static_cast<std::size_t>(i)]) continue;
     const Vec3 slot = offsets.empty() ? qbar : Vec3(qbar + offsets[static_cast<std::size_t>(i)]);
     spread = std::max(spread, (p[static_cast<std::size_t>(i)] - slot).norm());
   }

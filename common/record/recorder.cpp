@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <fstream>
+#include <tuple>
 
 #include "common/record/graph_metrics.hpp"
 
@@ -26,7 +27,17 @@ Recorder::Recorder(RunConfig rc, std::string run_dir, double time_scale)
       sinks_(dir_),
       presence_(ids_of(rc_), rc_.neighbor_timeout_s),
       judge_(rc_.tolerance_m, rc_.hold_s, rc_.neighbor_timeout_s, rc_.faults),
-      timeline_(rc_.faults.timeline()) {}
+      separation_(rc_.avoidance.safe_distance_m),
+      timeline_(rc_.faults.timeline()) {
+  // With avoidance, two slots closer than the filter keeps agents apart cannot both be reached.
+  if (rc_.avoidance.enabled) {
+    for (const AgentSpec& a : rc_.agents)
+      for (const AgentSpec& b : rc_.agents)
+        if (a.id != b.id && (a.offset_W - b.offset_W).norm() < rc_.avoidance.filter_distance_m())
+          held_.insert(a.id);
+  }
+  tally_.held.assign(held_.begin(), held_.end());
+}
 
 void Recorder::event(const std::string& kind, AgentId agent, const std::string& detail) {
   sinks_.event(t_s_, kind, agent, detail);
@@ -75,6 +86,7 @@ void Recorder::on_sample(const StateMessage& m, std::int64_t recv_wall_ns) {
       break;
     case Presence::Change::kDepart:
       ++tally_.departures;
+      separation_.forget(id);
       event("depart", id, "agent stopped");
       break;
     case Presence::Change::kNone:
@@ -85,6 +97,7 @@ void Recorder::on_sample(const StateMessage& m, std::int64_t recv_wall_ns) {
   const double age_ms = m.wall_ns > 0 ? static_cast<double>(recv_wall_ns - m.wall_ns) / 1e6 : 0.0;
   if (m.wall_ns > 0) tally_.ages_ms.push_back(age_ms);
   sinks_.sample(m, age_ms);
+  if (m.phase != kStopping) separation_.on_sample(id, m.p_W, m.v_W, m.stamp_s);
   // The initial graph, once every agent of the scenario has reported the links its law started
   // with (view seq >= 1), however late its first samples reached us.
   if (!first_full_ && m.phase == kRunning && m.view.seq >= 1) {
@@ -108,6 +121,7 @@ void Recorder::note_foreign_runs(const std::set<std::uint64_t>& runs, std::uint6
 
 void Recorder::depart(AgentId id, const std::string& why) {
   ++tally_.departures;
+  separation_.forget(id);
   event("depart", id, why);
   if (auto k = killed_at_.find(id); k != killed_at_.end()) {
     tally_.detect_s.push_back(t_s_ - k->second);
@@ -132,15 +146,7 @@ void Recorder::tick(std::int64_t now_wall_ns) {
   }
 }
 
-void Recorder::record_graph(const records::GraphSnapshot& g) {
-  sinks_.graph(g);
-  if (g.agents() > 1 && g.min_separation_m() < tally_.min_separation_m) {
-    tally_.min_separation_m = g.min_separation_m();
-    tally_.min_separation_t_s = g.t_s();
-    tally_.min_separation_a = g.min_separation_a();
-    tally_.min_separation_b = g.min_separation_b();
-  }
-}
+void Recorder::record_graph(const records::GraphSnapshot& g) { sinks_.graph(g); }
 
 void Recorder::initial_snapshot() {
   std::vector<AgentId> ids;
@@ -173,18 +179,23 @@ void Recorder::initial_snapshot() {
 void Recorder::snapshot() {
   std::vector<AgentId> ids;
   Positions q, p, offsets;
+  std::vector<bool> held;
+  double held_speed = 0.0;
   for (const auto& [id, a] : presence_.tracks()) {
     if (presence_.running(id)) {
       ids.push_back(id);
       q.push_back(a.last.view.q);
       p.push_back(a.last.p_W);
       offsets.push_back(offset_of(id));
+      held.push_back(held_.count(id) > 0);
+      if (held.back()) held_speed = std::max(held_speed, a.last.v_W.norm());
     }
   }
   last_ = measure_graph(
       t_s_, ids, q, p,
       [&](int i) -> const auto& { return presence_.track(ids[static_cast<size_t>(i)]).last.links; },
-      rc_.initial_average(), offsets);
+      rc_.initial_average(), offsets, held);
+  last_->set_held_speed_mps(held_speed);
   record_graph(*last_);
   const ConvergenceJudge::Verdict v = judge_.update(t_s_, *last_, presence_);
   if (v == ConvergenceJudge::Verdict::kNone) return;
@@ -227,6 +238,12 @@ std::string Recorder::progress_line() const {
 
 std::string Recorder::finish(const std::string& end_reason, double wall_time_s) {
   if (t_s_ >= next_snapshot_s_ || !last_) snapshot();
+  if (separation_.measured()) {
+    tally_.min_separation_m = separation_.min_m();
+    tally_.min_separation_t_s = separation_.min_t_s();
+    std::tie(tally_.min_separation_a, tally_.min_separation_b) = separation_.min_pair();
+  }
+  tally_.separation_violations = separation_.violations();
   summary_ = build_summary(rc_, presence_, judge_, tally_, first_full_, last_,
                            {end_reason, t_s_, wall_time_s, time_scale_});
   event("end", 0, end_reason);

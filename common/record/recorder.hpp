@@ -9,6 +9,7 @@
 #include "common/record/convergence.hpp"
 #include "common/record/presence.hpp"
 #include "common/record/record_sinks.hpp"
+#include "common/record/separation.hpp"
 #include "common/record/summary.hpp"
 #include "common/runtime/run_config.hpp"
 #include "common/transport/state_message.hpp"
@@ -66,6 +67,8 @@ class Recorder {
   Presence presence_;
   ConvergenceJudge judge_;
   RunTally tally_;
+  SeparationMonitor separation_;
+  std::set<AgentId> held_;  // with avoidance: agents whose slot another's blocks (RunTally::held)
   double t_s_ = 0.0;
   std::int64_t t_wall_ns_ = 0;  // wall time when t_s_ last advanced
   double next_snapshot_s_ = 0.0;

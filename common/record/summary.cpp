@@ -62,6 +62,10 @@ records::Summary build_summary(const RunConfig& rc, const Presence& presence,
     s.add_min_separation_agents(tally.min_separation_a);
     s.add_min_separation_agents(tally.min_separation_b);
   }
+  s.set_avoidance(rc.avoidance.enabled);
+  s.set_safe_distance_m(rc.avoidance.safe_distance_m);
+  s.set_separation_violations(tally.separation_violations);
+  for (const AgentId id : tally.held) s.add_held_agents(id);
   put_vec3(s.mutable_initial_average(), rc.initial_average());
 
   Positions final_q, final_p;
@@ -200,6 +204,24 @@ std::string summary_text(const records::Summary& s, const RunConfig& rc, const s
       << " at t = " << fmt("%.2f", s.min_separation_t_s()) << " s)";
   }
   h << "\n";
+  if (rc.mode == AgentMode::kQuadcopter || s.avoidance()) {
+    h << "safe distance " << fmt("%g", s.safe_distance_m()) << " m, collision avoidance "
+      << (s.avoidance() ? "on" : "off") << ": " << s.separation_violations()
+      << (s.separation_violations() == 1 ? " violation" : " violations") << "\n";
+  }
+  if (s.held_agents_size() > 0) {
+    double lo = 1e300, hi = 0.0;
+    for (const auto& a : s.agents()) {
+      if (std::find(s.held_agents().begin(), s.held_agents().end(), a.id()) ==
+          s.held_agents().end())
+        continue;
+      lo = std::min(lo, a.slot_error_m());
+      hi = std::max(hi, a.slot_error_m());
+    }
+    h << s.held_agents_size() << " agents share a slot region closer than the safe distance: "
+      << "avoidance holds them " << fmt("%.3f", lo) << " to " << fmt("%.3f", hi)
+      << " m from their slots\n";
+  }
   if (rc.has_formation()) {
     h << "formation: every agent within " << fmt("%.3f", s.max_slot_error_m())
       << " m of its slot about the agreed centre\n";

@@ -20,9 +20,11 @@ struct RunTally {
   std::uint32_t joins = 0, departures = 0, fault_events = 0;
   std::uint64_t foreign_samples = 0;      // samples of other runs on this domain, refused
   std::uint64_t implausible_samples = 0;  // stamped far ahead of the swarm's clock, refused
-  double min_separation_m = 1e300;
+  double min_separation_m = 1e300;        // over every sample (SeparationMonitor)
   double min_separation_t_s = 0.0;
   AgentId min_separation_a = 0, min_separation_b = 0;
+  std::uint32_t separation_violations = 0;
+  std::vector<AgentId> held;     // agents whose slot is too close to another's to reach
   std::vector<double> ages_ms;   // sample ages (receive - send wall time)
   std::vector<double> detect_s;  // planned kill -> departure seen
   // Fault counters per agent incarnation (an incarnation's counters only grow).

@@ -10,6 +10,7 @@
 #include "common/record/graph_metrics.hpp"
 #include "common/record/presence.hpp"
 #include "common/record/recorder.hpp"
+#include "common/record/separation.hpp"
 #include "common/runtime/scenario.hpp"
 #include "tests/core/paper_data.hpp"
 
@@ -119,6 +120,62 @@ TEST(ConvergenceJudge, AgentsThatAgreeWithoutAnExpectedAgentHaveNotConverged) {
   ConvergenceJudge planned(0.01, 0.5, 1.0, plan);
   EXPECT_EQ(ConvergenceJudge::Verdict::kNone, planned.update(1.0, agree, p));
   EXPECT_EQ(ConvergenceJudge::Verdict::kConverged, planned.update(1.5, agree, p));
+}
+
+TEST(SeparationMonitor, JudgesEverySampleCountsEachViolationOnceAndForgetsTheDeparted) {
+  SeparationMonitor m(1.0);
+  EXPECT_FALSE(m.measured());
+  // Two agents closing head-on at 1 m/s each, sampled every 20 ms at slightly different times:
+  // agent 2's sample is moved to agent 1's instant by its velocity.
+  for (int k = 0; k <= 100; ++k) {
+    const double t = 0.02 * k;
+    m.on_sample(1, Vec3(-2 + t, 0, 0), Vec3(1, 0, 0), t);
+    m.on_sample(2, Vec3(2 - (t + 0.01), 0, 0), Vec3(-1, 0, 0), t + 0.01);
+  }
+  // Closest at t = 2 s (both at 0): measured on the samples, not on 10 Hz rows.
+  EXPECT_NEAR(m.min_m(), 0.0, 1e-9);
+  EXPECT_NEAR(m.min_t_s(), 2.0, 0.011);
+  EXPECT_EQ(m.min_pair(), std::make_pair(AgentId{1}, AgentId{2}));
+  EXPECT_EQ(m.violations(), 1u);  // below 1 m for many samples: one violation
+  // Apart again, then close again: a second violation.
+  m.on_sample(1, Vec3(-5, 0, 0), Vec3::Zero(), 3.0);
+  m.on_sample(2, Vec3(5, 0, 0), Vec3::Zero(), 3.0);
+  m.on_sample(1, Vec3(4.5, 0, 0), Vec3::Zero(), 3.02);
+  EXPECT_EQ(m.violations(), 2u);
+  // A departed agent's last position no longer counts, and a non-finite sample is ignored.
+  m.forget(2);
+  m.on_sample(1, Vec3(5, 0, 0), Vec3::Zero(), 3.04);
+  m.on_sample(3, Vec3(std::nan(""), 0, 0), Vec3::Zero(), 3.04);
+  EXPECT_EQ(m.violations(), 2u);
+}
+
+TEST(ConvergenceJudge, AnAgentHeldOffItsSlotByAvoidanceHasArrivedOnceItHoldsStill) {
+  ConvergenceJudge judge(0.01, 0.5, 1.0, FaultPlan{});
+  Presence p({1, 2}, 1.0);
+  for (AgentId id : {1u, 2u}) p.on_sample(sample(id, 1, 0.0, Vec3::Zero()), 0.0);
+  records::GraphSnapshot g;
+  g.set_agents(2);
+  g.set_disagreement_m(0.001);
+  g.set_spread_m(0.0);  // the held agents are not in the spread
+  g.set_held_speed_mps(0.2);
+  EXPECT_EQ(ConvergenceJudge::Verdict::kNone, judge.update(1.0, g, p));
+  EXPECT_EQ(ConvergenceJudge::Verdict::kNone, judge.update(2.0, g, p));  // still moving
+  g.set_held_speed_mps(0.005);  // below tolerance_m per second
+  EXPECT_EQ(ConvergenceJudge::Verdict::kNone, judge.update(2.1, g, p));
+  EXPECT_EQ(ConvergenceJudge::Verdict::kConverged, judge.update(2.6, g, p));
+}
+
+TEST(GraphMetrics, HeldAgentsAreLeftOutOfTheSpreadFromTheSlots) {
+  const std::vector<AgentId> ids{1, 2, 3};
+  const Positions q(3, Vec3::Zero());
+  const Positions p{Vec3(0.7, 0, 0), Vec3(-0.7, 0, 0), Vec3(5, 0.02, 0)};
+  const Positions offsets{Vec3::Zero(), Vec3::Zero(), Vec3(5, 0, 0)};
+  const std::vector<std::pair<AgentId, double>> none;
+  const auto links = [&](int) -> const auto& { return none; };
+  EXPECT_NEAR(measure_graph(0, ids, q, p, links, Vec3::Zero(), offsets).spread_m(), 0.7, 1e-12);
+  EXPECT_NEAR(
+      measure_graph(0, ids, q, p, links, Vec3::Zero(), offsets, {true, true, false}).spread_m(),
+      0.02, 1e-12);
 }
 
 TEST(Recorder, FedWithMessagesWritesTheRunRecordAndASummary) {
