@@ -4,6 +4,7 @@
 
 #include <cstdio>
 #include <iostream>
+#include <set>
 #include <sstream>
 
 #include "common/core/graph.hpp"
@@ -45,6 +46,9 @@ std::string as_json(const RunConfig& rc, const InitialGraph& g, double tau) {
   const Vec3 avg = rc.initial_average();
   for (int k = 0; k < 3; ++k) ins.add_agreement_point(avg[k]);
   ins.set_time_constant_s(tau);
+  ins.set_avoidance(rc.avoidance.enabled);
+  ins.set_safe_distance_m(rc.avoidance.safe_distance_m);
+  for (const AgentId id : rc.held_agents()) ins.add_held_agents(id);
   return to_json(ins);
 }
 
@@ -78,6 +82,21 @@ std::string as_text(const RunConfig& rc, const InitialGraph& g, double tau) {
     << (rc.has_formation() ? " of the agents' estimates of the centre" : "") << "): (" << avg.x()
     << ", " << avg.y() << ", " << avg.z() << ")\n";
   if (tau > 0) o << "time constant 1/(k lambda2) = " << tau << " s (exact for fixed weights)\n";
+  if (rc.avoidance.enabled) {
+    o << "collision avoidance on: every quadcopter keeps " << rc.avoidance.safe_distance_m
+      << " m from every agent it hears (the filter aims for " << rc.avoidance.filter_distance_m()
+      << " m)\n";
+    const std::set<AgentId> held = rc.held_agents();
+    if (!held.empty()) {
+      o << "  " << held.size() << " of " << n
+        << " agents have slots closer than that to another's: they end in a cluster about "
+           "their slots, not on them\n";
+    }
+  } else if (rc.mode == AgentMode::kQuadcopter) {
+    o << "collision avoidance off: nothing keeps the quadcopters apart (the record counts "
+         "approaches closer than "
+      << rc.avoidance.safe_distance_m << " m)\n";
+  }
   if (rc.has_formation()) {
     o << "formation: the agents agree on the centre above and fly to centre + slot\n";
     o << "  agent        slot about the centre         where it ends\n";

@@ -28,14 +28,8 @@ Recorder::Recorder(RunConfig rc, std::string run_dir, double time_scale)
       presence_(ids_of(rc_), rc_.neighbor_timeout_s),
       judge_(rc_.tolerance_m, rc_.hold_s, rc_.neighbor_timeout_s, rc_.faults),
       separation_(rc_.avoidance.safe_distance_m),
+      held_(rc_.held_agents()),
       timeline_(rc_.faults.timeline()) {
-  // With avoidance, two slots closer than the filter keeps agents apart cannot both be reached.
-  if (rc_.avoidance.enabled) {
-    for (const AgentSpec& a : rc_.agents)
-      for (const AgentSpec& b : rc_.agents)
-        if (a.id != b.id && (a.offset_W - b.offset_W).norm() < rc_.avoidance.filter_distance_m())
-          held_.insert(a.id);
-  }
   tally_.held.assign(held_.begin(), held_.end());
 }
 

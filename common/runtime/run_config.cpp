@@ -96,6 +96,16 @@ std::vector<Vec3> formation_slots(int shape, int n, double spacing_m) {
   return out;
 }
 
+std::set<AgentId> RunConfig::held_agents() const {
+  std::set<AgentId> held;
+  if (!avoidance.enabled) return held;
+  for (const AgentSpec& a : agents)
+    for (const AgentSpec& b : agents)
+      if (a.id != b.id && (a.offset_W - b.offset_W).norm() < avoidance.filter_distance_m())
+        held.insert(a.id);
+  return held;
+}
+
 std::vector<AgentSpec> random_agent_specs(int n, std::uint64_t seed, double box_m,
                                           double min_separation_m) {
   std::mt19937_64 rng(seed);

@@ -58,6 +58,10 @@ struct RunConfig {
   // Whether any agent has a formation slot (else every agent flies to the agreed point).
   bool has_formation() const;
   std::set<AgentId> ids() const;
+  // With avoidance: the agents whose slot is closer than the filter keeps agents apart to another
+  // agent's slot (every agent of a rendezvous to one point). They cannot all reach their slots; the
+  // record counts them arrived when they hold still. Empty without avoidance.
+  std::set<AgentId> held_agents() const;
   // The one definition of the peers agent `id` waits for at the start (the barrier, and the law's
   // first tick): its listed neighbours on a FIXED graph, every other agent otherwise, and never an
   // agent that the fault plan has joining late.

@@ -96,6 +96,21 @@ TEST(Scenario, AvoidanceIsOnForQuadcoptersOffForParticlesAndKeepsRandomStartsApa
       kTwo + "mode: QUADCOPTER\navoidance { enabled: false safe_distance_m: 2 }\n", "s"));
   EXPECT_FALSE(off.avoidance.enabled);  // and listed starts closer than 2 m are then allowed
   EXPECT_EQ(off.avoidance.safe_distance_m, 2.0);  // still what the record judges by
+  // Held agents: slots closer than the filter keeps quadcopters apart.
+  EXPECT_EQ(particle.held_agents().size(), 0u);
+  const std::string four = "mode: QUADCOPTER\nrandom_agents { count: 4 box_m: 20 }\n";
+  EXPECT_EQ(resolve_scenario(parse_scenario_text(four, "s")).held_agents().size(),
+            4u);  // one point
+  EXPECT_EQ(
+      resolve_scenario(parse_scenario_text(four + "formation { shape: GRID spacing_m: 3 }\n", "s"))
+          .held_agents()
+          .size(),
+      0u);
+  EXPECT_EQ(
+      resolve_scenario(parse_scenario_text(four + "formation { shape: LINE spacing_m: 1 }\n", "s"))
+          .held_agents()
+          .size(),
+      4u);
   // Without avoidance the random draw is the plain one (the paper's scenarios keep their starts).
   const RunConfig plain =
       resolve_scenario(parse_scenario_text("random_agents { count: 40 box_m: 6 }\nseed: 3\n", "s"));

@@ -486,8 +486,17 @@ TEST(Smoke, InspectPredictsWithoutFlying) {
   EXPECT_EQ(ins.edges_size(), 3);
   EXPECT_EQ(ins.laplacian_size(), 4);
   EXPECT_TRUE(ins.connected());
+  EXPECT_FALSE(ins.avoidance());  // point agents
   const Result text = run({bin("swarm"), "inspect", scenario("paper/weighted")});
   EXPECT_NE(text.output.find("13.06"), std::string::npos) << text.output;
+  // Quadcopters to one point: avoidance on, and every one of them held in a cluster.
+  const Result quad =
+      run({bin("swarm"), "inspect", scenario("paper/weighted_quadcopter"), "--json"});
+  records::Inspection q;
+  ASSERT_TRUE(google::protobuf::util::JsonStringToMessage(quad.output, &q).ok()) << quad.output;
+  EXPECT_TRUE(q.avoidance());
+  EXPECT_EQ(q.safe_distance_m(), 1.0);
+  EXPECT_EQ(q.held_agents_size(), 4);
 }
 
 TEST(Record, ASecondRunOnTheSameOutIsRefusedAndADeadSupervisorStillLeavesASummary) {
