@@ -2,8 +2,10 @@
 // tick, and what the supervisor spends analysing an N-agent graph.
 #include <benchmark/benchmark.h>
 
+#include <cmath>
 #include <random>
 
+#include "common/core/avoidance.hpp"
 #include "common/core/dynamics.hpp"
 #include "common/core/graph.hpp"
 #include "common/core/tracking_controller.hpp"
@@ -37,6 +39,28 @@ void BM_ControllerStep(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_ControllerStep);
+
+// The avoidance filter at one physics step, with k neighbours all close enough to constrain the
+// desired velocity (the worst case: every one enters the QP; at most 8 are kept, the nearest).
+void BM_SafeVelocity(benchmark::State& state) {
+  const int k = static_cast<int>(state.range(0));
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> angle(0.0, 6.283185307179586);
+  std::vector<Obstacle> others;
+  for (int i = 0; i < k; ++i) {
+    const double a = angle(rng), b = angle(rng) / 4.0;
+    others.push_back({static_cast<AgentId>(i + 2),
+                      Vec3(std::cos(a) * std::cos(b), std::sin(a) * std::cos(b), std::sin(b)) *
+                          (1.4 + 0.1 * i)});
+  }
+  AvoidanceConfig c;
+  c.enabled = true;
+  for (auto _ : state) {
+    SafeVelocity v = safe_velocity(1, Vec3::Zero(), Vec3(3, 0, 0), Vec3(10, 0, 0), others, c);
+    benchmark::DoNotOptimize(v);
+  }
+}
+BENCHMARK(BM_SafeVelocity)->Arg(1)->Arg(4)->Arg(8)->Arg(15);
 
 std::vector<NeighborView> neighbours(int k, std::uint64_t seed) {
   std::mt19937_64 rng(seed);

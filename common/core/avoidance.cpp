@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <initializer_list>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -31,22 +32,32 @@ double worst_violation(const std::vector<Halfspace>& hs, const Vec3& v) {
   return worst;
 }
 
-// The point closest to u on the intersection of the planes a_k . v = b_k (k in idx), or nothing
-// when they are degenerate (parallel normals).
-bool project_on_planes(const std::vector<Halfspace>& hs, const std::vector<std::size_t>& idx,
-                       const Vec3& u, Vec3& out) {
-  const auto m = static_cast<Eigen::Index>(idx.size());
-  Eigen::MatrixXd A(m, 3);
-  Eigen::VectorXd r(m);
-  for (Eigen::Index k = 0; k < m; ++k) {
-    const Halfspace& h = hs[idx[static_cast<std::size_t>(k)]];
-    A.row(k) = h.a.transpose();
-    r(k) = h.b - h.a.dot(u);
+// The point closest to u on the plane(s) a_k . v = b_k, or false when they are degenerate (parallel
+// normals). Fixed-size closed forms: no allocation on the 500 Hz path.
+bool project_on_planes(const Halfspace* const* h, int m, const Vec3& u, Vec3& out) {
+  if (m == 1) {
+    const double aa = h[0]->a.squaredNorm();
+    if (aa < 1e-18) return false;
+    out = u + h[0]->a * ((h[0]->b - h[0]->a.dot(u)) / aa);
+    return true;
   }
-  const Eigen::MatrixXd G = A * A.transpose();
-  Eigen::FullPivLU<Eigen::MatrixXd> lu(G);
-  if (lu.rank() < m || std::abs(G.determinant()) < 1e-12) return false;
-  out = u + A.transpose() * lu.solve(r);
+  if (m == 2) {
+    const Vec3& a0 = h[0]->a;
+    const Vec3& a1 = h[1]->a;
+    const double g00 = a0.squaredNorm(), g01 = a0.dot(a1), g11 = a1.squaredNorm();
+    const double det = g00 * g11 - g01 * g01;
+    if (std::abs(det) < 1e-12) return false;
+    const double r0 = h[0]->b - a0.dot(u), r1 = h[1]->b - a1.dot(u);
+    const double l0 = (g11 * r0 - g01 * r1) / det, l1 = (g00 * r1 - g01 * r0) / det;
+    out = u + a0 * l0 + a1 * l1;
+    return true;
+  }
+  Mat3 A;
+  A.row(0) = h[0]->a.transpose();
+  A.row(1) = h[1]->a.transpose();
+  A.row(2) = h[2]->a.transpose();
+  if (std::abs(A.determinant()) < 1e-9) return false;
+  out = A.inverse() * Vec3(h[0]->b, h[1]->b, h[2]->b);
   return out.allFinite();
 }
 
@@ -128,9 +139,9 @@ SafeVelocity safe_velocity(AgentId self, const Vec3& p_W, const Vec3& v_des, con
   double best = std::numeric_limits<double>::infinity();
   double least_violation = std::numeric_limits<double>::infinity();
   Vec3 least_violating = Vec3::Zero();
-  const auto consider = [&](const std::vector<std::size_t>& idx) {
+  const auto consider = [&](std::initializer_list<const Halfspace*> idx) {
     Vec3 v;
-    if (!project_on_planes(hs, idx, u, v)) return;
+    if (!project_on_planes(idx.begin(), static_cast<int>(idx.size()), u, v)) return;
     const double viol = worst_violation(hs, v);
     if (viol <= 1e-9) {
       const double cost = (v - u).squaredNorm();
@@ -144,11 +155,18 @@ SafeVelocity safe_velocity(AgentId self, const Vec3& p_W, const Vec3& v_des, con
       least_violating = v;
     }
   };
+  // Every feasible point is at least as far from u as the largest single violation (the distance to
+  // that halfspace), so a feasible projection onto the most violated plane is the optimum.
+  std::size_t worst = 0;
+  for (std::size_t i = 1; i < m; ++i)
+    if (hs[i].b - hs[i].a.dot(u) > hs[worst].b - hs[worst].a.dot(u)) worst = i;
+  consider({&hs[worst]});
+  if (std::isfinite(best)) return out;
   for (std::size_t i = 0; i < m; ++i) {
-    consider({i});
+    consider({&hs[i]});
     for (std::size_t j = i + 1; j < m; ++j) {
-      consider({i, j});
-      for (std::size_t k = j + 1; k < m; ++k) consider({i, j, k});
+      consider({&hs[i], &hs[j]});
+      for (std::size_t k = j + 1; k < m; ++k) consider({&hs[i], &hs[j], &hs[k]});
     }
   }
   if (!std::isfinite(best)) {
