@@ -109,7 +109,7 @@ LifecycleStep AgentLifecycle::barrier(double now, const std::vector<PeerStatus>&
   }
   phase_ = all_heard ? LifePhase::kReady : LifePhase::kWaiting;
   s.announce = all_heard ? kReady : kWaiting;
-  s.wake_at_s = now + cfg_.announce_period_s;
+  s.wake_at_s = now + (all_heard ? cfg_.announce_period_s : cfg_.waiting_period_s);
   return s;
 }
 

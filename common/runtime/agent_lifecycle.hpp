@@ -28,10 +28,14 @@ struct LifecycleConfig {
   double time_scale = 1.0;           // simulated seconds per wall second
   double start_timeout_s = 30.0;     // wall: start anyway after this long at the barrier
   double join_timeout_s = 40.0;      // wall: join anyway after this long in kJoinWait
-  double announce_period_s = 0.005;  // wall: waiting/ready announcements (start skew ~ this)
-  double tick_wall_s = 0.02;         // wall seconds per consensus tick
-  double max_wall_s = 150.0;         // wall: stop after running this long
-  std::vector<double> kill_at_s;     // planned self-kills (simulated time), ascending
+  double announce_period_s = 0.005;  // wall: ready announcements (start skew ~ this)
+  // wall: waiting announcements, before every start peer is heard: a beacon that others are here.
+  // Slower than ready for large swarms: N agents waiting for the last replicas to come (compose
+  // at 32 on two cores) would otherwise flood the network they need to discover each other on.
+  double waiting_period_s = 0.005;
+  double tick_wall_s = 0.02;      // wall seconds per consensus tick
+  double max_wall_s = 150.0;      // wall: stop after running this long
+  std::vector<double> kill_at_s;  // planned self-kills (simulated time), ascending
 };
 
 // What one peer last said, as the lifecycle needs it.

@@ -33,6 +33,10 @@ LifecycleConfig lifecycle_config(const RunConfig& rc, AgentId id, const AgentLoo
   // skew small for a few agents; beyond 8 the period grows with N so that the barrier costs no
   // more than flying does (32 agents in containers saturated two cores at 5 ms).
   c.announce_period_s = 0.005 * std::max(1.0, static_cast<double>(rc.agents.size()) / 8.0);
+  // Until every peer is heard (which in compose can take minutes while replicas claim ids), a
+  // waiting agent only says it is here: 0.05 s per 8 agents (0.2 s at 32; 5 ms up to 8 agents).
+  c.waiting_period_s = rc.agents.size() <= 8 ? c.announce_period_s
+                                             : 0.05 * static_cast<double>(rc.agents.size()) / 8.0;
   c.tick_wall_s = steps_per_tick / (rc.physics_hz * o.time_scale);
   c.max_wall_s = o.max_wall_s >= 0.0 ? o.max_wall_s : 2.0 * rc.duration_s / o.time_scale + 30.0;
   c.kill_at_s = rc.faults.kills_of(id);

@@ -245,3 +245,70 @@ TEST(IdClaimer, AReplacementTakesTheIdOfAReplicaThatDiedBeforeTakingIt) {
 
 }  // namespace
 }  // namespace qswarm
+
+namespace qswarm {
+namespace {
+
+// Compose at 32 on two saturated cores: podman-compose starts one container a second, and a
+// starved replica runs its claim loop late (gaps of 0.1 to 0.5 s, and now and then a stall of 2 to
+// 5 s); its claims reach the others up to 0.4 s late. Every replica must still take a distinct
+// id, and no id may be confirmed by two replicas.
+TEST(IdClaimer, ThirtyTwoStarvedReplicasStartedOneASecondStillTakeEveryIdOnce) {
+  for (std::uint64_t seed : {1u, 2u, 3u}) {
+    std::mt19937_64 rng(seed);
+    std::uniform_real_distribution<double> u01(0.0, 1.0);
+    const int n = 32;
+    const IdClaimer::Config cfg = IdClaimer::Config::for_swarm(n, -1.0);
+    struct R {
+      std::optional<IdClaimer> claimer;
+      double start_s, next_s;
+      AgentId taken = 0;
+      bool refused = false;
+      std::string why;
+    };
+    std::vector<R> rs;
+    for (int k = 0; k < n; ++k) rs.push_back({std::nullopt, 1.0 * k, 1.0 * k, 0, false, {}});
+    std::map<std::uint64_t, IdClaim> wire;  // what has arrived
+    std::vector<std::pair<double, IdClaim>> in_flight;
+    std::map<AgentId, int> confirmed;
+    for (double now = 0.0; now < cfg.timeout_s + 40.0; now += 0.01) {
+      for (auto it = in_flight.begin(); it != in_flight.end();) {
+        if (it->first <= now) {
+          wire[it->second.nonce] = it->second;
+          it = in_flight.erase(it);
+        } else {
+          ++it;
+        }
+      }
+      std::vector<IdClaim> heard;
+      for (const auto& [nonce, c] : wire) heard.push_back(c);
+      for (R& r : rs) {
+        if (now < r.next_s || r.refused) continue;
+        if (!r.claimer) r.claimer.emplace(roster(n), rng() | 1, 7, 0, cfg, now);
+        const IdClaimer::Step s = r.claimer->step(now, heard);
+        if (s.announce) in_flight.emplace_back(now + 0.4 * u01(rng), r.claimer->claim());
+        if (s.taken) {
+          r.taken = s.taken;
+          ++confirmed[s.taken];
+        }
+        if (s.refuse) {
+          r.refused = true;
+          r.why = s.message;
+        }
+        r.next_s = now + (u01(rng) < 0.03 ? 2.0 + 3.0 * u01(rng) : 0.1 + 0.4 * u01(rng));
+      }
+    }
+    std::vector<AgentId> ids;
+    for (const R& r : rs) {
+      EXPECT_FALSE(r.refused) << "seed " << seed << ": " << r.why;
+      if (r.taken) ids.push_back(r.taken);
+    }
+    std::sort(ids.begin(), ids.end());
+    EXPECT_EQ(ids, roster(n)) << "seed " << seed;
+    for (const auto& [id, times] : confirmed)
+      EXPECT_EQ(times, 1) << "seed " << seed << " id " << id;
+  }
+}
+
+}  // namespace
+}  // namespace qswarm

@@ -55,6 +55,21 @@ TEST(Lifecycle, BarrierWaitsForEveryPeerThenForEveryoneReady) {
   EXPECT_DOUBLE_EQ(life.discovery_s(), 0.015);
 }
 
+TEST(Lifecycle, WaitingForMissingPeersIsABeaconAndReadyIsFast) {
+  // A large swarm: waiting for peers that are not there yet (replicas still claiming ids) announces
+  // slowly; once all are heard, the ready announcements keep the start skew small.
+  LifecycleConfig c = barrier_config();
+  c.waiting_period_s = 0.2;
+  c.announce_period_s = 0.02;
+  AgentLifecycle life(c, 0.0);
+  LifecycleStep s = life.step(0.0, {{2, kWaiting, 0.0}}, 0, 0.0);
+  EXPECT_EQ(*s.announce, kWaiting);
+  EXPECT_DOUBLE_EQ(s.wake_at_s, 0.2);
+  s = life.step(0.2, {{2, kWaiting, 0.0}, {3, kWaiting, 0.0}}, 0, 0.0);
+  EXPECT_EQ(*s.announce, kReady);
+  EXPECT_DOUBLE_EQ(s.wake_at_s, 0.22);
+}
+
 TEST(Lifecycle, WithASupervisorTheBarrierAlsoWaitsForItsReader) {
   LifecycleConfig c = barrier_config();
   c.min_matched_readers = 3;  // peers 2 and 3, and the supervisor
