@@ -12,8 +12,8 @@
 namespace qswarm {
 namespace {
 
-// Constraints kept per step: the nearest ones (farther ones are implied in practice, and the
-// enumeration grows with the cube of the count).
+// Constraints in the QP at a time (its enumeration grows with the cube of the count): those that
+// press hardest on the desired velocity, with any other the answer breaks swapped in.
 constexpr std::size_t kMaxConstraints = 8;
 
 struct Halfspace {  // a . v >= b
@@ -33,7 +33,7 @@ double worst_violation(const std::vector<Halfspace>& hs, const Vec3& v) {
 }
 
 // The point closest to u on the plane(s) a_k . v = b_k, or false when they are degenerate (parallel
-// normals). Fixed-size closed forms: no allocation on the 500 Hz path.
+// normals). Fixed-size closed forms: no allocation inside the QP's enumeration.
 bool project_on_planes(const Halfspace* const* h, int m, const Vec3& u, Vec3& out) {
   if (m == 1) {
     const double aa = h[0]->a.squaredNorm();
@@ -61,6 +61,53 @@ bool project_on_planes(const Halfspace* const* h, int m, const Vec3& u, Vec3& ou
   return out.allFinite();
 }
 
+// Exact QP: min |v - u|^2 over the halfspaces hs. The optimum lies on the intersection of at most
+// 3 active planes; every feasible candidate is at least as far from u as the optimum, so the
+// nearest feasible candidate is the optimum. When none is feasible, the least violating candidate
+// (or 0, if that violates less) and feasible = false.
+void solve_qp(const std::vector<Halfspace>& hs, const Vec3& u, SafeVelocity& out) {
+  const std::size_t m = hs.size();
+  double best = std::numeric_limits<double>::infinity();
+  double least_violation = std::numeric_limits<double>::infinity();
+  Vec3 least_violating = Vec3::Zero();
+  out.feasible = true;
+  const auto consider = [&](std::initializer_list<const Halfspace*> idx) {
+    Vec3 v;
+    if (!project_on_planes(idx.begin(), static_cast<int>(idx.size()), u, v)) return;
+    const double viol = worst_violation(hs, v);
+    if (viol <= 1e-9) {
+      const double cost = (v - u).squaredNorm();
+      if (cost < best) {
+        best = cost;
+        out.v_W = v;
+        out.active = static_cast<int>(idx.size());
+      }
+    } else if (viol < least_violation) {
+      least_violation = viol;
+      least_violating = v;
+    }
+  };
+  // Every feasible point is at least as far from u as the largest single violation (the distance
+  // to that halfspace), so a feasible projection onto the most violated plane is the optimum.
+  std::size_t worst = 0;
+  for (std::size_t i = 1; i < m; ++i)
+    if (hs[i].b - hs[i].a.dot(u) > hs[worst].b - hs[worst].a.dot(u)) worst = i;
+  consider({&hs[worst]});
+  if (std::isfinite(best)) return;
+  for (std::size_t i = 0; i < m; ++i) {
+    consider({&hs[i]});
+    for (std::size_t j = i + 1; j < m; ++j) {
+      consider({&hs[i], &hs[j]});
+      for (std::size_t k = j + 1; k < m; ++k) consider({&hs[i], &hs[j], &hs[k]});
+    }
+  }
+  if (!std::isfinite(best)) {
+    out.feasible = false;
+    out.v_W = worst_violation(hs, Vec3::Zero()) < least_violation ? Vec3::Zero() : least_violating;
+    out.active = static_cast<int>(m);
+  }
+}
+
 }  // namespace
 
 void AvoidanceConfig::validate() const {
@@ -78,10 +125,19 @@ void AvoidanceConfig::validate() const {
   positive(brake_mps2, "brake_mps2", 100.0);
 }
 
+Vec3 project_position(const Vec3& p_W, const Vec3& v_W, double age_s) {
+  return p_W + v_W * std::clamp(age_s, -kMaxProjectionS, kMaxProjectionS);
+}
+
 SafeVelocity safe_velocity(AgentId self, const Vec3& p_W, const Vec3& v_des, const Vec3& goal_W,
                            const std::vector<Obstacle>& others, const AvoidanceConfig& c) {
   SafeVelocity out;
   out.v_W = v_des;
+  if (!p_W.allFinite() || !v_des.allFinite() || !goal_W.allFinite()) {
+    out.v_W = Vec3::Zero();  // nothing sensible to filter: hold still
+    out.feasible = false;
+    return out;
+  }
   const double D = c.filter_distance_m();
   const double speed = v_des.norm();
   // The constraints that can bind: the allowed approach speed rate (d - D) / 2 is below the
@@ -107,10 +163,6 @@ SafeVelocity safe_velocity(AgentId self, const Vec3& p_W, const Vec3& v_des, con
     near.push_back({o.id, d, {n, -0.5 * c.rate_hz * (d - D)}});
   }
   if (near.empty()) return out;
-  std::sort(near.begin(), near.end(), [](const Near& a, const Near& b) { return a.d < b.d; });
-  if (near.size() > kMaxConstraints) near.resize(kMaxConstraints);
-  std::vector<Halfspace> hs;
-  for (const Near& n : near) hs.push_back(n.h);
 
   // Pass on the right: a neighbour between the agent and a goal beyond it turns the desired
   // velocity by the part the constraint would remove, sideways (right of the heading, about z).
@@ -128,52 +180,38 @@ SafeVelocity safe_velocity(AgentId self, const Vec3& p_W, const Vec3& v_des, con
   }
   if (speed > 0.0) u = clamp_norm(u, speed);
 
-  if (worst_violation(hs, u) <= 1e-12) {
+  std::vector<Halfspace> all;
+  for (const Near& n : near) all.push_back(n.h);
+  if (worst_violation(all, u) <= 1e-12) {
     out.v_W = u;
     return out;
   }
-  // Exact QP: min |v - u|^2 over the halfspaces. The optimum lies on the intersection of at most 3
-  // active planes; every feasible candidate is at least as far from u as the optimum, so the
-  // nearest feasible candidate is the optimum.
-  const std::size_t m = hs.size();
-  double best = std::numeric_limits<double>::infinity();
-  double least_violation = std::numeric_limits<double>::infinity();
-  Vec3 least_violating = Vec3::Zero();
-  const auto consider = [&](std::initializer_list<const Halfspace*> idx) {
-    Vec3 v;
-    if (!project_on_planes(idx.begin(), static_cast<int>(idx.size()), u, v)) return;
-    const double viol = worst_violation(hs, v);
-    if (viol <= 1e-9) {
-      const double cost = (v - u).squaredNorm();
-      if (cost < best) {
-        best = cost;
-        out.v_W = v;
-        out.active = static_cast<int>(idx.size());
-      }
-    } else if (viol < least_violation) {
-      least_violation = viol;
-      least_violating = v;
-    }
-  };
-  // Every feasible point is at least as far from u as the largest single violation (the distance to
-  // that halfspace), so a feasible projection onto the most violated plane is the optimum.
-  std::size_t worst = 0;
-  for (std::size_t i = 1; i < m; ++i)
-    if (hs[i].b - hs[i].a.dot(u) > hs[worst].b - hs[worst].a.dot(u)) worst = i;
-  consider({&hs[worst]});
-  if (std::isfinite(best)) return out;
-  for (std::size_t i = 0; i < m; ++i) {
-    consider({&hs[i]});
-    for (std::size_t j = i + 1; j < m; ++j) {
-      consider({&hs[i], &hs[j]});
-      for (std::size_t k = j + 1; k < m; ++k) consider({&hs[i], &hs[j], &hs[k]});
-    }
+  // The QP keeps at most kMaxConstraints at a time: those that press hardest on u (the largest
+  // b - a.u). A constraint left out that the answer breaks is swapped in for the kept one with the
+  // most slack, and the QP solved again, until the answer meets them all.
+  std::sort(all.begin(), all.end(), [&u](const Halfspace& a, const Halfspace& b) {
+    return a.b - a.a.dot(u) > b.b - b.a.dot(u);
+  });
+  std::vector<Halfspace> kept(
+      all.begin(), all.begin() + static_cast<long>(std::min(all.size(), kMaxConstraints)));
+  std::vector<Halfspace> rest(
+      kept.size() < all.size() ? all.begin() + static_cast<long>(kept.size()) : all.end(),
+      all.end());
+  for (int round = 0;; ++round) {
+    solve_qp(kept, u, out);
+    if (rest.empty() || round == 8) break;
+    auto worst =
+        std::max_element(rest.begin(), rest.end(), [&out](const Halfspace& a, const Halfspace& b) {
+          return a.b - a.a.dot(out.v_W) < b.b - b.a.dot(out.v_W);
+        });
+    if (worst->b - worst->a.dot(out.v_W) <= 1e-9) break;
+    auto slack =
+        std::min_element(kept.begin(), kept.end(), [&out](const Halfspace& a, const Halfspace& b) {
+          return a.b - a.a.dot(out.v_W) < b.b - b.a.dot(out.v_W);
+        });
+    std::swap(*worst, *slack);
   }
-  if (!std::isfinite(best)) {
-    out.feasible = false;
-    out.v_W = worst_violation(hs, Vec3::Zero()) < least_violation ? Vec3::Zero() : least_violating;
-    out.active = static_cast<int>(m);
-  }
+  if (worst_violation(all, out.v_W) > 1e-9) out.feasible = false;
   return out;
 }
 

@@ -56,6 +56,13 @@ struct SafeVelocity {
   bool feasible = true;  // false: no velocity meets them all (returned: the least violating)
 };
 
+// Where a neighbour is at a time age_s after its last sample: moved on by the sample's velocity for
+// at most kMaxProjectionS either way. Past that it is held where it was last seen, not flown on in
+// a straight line (a silent neighbour may have stopped, or died). The agents' filters and the
+// record's separation use this one rule, so both see a silent neighbour in the same place.
+inline constexpr double kMaxProjectionS = 0.1;
+Vec3 project_position(const Vec3& p_W, const Vec3& v_W, double age_s);
+
 // The velocity closest to v_des that keeps the barrier for every obstacle (see above), for an
 // agent at p_W of id `self`. `goal_W` decides which way to pass: when a neighbour stands between
 // the agent and a goal beyond it, the desired velocity is first turned to the agent's right (about

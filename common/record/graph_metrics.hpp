@@ -15,8 +15,8 @@ using LinksOf = std::function<const std::vector<std::pair<AgentId, double>>&(int
 // end holds it), lambda_2 and components of its Laplacian, disagreement of the consensus states q,
 // drift of their mean from `initial_average`, the smallest separation of the physical positions p
 // (and between whom), and their largest distance from their slots (mean of q + `offsets`, one per
-// agent; empty: no formation). An agent with held[i] (its slot is closer than the safe distance to
-// another's, so avoidance keeps it off) does not count toward the spread. Pure.
+// agent; empty: no formation). An agent with held[i] (a neighbour holds it off a slot that
+// avoidance cannot let it reach) does not count toward the spread. Pure.
 records::GraphSnapshot measure_graph(double t_s, const std::vector<AgentId>& ids,
                                      const Positions& q, const Positions& p,
                                      const LinksOf& links_of, const Vec3& initial_average,

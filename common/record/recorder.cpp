@@ -91,7 +91,11 @@ void Recorder::on_sample(const StateMessage& m, std::int64_t recv_wall_ns) {
   const double age_ms = m.wall_ns > 0 ? static_cast<double>(recv_wall_ns - m.wall_ns) / 1e6 : 0.0;
   if (m.wall_ns > 0) tally_.ages_ms.push_back(age_ms);
   sinks_.sample(m, age_ms);
-  if (m.phase != kStopping) separation_.on_sample(id, m.p_W, m.v_W, m.stamp_s);
+  // A running sample's position is for its stamp; a waiting (or restarting) agent's stamp is not on
+  // the swarm's clock yet: its position is for now.
+  if (m.phase != kStopping)
+    separation_.on_sample(id, m.p_W, m.v_W,
+                          m.phase == kRunning ? m.stamp_s : swarm_time_at(recv_wall_ns));
   // The initial graph, once every agent of the scenario has reported the links its law started
   // with (view seq >= 1), however late its first samples reached us.
   if (!first_full_ && m.phase == kRunning && m.view.seq >= 1) {
@@ -173,17 +177,26 @@ void Recorder::initial_snapshot() {
 void Recorder::snapshot() {
   std::vector<AgentId> ids;
   Positions q, p, offsets;
-  std::vector<bool> held;
-  double held_speed = 0.0;
+  std::vector<const StateMessage*> last;
   for (const auto& [id, a] : presence_.tracks()) {
     if (presence_.running(id)) {
       ids.push_back(id);
       q.push_back(a.last.view.q);
       p.push_back(a.last.p_W);
       offsets.push_back(offset_of(id));
-      held.push_back(held_.count(id) > 0);
-      if (held.back()) held_speed = std::max(held_speed, a.last.v_W.norm());
+      last.push_back(&a.last);
     }
+  }
+  // A held agent (its slot too close to another's to reach) is excused from the spread only while
+  // another agent actually holds it off: one within the filter's distance plus kHeldReachM. Else it
+  // is judged on its slot like everyone (a crawler far from its slot has not arrived).
+  std::vector<bool> held(ids.size(), false);
+  double held_speed = 0.0;
+  for (std::size_t i = 0; i < ids.size(); ++i) {
+    if (!held_.count(ids[i])) continue;
+    for (std::size_t j = 0; j < ids.size() && !held[i]; ++j)
+      held[i] = j != i && (p[i] - p[j]).norm() <= rc_.avoidance.filter_distance_m() + kHeldReachM;
+    if (held[i]) held_speed = std::max(held_speed, last[i]->v_W.norm());
   }
   last_ = measure_graph(
       t_s_, ids, q, p,

@@ -81,6 +81,9 @@ class Recorder {
   // How far (simulated s) a sample may be stamped ahead of the swarm's clock: a late joiner's
   // first stamps, the supervisor's own scheduling, a tick or two of skew.
   static constexpr double kStampSlackS = 5.0;
+  // How far beyond the avoidance filter's distance a neighbour may be and still hold a held agent
+  // off its slot (the filter settles at its distance; tracking adds centimetres).
+  static constexpr double kHeldReachM = 0.25;
   records::Summary summary_;
 };
 

@@ -3,21 +3,15 @@
 #include <algorithm>
 #include <cmath>
 
+#include "common/core/avoidance.hpp"
+
 namespace qswarm {
-namespace {
-
-// A newest sample older than this next to the one measured is not moved on by its velocity further
-// (a silent agent's last position is where it was, not a straight line into the distance).
-constexpr double kMaxExtrapolationS = 0.1;
-
-}  // namespace
 
 void SeparationMonitor::on_sample(AgentId id, const Vec3& p_W, const Vec3& v_W, double t_s) {
   if (!p_W.allFinite() || !v_W.allFinite() || !std::isfinite(t_s)) return;
   for (const auto& [other, l] : last_) {
     if (other == id) continue;
-    const double dt = std::clamp(t_s - l.t, -kMaxExtrapolationS, kMaxExtrapolationS);
-    const double d = (p_W - (l.p + l.v * dt)).norm();
+    const double d = (p_W - project_position(l.p, l.v, t_s - l.t)).norm();
     const auto pair = std::minmax(id, other);
     if (d < min_m_) {
       min_m_ = d;
@@ -26,7 +20,7 @@ void SeparationMonitor::on_sample(AgentId id, const Vec3& p_W, const Vec3& v_W, 
     }
     if (d < safe_m_) {
       if (inside_.insert(pair).second) ++violations_;
-    } else {
+    } else if (d > safe_m_ + kRearmM) {
       inside_.erase(pair);
     }
   }

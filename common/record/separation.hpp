@@ -12,11 +12,13 @@ namespace qswarm {
 
 // The swarm's physical separation over a whole run, judged on every sample (not only on the 10 Hz
 // graph rows): a sample of one agent is measured against the newest sample of every other present
-// agent, moved to the same instant by that sample's velocity. Counts violations of the safe
-// distance: a pair closer than it is one violation until the pair is apart again. Pure: told the
-// samples and departures.
+// agent, moved to the same instant by project_position() (the rule the agents' filters use).
+// Counts violations of the safe distance: a pair closer than it is one violation until the pair
+// is more than kRearmM beyond it again (a pair hovering at the boundary counts once). Pure: told
+// the samples and departures.
 class SeparationMonitor {
  public:
+  static constexpr double kRearmM = 0.05;
   explicit SeparationMonitor(double safe_distance_m) : safe_m_(safe_distance_m) {}
 
   // Agent `id` was at p_W with velocity v_W at swarm time t_s.

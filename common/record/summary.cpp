@@ -212,15 +212,18 @@ std::string summary_text(const records::Summary& s, const RunConfig& rc, const s
   if (s.held_agents_size() > 0) {
     double lo = 1e300, hi = 0.0;
     for (const auto& a : s.agents()) {
-      if (std::find(s.held_agents().begin(), s.held_agents().end(), a.id()) ==
-          s.held_agents().end())
+      if (a.final_position_size() != 3 || std::find(s.held_agents().begin(), s.held_agents().end(),
+                                                    a.id()) == s.held_agents().end())
         continue;
       lo = std::min(lo, a.slot_error_m());
       hi = std::max(hi, a.slot_error_m());
     }
-    h << s.held_agents_size() << " agents share a slot region closer than the safe distance: "
-      << "avoidance holds them " << fmt("%.3f", lo) << " to " << fmt("%.3f", hi)
-      << " m from their slots\n";
+    h << s.held_agents_size()
+      << " agents have slots closer to another's than avoidance keeps them apart";
+    if (hi >= lo) {
+      h << ": they ended " << fmt("%.3f", lo) << " to " << fmt("%.3f", hi) << " m from their slots";
+    }
+    h << "\n";
   }
   if (rc.has_formation()) {
     h << "formation: every agent within " << fmt("%.3f", s.max_slot_error_m())

@@ -63,48 +63,30 @@ void AgentRuntime::publish(std::uint8_t phase) {
   bus_.publish(m);
 }
 
-void AgentRuntime::hear_obstacles(const std::vector<StateMessage>& samples, double t) {
-  for (const StateMessage& m : samples) {
-    const AgentId peer = m.view.id;
-    if (peer == p_.id) continue;
-    if (m.phase == kStopping) {
-      heard_.erase(peer);
-      continue;
-    }
-    Heard& h = heard_[peer];
-    if (m.incarnation != h.incarnation || m.seq != h.seq) {
-      h.seq = m.seq;
-      h.incarnation = m.incarnation;
-      h.last_new_s = t;
-      h.p_W = m.p_W;
-      h.v_W = m.v_W;
-      // The position is for the sender's stamp when both run on the swarm's clock; a waiting
-      // agent's is for now (it is not moving).
-      h.at_s = m.phase == kRunning ? std::clamp(m.stamp_s, t - p_.neighbor_timeout_s, t) : t;
-    }
-  }
-  for (auto it = heard_.begin(); it != heard_.end();) {
-    it = t - it->second.last_new_s > p_.neighbor_timeout_s ? heard_.erase(it) : std::next(it);
-  }
-}
-
 void AgentRuntime::consensus_tick(std::vector<AgentEvent>& events) {
   const double t = time_s();
   std::vector<NeighborView> views;
   const std::vector<StateMessage> samples = bus_.latest(p_.id);
-  if (p_.mode == AgentMode::kQuadcopter && p_.avoidance.enabled) hear_obstacles(samples, t);
   for (const StateMessage& m : samples) {
     const AgentId peer = m.view.id;
-    if (m.phase != kRunning) continue;
-    if (!listen_to_.empty() && !listen_to_.count(peer))
-      continue;  // explicit graph: not a neighbour
+    if (peer == p_.id) continue;
     Peer& st = peers_[peer];
-    if (m.incarnation != st.incarnation || m.seq != st.seq) {
+    const bool fresh = m.incarnation != st.incarnation || m.seq != st.seq;
+    if (fresh) {
       st.seq = m.seq;
       st.incarnation = m.incarnation;
       st.last_new_s = t;
-      if (live_.insert(peer).second) events.push_back({AgentEvent::kNeighborHeard, peer, t});
+      st.phase = m.phase;
+      st.p_W = m.p_W;
+      st.v_W = m.v_W;
+      // A running sample's position is for its stamp on the swarm's clock; a waiting agent's is
+      // for now (it is not moving, and its stamp is not yet on the swarm's clock).
+      st.at_s = m.phase == kRunning ? m.stamp_s : t;
     }
+    if (m.phase != kRunning) continue;
+    if (!listen_to_.empty() && !listen_to_.count(peer))
+      continue;  // explicit graph: not a neighbour
+    if (fresh && live_.insert(peer).second) events.push_back({AgentEvent::kNeighborHeard, peer, t});
     if (t - st.last_new_s > p_.neighbor_timeout_s) {
       if (live_.erase(peer)) events.push_back({AgentEvent::kNeighborLost, peer, t});
       continue;
@@ -138,8 +120,13 @@ void AgentRuntime::physics(double dt) {
   const Vec3 goal = law_->state() + p_.offset_W;  // its slot about its estimate of the centre
   obstacles_.clear();
   if (p_.avoidance.enabled) {
+    // Every agent heard within the neighbour timeout, whatever the graph: a radio hears everyone
+    // near. A stopping agent is gone.
     const double t = time_s();
-    for (const auto& [peer, h] : heard_) obstacles_.push_back({peer, h.p_W + h.v_W * (t - h.at_s)});
+    for (const auto& [peer, h] : peers_) {
+      if (h.phase == kStopping || t - h.last_new_s > p_.neighbor_timeout_s) continue;
+      obstacles_.push_back({peer, project_position(h.p_W, h.v_W, t - h.at_s)});
+    }
   }
   TrackingReference ref = reference_.step(goal, dt, p_.id, quad_.p_W, obstacles_, p_.avoidance);
   ref.yaw_rad = p_.yaw0_rad;

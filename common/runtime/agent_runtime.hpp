@@ -94,7 +94,6 @@ class AgentRuntime {
 
  private:
   void consensus_tick(std::vector<AgentEvent>& events);
-  void hear_obstacles(const std::vector<StateMessage>& samples, double t);
   void physics(double dt);
 
   AgentParams p_;
@@ -108,22 +107,17 @@ class AgentRuntime {
   double law_start_s_ = -1.0;
   QuadState quad_;
   RotorSpeeds rotors_ = RotorSpeeds::Zero();
-  ReferenceGenerator reference_;  // the rate-limited reference the quadcopter tracks
-  // Collision avoidance: every agent heard (any phase but stopping), its last sample's position and
-  // velocity and the swarm time that position is for; forgotten after the neighbour timeout.
-  struct Heard {
-    std::uint64_t seq = 0;
-    std::int64_t incarnation = 0;
-    double last_new_s = 0.0;
-    Vec3 p_W = Vec3::Zero(), v_W = Vec3::Zero();
-    double at_s = 0.0;
-  };
-  std::map<AgentId, Heard> heard_;
+  ReferenceGenerator reference_;     // the rate-limited reference the quadcopter tracks
   std::vector<Obstacle> obstacles_;  // scratch, reused every physics step
+  // Every agent heard, in any phase: the law reads its running ones, collision avoidance all but
+  // stopping ones. A peer is silent when no new sample came for the neighbour timeout.
   struct Peer {
     std::uint64_t seq = 0;
     std::int64_t incarnation = 0;
-    double last_new_s = 0.0;
+    double last_new_s = 0.0;  // this agent's time when its newest sample arrived
+    std::uint8_t phase = 0;   // of its newest sample
+    Vec3 p_W = Vec3::Zero(), v_W = Vec3::Zero();
+    double at_s = 0.0;  // the swarm time p_W is for
   };
   std::map<AgentId, Peer> peers_;
   std::set<AgentId> live_;

@@ -132,6 +132,14 @@ void resolve_avoidance(const scenario::Scenario& s, RunConfig& rc) {
   rc.avoidance.enabled = a.has_enabled() ? a.enabled() : quad;
   rc.avoidance.safe_distance_m = positive("avoidance.safe_distance_m", a.has_safe_distance_m(),
                                           a.safe_distance_m(), 1.0, 100.0);
+  // Quadcopters closer than two arms overlap: a smaller safe distance would let the record call a
+  // collision safe.
+  const double span = 2.0 * rc.airframe.arm_m;
+  if (quad && rc.avoidance.safe_distance_m < span)
+    fail("avoidance.safe_distance_m",
+         "at least " + num(span) +
+             " m in QUADCOPTER mode (two airframes' arms: closer, their rotors overlap)",
+         num(rc.avoidance.safe_distance_m));
 }
 
 // With avoidance on, listed starts must keep the safe distance: the run would begin in a violation.

@@ -137,16 +137,27 @@ TEST(SeparationMonitor, JudgesEverySampleCountsEachViolationOnceAndForgetsTheDep
   EXPECT_NEAR(m.min_t_s(), 2.0, 0.011);
   EXPECT_EQ(m.min_pair(), std::make_pair(AgentId{1}, AgentId{2}));
   EXPECT_EQ(m.violations(), 1u);  // below 1 m for many samples: one violation
+  // Hovering at the boundary (in and out by less than kRearmM) is the same violation.
+  m.on_sample(1, Vec3(-0.51, 0, 0), Vec3::Zero(), 2.5);
+  m.on_sample(2, Vec3(0.51, 0, 0), Vec3::Zero(), 2.5);
+  m.on_sample(1, Vec3(-0.48, 0, 0), Vec3::Zero(), 2.52);
+  EXPECT_EQ(m.violations(), 1u);
   // Apart again, then close again: a second violation.
   m.on_sample(1, Vec3(-5, 0, 0), Vec3::Zero(), 3.0);
   m.on_sample(2, Vec3(5, 0, 0), Vec3::Zero(), 3.0);
   m.on_sample(1, Vec3(4.5, 0, 0), Vec3::Zero(), 3.02);
   EXPECT_EQ(m.violations(), 2u);
-  // A departed agent's last position no longer counts, and a non-finite sample is ignored.
+  // A departed agent's last position no longer counts: apart, agent 2 departs, agent 1 flies
+  // through where 2 was.
+  m.on_sample(1, Vec3(-5, 0, 0), Vec3::Zero(), 3.04);
   m.forget(2);
-  m.on_sample(1, Vec3(5, 0, 0), Vec3::Zero(), 3.04);
-  m.on_sample(3, Vec3(std::nan(""), 0, 0), Vec3::Zero(), 3.04);
+  m.on_sample(1, Vec3(5, 0, 0), Vec3::Zero(), 3.06);
   EXPECT_EQ(m.violations(), 2u);
+  // A non-finite sample is ignored: it neither counts nor stays to be measured against.
+  m.on_sample(3, Vec3(std::nan(""), 0, 0), Vec3::Zero(), 3.08);
+  m.on_sample(4, Vec3(5.1, 0, 0), Vec3::Zero(), 3.08);  // close to agent 1: a third violation
+  EXPECT_EQ(m.violations(), 3u);
+  EXPECT_EQ(m.min_pair(), std::make_pair(AgentId{1}, AgentId{2}));
 }
 
 TEST(ConvergenceJudge, AnAgentHeldOffItsSlotByAvoidanceHasArrivedOnceItHoldsStill) {

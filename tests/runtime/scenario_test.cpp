@@ -66,6 +66,8 @@ TEST(Scenario, EveryBadFieldIsRefusedWithItsName) {
        "avoidance.safe_distance_m"},
       {kTwo + "avoidance { safe_distance_m: 0 }\n", "avoidance.safe_distance_m"},
       {kTwo + "avoidance { safe_distance_m: 1e9 }\n", "avoidance.safe_distance_m"},
+      {kTwo + "mode: QUADCOPTER\navoidance { safe_distance_m: 0.3 }\n",
+       "avoidance.safe_distance_m"},
       {kTwo + "mode: QUADCOPTER\navoidance { safe_distance_m: 1.5 }\n", "agents[1].position"},
       {"mode: QUADCOPTER\nrandom_agents { count: 64 box_m: 2 }\n", "random_agents.box_m"},
   };
