@@ -27,10 +27,17 @@ IdClaimRunner::IdClaimRunner(DdsBus& bus, const RunConfig& rc, AgentId fixed, do
       claimer_(roster_of(rc), random_nonce(), rc.run_id, fixed,
                IdClaimer::Config::for_swarm(rc.agents.size(), timeout_s), clock.now_s()) {}
 
-std::optional<AgentId> IdClaimRunner::acquire(const std::atomic<bool>& stop, std::string& why) {
+std::optional<AgentId> IdClaimRunner::acquire(
+    const std::atomic<bool>& stop, std::string& why,
+    const std::function<void(const std::string&)>& progress) {
+  double next_progress_s = clock_.now_s() + 10.0;
   while (!stop) {
-    const IdClaimer::Step s =
-        claimer_.step(clock_.now_s(), bus_.claims(), bus_.claim_writers_matched());
+    const int matched = bus_.claim_writers_matched();
+    const IdClaimer::Step s = claimer_.step(clock_.now_s(), bus_.claims(), matched);
+    if (clock_.now_s() >= next_progress_s) {
+      progress(claimer_.status(clock_.now_s(), matched));
+      next_progress_s += 10.0;
+    }
     if (s.announce) bus_.publish_claim(claimer_.claim());
     if (s.refuse) {
       why = s.message;

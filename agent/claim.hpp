@@ -1,6 +1,7 @@
 #pragma once
 
 #include <atomic>
+#include <functional>
 #include <optional>
 #include <string>
 
@@ -18,8 +19,10 @@ class IdClaimRunner {
   // `fixed`: the id given by hand, 0 for auto; `timeout_s` < 0: the default for the swarm's size.
   IdClaimRunner(DdsBus& bus, const RunConfig& rc, AgentId fixed, double timeout_s, Clock& clock);
 
-  // Waits until an id is taken (returned), the claim is refused (`why` says why) or `stop` is set.
-  std::optional<AgentId> acquire(const std::atomic<bool>& stop, std::string& why);
+  // Waits until an id is taken (returned), the claim is refused (`why` says why) or `stop` is set;
+  // says where it stands through `progress` every 10 s.
+  std::optional<AgentId> acquire(const std::atomic<bool>& stop, std::string& why,
+                                 const std::function<void(const std::string&)>& progress);
   // While flying: keeps announcing the claim. Returns why this replica must stop (another one holds
   // its id and keeps it), or nothing.
   std::optional<std::string> keep();

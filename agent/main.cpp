@@ -50,7 +50,9 @@ int main(int argc, char** argv) {
     if (claiming) {
       claim.emplace(bus, *rc, id, f.claim_timeout_s, clock);
       std::string why;
-      const std::optional<AgentId> taken = claim->acquire(g_stop, why);
+      const std::optional<AgentId> taken = claim->acquire(
+          g_stop, why,
+          [&](const std::string& line) { log->info("replica {:016x}: {}", claim->nonce(), line); });
       if (!taken) {
         log->error("replica {:016x}: no agent id: {}", claim->nonce(), why);
         return g_stop ? 0 : 2;  // stopped while claiming: a stop, not a failure

@@ -19,7 +19,10 @@ IdClaimer::Config IdClaimer::Config::for_swarm(std::size_t n, double timeout_s) 
   const double size = static_cast<double>(n);
   c.timeout_s = timeout_s >= 0.0 ? timeout_s : 60.0 + 4.0 * size;
   c.period_s = 0.1 * std::max(1.0, size / 6.0);
-  c.expire_s = std::max(c.expire_s, 6.0 * c.period_s);
+  // A replica is gone after 15 silent periods (8 s at 32): on two saturated cores a live replica's
+  // claims can go unheard for seconds, and each such gap changes every view and restarts the
+  // settle wait (32 containers here: views never held still for 150 s at 6 periods).
+  c.expire_s = std::max(c.expire_s, 15.0 * c.period_s);
   c.settle_s = std::max(c.settle_s, 3.0 * c.period_s);
   c.confirm_s = std::max(c.confirm_s, 3.0 * c.period_s);
   return c;
@@ -37,6 +40,17 @@ IdClaimer::IdClaimer(std::vector<AgentId> roster, std::uint64_t nonce, std::uint
   view_ = {nonce};
 }
 
+std::string IdClaimer::status(double now_s, int matched_writers) const {
+  char buf[200];
+  std::snprintf(buf, sizeof buf,
+                "claiming: heard %zu of %u replicas, view still for %.1f s (needs %.1f), %llu view "
+                "changes, %llu silences past %.1f s, %d claim writers matched",
+                live(), mine_.expected, now_s - view_since_s_, cfg_.settle_s,
+                static_cast<unsigned long long>(view_changes_),
+                static_cast<unsigned long long>(expiries_), cfg_.expire_s, matched_writers);
+  return buf;
+}
+
 IdClaimer::Step IdClaimer::step(double now_s, const std::vector<IdClaim>& heard,
                                 int matched_writers) {
   for (const IdClaim& c : heard) {
@@ -46,17 +60,22 @@ IdClaimer::Step IdClaimer::step(double now_s, const std::vector<IdClaim>& heard,
     it->second.seq = c.seq;
     it->second.claim = c;
   }
-  live_.clear();
   std::vector<std::uint64_t> view{mine_.nonce};
+  std::map<std::uint64_t, IdClaim> now_live;
   for (const auto& [nonce, s] : seen_) {
-    if (now_s - s.heard_s > cfg_.expire_s) continue;
-    live_[nonce] = s.claim;
+    if (now_s - s.heard_s > cfg_.expire_s) {
+      if (live_.count(nonce)) ++expiries_;
+      continue;
+    }
+    now_live[nonce] = s.claim;
     view.push_back(nonce);
   }
+  live_.swap(now_live);
   std::sort(view.begin(), view.end());
   if (view != view_) {
     view_ = view;
     view_since_s_ = now_s;
+    ++view_changes_;
   }
   // Ready to decide: the view held still, this replica listened long enough, and every claim
   // writer DDS matched has been heard.

@@ -63,6 +63,10 @@ class IdClaimer {
   // unknown, as in tests without DDS).
   Step step(double now_s, const std::vector<IdClaim>& heard, int matched_writers = -1);
 
+  // Where the claim stands, for a progress line: replicas heard of N, how long the view has held
+  // still (of settle_s), how many times it changed, the matched claim writers.
+  std::string status(double now_s, int matched_writers) const;
+
   const IdClaim& claim() const { return mine_; }
   AgentId id() const { return mine_.id; }
   // Live replicas heard, itself included.
@@ -86,6 +90,8 @@ class IdClaimer {
   std::map<std::uint64_t, IdClaim> live_;  // heard within expire_s, without mine
   std::vector<std::uint64_t> view_;        // the live nonces at the last change
   double view_since_s_ = 0.0;
+  std::uint64_t view_changes_ = 0;
+  std::uint64_t expiries_ = 0;  // replicas dropped for silence (and heard again, if they flap)
 };
 
 }  // namespace qswarm
