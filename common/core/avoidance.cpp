@@ -181,6 +181,7 @@ SafeVelocity safe_velocity(AgentId self, const Vec3& p_W, const Vec3& v_des, con
   if (speed > 0.0) u = clamp_norm(u, speed);
 
   std::vector<Halfspace> all;
+  all.reserve(near.size());
   for (const Near& n : near) all.push_back(n.h);
   if (worst_violation(all, u) <= 1e-12) {
     out.v_W = u;

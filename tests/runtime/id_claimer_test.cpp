@@ -267,6 +267,7 @@ TEST(IdClaimer, ThirtyTwoStarvedReplicasStartedOneASecondStillTakeEveryIdOnce) {
       std::string why;
     };
     std::vector<R> rs;
+    rs.reserve(n);
     for (int k = 0; k < n; ++k) rs.push_back({std::nullopt, 1.0 * k, 1.0 * k, 0, false, {}});
     std::map<std::uint64_t, IdClaim> wire;  // what has arrived
     std::vector<std::pair<double, IdClaim>> in_flight;
@@ -281,6 +282,7 @@ TEST(IdClaimer, ThirtyTwoStarvedReplicasStartedOneASecondStillTakeEveryIdOnce) {
         }
       }
       std::vector<IdClaim> heard;
+      heard.reserve(wire.size());
       for (const auto& [nonce, c] : wire) heard.push_back(c);
       for (R& r : rs) {
         if (now < r.next_s || r.refused) continue;
