@@ -107,6 +107,7 @@ TEST(SafeVelocity, IsTheProjectionOntoAllConstraintsOnRandomCrowds) {
     Vec3 x = v_des;
     std::vector<Vec3> incr(hs.size(), Vec3::Zero());
     for (int it = 0; it < 20000; ++it) {
+      const Vec3 before = x;
       for (std::size_t i = 0; i < hs.size(); ++i) {
         const Vec3 y = x + incr[i];
         const double viol = hs[i].second - hs[i].first.dot(y);
@@ -114,6 +115,7 @@ TEST(SafeVelocity, IsTheProjectionOntoAllConstraintsOnRandomCrowds) {
         incr[i] = y - p;
         x = p;
       }
+      if (it > 10 && (x - before).norm() < 1e-13) break;
     }
     if (!s.feasible) continue;  // an inside neighbour can make the set empty: no projection then
     ++compared;
