@@ -3,9 +3,9 @@
 #include <gtest/gtest.h>
 
 #include <unistd.h>
-#include <cstdio>
 
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <map>
