@@ -81,8 +81,6 @@ class ReferenceGenerator {
   // with the agent's physical position `self_p_W` (what the others see of it).
   TrackingReference step(const Vec3& goal_W, double dt, AgentId self, const Vec3& self_p_W,
                          const std::vector<Obstacle>& others, const AvoidanceConfig& avoid);
-  const Vec3& position() const { return p_W_; }
-  const Vec3& velocity() const { return v_W_; }
 
  private:
   Vec3 p_W_;

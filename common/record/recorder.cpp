@@ -28,9 +28,8 @@ Recorder::Recorder(RunConfig rc, std::string run_dir, double time_scale)
       presence_(ids_of(rc_), rc_.neighbor_timeout_s),
       judge_(rc_.tolerance_m, rc_.hold_s, rc_.neighbor_timeout_s, rc_.faults),
       separation_(rc_.avoidance.safe_distance_m),
-      held_(rc_.held_agents()),
       timeline_(rc_.faults.timeline()) {
-  tally_.held.assign(held_.begin(), held_.end());
+  tally_.held = rc_.held_agents();
 }
 
 void Recorder::event(const std::string& kind, AgentId agent, const std::string& detail) {
@@ -177,14 +176,14 @@ void Recorder::initial_snapshot() {
 void Recorder::snapshot() {
   std::vector<AgentId> ids;
   Positions q, p, offsets;
-  std::vector<const StateMessage*> last;
+  std::vector<double> speed;
   for (const auto& [id, a] : presence_.tracks()) {
     if (presence_.running(id)) {
       ids.push_back(id);
       q.push_back(a.last.view.q);
       p.push_back(a.last.p_W);
       offsets.push_back(offset_of(id));
-      last.push_back(&a.last);
+      speed.push_back(a.last.v_W.norm());
     }
   }
   // A held agent (its slot too close to another's to reach) is excused from the spread only while
@@ -193,10 +192,10 @@ void Recorder::snapshot() {
   std::vector<bool> held(ids.size(), false);
   double held_speed = 0.0;
   for (std::size_t i = 0; i < ids.size(); ++i) {
-    if (!held_.count(ids[i])) continue;
+    if (!tally_.held.count(ids[i])) continue;
     for (std::size_t j = 0; j < ids.size() && !held[i]; ++j)
       held[i] = j != i && (p[i] - p[j]).norm() <= rc_.avoidance.filter_distance_m() + kHeldReachM;
-    if (held[i]) held_speed = std::max(held_speed, last[i]->v_W.norm());
+    if (held[i]) held_speed = std::max(held_speed, speed[i]);
   }
   last_ = measure_graph(
       t_s_, ids, q, p,

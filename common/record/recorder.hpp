@@ -68,7 +68,6 @@ class Recorder {
   ConvergenceJudge judge_;
   RunTally tally_;
   SeparationMonitor separation_;
-  std::set<AgentId> held_;  // RunConfig::held_agents()
   double t_s_ = 0.0;
   std::int64_t t_wall_ns_ = 0;  // wall time when t_s_ last advanced
   double next_snapshot_s_ = 0.0;

@@ -31,7 +31,6 @@ class SeparationMonitor {
   double min_t_s() const { return min_t_s_; }
   std::pair<AgentId, AgentId> min_pair() const { return min_pair_; }
   std::uint32_t violations() const { return violations_; }
-  double safe_distance_m() const { return safe_m_; }
 
  private:
   struct Last {

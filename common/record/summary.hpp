@@ -3,6 +3,7 @@
 #include <cstdint>
 #include <map>
 #include <optional>
+#include <set>
 #include <string>
 #include <utility>
 #include <vector>
@@ -24,7 +25,7 @@ struct RunTally {
   double min_separation_t_s = 0.0;
   AgentId min_separation_a = 0, min_separation_b = 0;
   std::uint32_t separation_violations = 0;
-  std::vector<AgentId> held;     // agents whose slot is too close to another's to reach
+  std::set<AgentId> held;        // RunConfig::held_agents(): slots too close to another's to reach
   std::vector<double> ages_ms;   // sample ages (receive - send wall time)
   std::vector<double> detect_s;  // planned kill -> departure seen
   // Fault counters per agent incarnation (an incarnation's counters only grow).

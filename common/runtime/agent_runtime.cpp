@@ -66,8 +66,7 @@ void AgentRuntime::publish(std::uint8_t phase) {
 void AgentRuntime::consensus_tick(std::vector<AgentEvent>& events) {
   const double t = time_s();
   std::vector<NeighborView> views;
-  const std::vector<StateMessage> samples = bus_.latest(p_.id);
-  for (const StateMessage& m : samples) {
+  for (const StateMessage& m : bus_.latest(p_.id)) {
     const AgentId peer = m.view.id;
     if (peer == p_.id) continue;
     Peer& st = peers_[peer];

@@ -289,13 +289,22 @@ TEST(AvoidanceFlight, ACrowdOfEightOnOneSlotRegionSettlesApart) {
   EXPECT_LT(with.max_goal_error_m, 2.0);    // a cluster about the slots (measured 1.55 m)
 }
 
-TEST(AvoidanceFlight, HoldsWithThirtyPercentOfSamplesLost) {
-  std::vector<Vec3> a, b;
+// Eight on a circle of 8 m, each flying through the centre to the opposite side.
+struct Swap {
+  std::vector<Vec3> starts, goals;
+};
+Swap swap_through_the_centre() {
+  Swap s;
   for (int i = 0; i < 8; ++i) {
     const double th = i * M_PI / 4.0;
-    a.emplace_back(8 * std::cos(th), 8 * std::sin(th), 0.0);
-    b.emplace_back(-a.back());  // through the centre to the opposite side
+    s.starts.emplace_back(8 * std::cos(th), 8 * std::sin(th), 0.0);
+    s.goals.push_back(-s.starts.back());
   }
+  return s;
+}
+
+TEST(AvoidanceFlight, HoldsWithThirtyPercentOfSamplesLost) {
+  const auto [a, b] = swap_through_the_centre();
   for (std::uint64_t seed = 1; seed <= 3; ++seed) {
     const Flight f = fly(a, b, true, 60.0, 0.3, seed);
     print("swap through the centre, 30% loss", f);
@@ -308,12 +317,7 @@ TEST(AvoidanceFlight, HoldsWithThirtyPercentOfSamplesLost) {
 TEST(AvoidanceFlight, HoldsWithSamplesATenthOfASecondLateAndLost) {
   // Five ticks of delay on every sample, and 30 % of them lost: positions up to about 0.3 s old,
   // extrapolated by their velocity.
-  std::vector<Vec3> a, b;
-  for (int i = 0; i < 8; ++i) {
-    const double th = i * M_PI / 4.0;
-    a.emplace_back(8 * std::cos(th), 8 * std::sin(th), 0.0);
-    b.emplace_back(-a.back());
-  }
+  const auto [a, b] = swap_through_the_centre();
   const Flight f = fly(a, b, true, 60.0, 0.3, 4, 5);
   print("swap through the centre, 100 ms late, 30% loss", f);
   EXPECT_GE(f.min_separation_m, on().safe_distance_m);
