@@ -102,6 +102,7 @@ int main(int argc, char** argv) {
       std::lock_guard<std::mutex> lock(mu);
       rec.tick(wall_now_ns());
       rec.note_foreign_runs(bus.foreign_runs(), bus.counters().foreign);
+      rec.note_strangers(bus.strangers());
       // Once a second, and whenever the graph gains or loses an edge.
       if (progress && (wall_s() - last_print >= 1.0 || rec.edges_now() != last_edges)) {
         last_edges = rec.edges_now();

@@ -67,6 +67,7 @@ DdsOptions dds_options(const RunConfig& rc, const std::string& participant_name,
   d.max_agents = static_cast<int>(std::max<std::size_t>(rc.agents.size(), 16));
   d.test_drop_data_percent = static_cast<std::uint8_t>(rc.faults.transport_drop_percent);
   d.run_id = rc.run_id;
+  for (const auto& a : rc.agents) d.roster.push_back(a.id);
   return d;
 }
 

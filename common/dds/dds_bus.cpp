@@ -18,13 +18,21 @@
 #include <fastdds/dds/subscriber/DataReaderListener.hpp>
 #include <fastdds/dds/subscriber/SampleInfo.hpp>
 #include <fastdds/dds/subscriber/Subscriber.hpp>
+#include <fastdds/dds/topic/ContentFilteredTopic.hpp>
+#include <fastdds/dds/topic/IContentFilter.hpp>
+#include <fastdds/dds/topic/IContentFilterFactory.hpp>
 #include <fastdds/dds/topic/TypeSupport.hpp>
 
+#include <algorithm>
 #include <atomic>
+#include <cctype>
 #include <chrono>
 #include <cstdio>
+#include <limits>
 #include <map>
 #include <mutex>
+#include <optional>
+#include <set>
 #include <stdexcept>
 #include <thread>
 
@@ -44,12 +52,90 @@ std::int64_t wall_now_ns() {
       .count();
 }
 
+namespace {
+
+// The roster filter (DdsOptions::roster): reads the key, the agent id, straight from the serialized
+// sample (CDR: a 4-byte encapsulation header, then the id as the first field) instead of Fast
+// DDS's SQL filter, which needs the type's description and decodes every sample in full (a 32-agent
+// swarm fell behind real time with it).
+// What a bus's roster filter turned away. The filter finds its bus's tally by the key given as the
+// filter's one parameter; a filter made for a reader elsewhere (a writer filtering for a remote
+// reader) finds none and counts nothing.
+struct StrangerTally {
+  static constexpr std::size_t kMaxIds = 64;
+  std::mutex mu;
+  std::set<AgentId> ids;
+  std::uint64_t samples = 0;
+};
+std::mutex g_tallies_mu;
+std::map<std::string, std::weak_ptr<StrangerTally>> g_tallies;
+
+class RosterFilter final : public dds::IContentFilter {
+ public:
+  RosterFilter(std::vector<std::pair<AgentId, AgentId>> ranges,
+               std::shared_ptr<StrangerTally> tally)
+      : ranges_(std::move(ranges)), tally_(std::move(tally)) {}
+  bool evaluate(const SerializedPayload& payload, const FilterSampleInfo&,
+                const GUID_t&) const override {
+    if (payload.data == nullptr || payload.length < 8) return false;
+    const unsigned char* d = payload.data;
+    const bool little = (d[1] & 1) != 0;  // CDR_LE / PL_CDR_LE
+    const AgentId id =
+        little ? AgentId{d[4]} | AgentId{d[5]} << 8 | AgentId{d[6]} << 16 | AgentId{d[7]} << 24
+               : AgentId{d[7]} | AgentId{d[6]} << 8 | AgentId{d[5]} << 16 | AgentId{d[4]} << 24;
+    for (const auto& [lo, hi] : ranges_)
+      if (id >= lo && id <= hi) return true;
+    if (tally_) {
+      std::lock_guard<std::mutex> lock(tally_->mu);
+      ++tally_->samples;
+      if (tally_->ids.size() < StrangerTally::kMaxIds) tally_->ids.insert(id);
+    }
+    return false;
+  }
+
+ private:
+  std::vector<std::pair<AgentId, AgentId>> ranges_;
+  std::shared_ptr<StrangerTally> tally_;
+};
+
+constexpr const char* kRosterFilterClass = "QSWARM_ROSTER";
+
+class RosterFilterFactory final : public dds::IContentFilterFactory {
+ public:
+  ReturnCode_t create_content_filter(const char*, const char*, const dds::TopicDataType*,
+                                     const char* expression, const ParameterSeq& parameters,
+                                     dds::IContentFilter*& filter) override {
+    auto ranges = parse_roster_filter(expression ? expression : "");
+    if (!ranges) return ReturnCode_t::RETCODE_BAD_PARAMETER;
+    std::shared_ptr<StrangerTally> tally;
+    if (parameters.length() == 1 && parameters[0] != nullptr) {
+      std::lock_guard<std::mutex> lock(g_tallies_mu);
+      if (const auto it = g_tallies.find(parameters[0]); it != g_tallies.end())
+        tally = it->second.lock();
+    }
+    delete static_cast<RosterFilter*>(filter);  // an expression update replaces the previous one
+    filter = new RosterFilter(std::move(*ranges), std::move(tally));
+    return ReturnCode_t::RETCODE_OK;
+  }
+  ReturnCode_t delete_content_filter(const char*, dds::IContentFilter* filter) override {
+    delete static_cast<RosterFilter*>(filter);  // this factory makes no other kind
+    return ReturnCode_t::RETCODE_OK;
+  }
+};
+
+RosterFilterFactory roster_filter_factory;  // outlives every participant
+
+}  // namespace
+
 struct DdsBus::Impl : public dds::DataReaderListener {
   DdsOptions opts;
   dds::DomainParticipant* participant = nullptr;
   dds::Publisher* publisher = nullptr;
   dds::Subscriber* subscriber = nullptr;
   dds::Topic* topic = nullptr;
+  dds::ContentFilteredTopic* roster_topic = nullptr;  // DdsOptions::roster
+  std::shared_ptr<StrangerTally> strangers = std::make_shared<StrangerTally>();
+  std::string tally_key;  // this bus's entry in g_tallies
   dds::DataWriter* writer = nullptr;
   dds::DataReader* reader = nullptr;
   dds::TypeSupport type{new qswarm_msgs::AgentStatePubSubType()};
@@ -76,8 +162,44 @@ struct DdsBus::Impl : public dds::DataReaderListener {
   dds::DataWriter* claim_writer = nullptr;
   dds::DataReader* claim_reader = nullptr;
   mutable std::mutex claims_mu;
-  std::map<std::uint64_t, IdClaim> claims;
+  // The latest claim of each replica heard, bounded by max_claims: a new nonce arriving when it is
+  // full evicts the one heard longest ago. The topic has no key, so DDS keeps no state per nonce
+  // either: nonces a stranger flooded once, or replicas that restarted, are gone once enough newer
+  // ones are heard, and a live replica evicted comes back with its next claim.
+  struct HeardClaim {
+    IdClaim claim;
+    std::uint64_t heard = 0;  // claims_heard when this nonce was last heard: the LRU order
+  };
+  std::map<std::uint64_t, HeardClaim> claims;
+  std::uint64_t claims_heard = 0;
+  std::uint64_t claims_evicted = 0;
   std::size_t max_claims = 0;
+  void hear_claim(const qswarm_msgs::IdClaim& s) {
+    std::lock_guard<std::mutex> lock(claims_mu);
+    auto it = claims.find(s.nonce());
+    if (it == claims.end()) {
+      if (claims.size() >= max_claims) {
+        claims.erase(std::min_element(
+            claims.begin(), claims.end(),
+            [](const auto& a, const auto& b) { return a.second.heard < b.second.heard; }));
+        if (claims_evicted++ == 0)
+          spdlog::warn(
+              "id claims: more than {} replicas heard; the one heard longest ago is "
+              "forgotten for each new one (further evictions are counted, not logged)",
+              max_claims);
+      }
+      it = claims.emplace(s.nonce(), HeardClaim{}).first;
+    }
+    IdClaim& c = it->second.claim;
+    c.nonce = s.nonce();
+    c.seq = s.seq();
+    c.run_id = s.run_id();
+    c.expected = s.expected();
+    c.id = s.id();
+    c.stage = s.stage();
+    c.flying_s = s.flying_s();
+    it->second.heard = ++claims_heard;
+  }
   struct ClaimListener : public dds::DataReaderListener {
     Impl* d = nullptr;
     void on_data_available(dds::DataReader* r) override {
@@ -85,16 +207,7 @@ struct DdsBus::Impl : public dds::DataReaderListener {
       dds::SampleInfo info;
       while (r->take_next_sample(&s, &info) == ReturnCode_t::RETCODE_OK) {
         if (!info.valid_data || s.run_id() != d->opts.run_id) continue;
-        std::lock_guard<std::mutex> lock(d->claims_mu);
-        if (d->claims.size() >= d->max_claims && !d->claims.count(s.nonce())) continue;
-        IdClaim& c = d->claims[s.nonce()];
-        c.nonce = s.nonce();
-        c.seq = s.seq();
-        c.run_id = s.run_id();
-        c.expected = s.expected();
-        c.id = s.id();
-        c.stage = s.stage();
-        c.flying_s = s.flying_s();
+        d->hear_claim(s);
       }
     }
   } claim_listener;
@@ -191,6 +304,10 @@ DdsBus::DdsBus(const DdsOptions& opts) : impl_(std::make_unique<Impl>()) {
     wq.history().kind = dds::KEEP_LAST_HISTORY_QOS;
     wq.history().depth = 1;
     wq.data_sharing().off();
+    // No filtering on the writer's side: it would evaluate each sample for every filtering reader
+    // and send per reader (64 agents on 2 cores fell behind with it); the readers filter.
+    wq.writer_resource_limits().reader_filters_allocation =
+        eprosima::fastrtps::ResourceLimitedContainerConfig(0, 0, 0);
     wq.endpoint().history_memory_policy =
         eprosima::fastrtps::rtps::PREALLOCATED_WITH_REALLOC_MEMORY_MODE;
     d.writer = d.publisher->create_datawriter(d.topic, wq, &d.writer_listener);
@@ -213,7 +330,23 @@ DdsBus::DdsBus(const DdsOptions& opts) : impl_(std::make_unique<Impl>()) {
   rq.resource_limits().allocated_samples = 32;
   rq.endpoint().history_memory_policy =
       eprosima::fastrtps::rtps::PREALLOCATED_WITH_REALLOC_MEMORY_MODE;
-  d.reader = d.subscriber->create_datareader(d.topic, rq, &d);
+  dds::TopicDescription* read_from = d.topic;
+  if (!opts.roster.empty()) {
+    d.participant->register_content_filter_factory(kRosterFilterClass, &roster_filter_factory);
+    char key[32];
+    std::snprintf(key, sizeof key, "%p", static_cast<void*>(&d));
+    d.tally_key = key;
+    {
+      std::lock_guard<std::mutex> lock(g_tallies_mu);
+      g_tallies[d.tally_key] = d.strangers;
+    }
+    d.roster_topic = d.participant->create_contentfilteredtopic("qswarm/agent_state/roster",
+                                                                d.topic, roster_filter(opts.roster),
+                                                                {d.tally_key}, kRosterFilterClass);
+    if (!d.roster_topic) throw std::runtime_error("dds: cannot create the roster filter");
+    read_from = d.roster_topic;
+  }
+  d.reader = d.subscriber->create_datareader(read_from, rq, &d);
   if (!d.reader) throw std::runtime_error("dds: cannot create the state reader");
 
   if (opts.id_claims) {
@@ -231,11 +364,13 @@ DdsBus::DdsBus(const DdsOptions& opts) : impl_(std::make_unique<Impl>()) {
     dds::DataReaderQos cr = dds::DATAREADER_QOS_DEFAULT;
     cr.reliability().kind = dds::BEST_EFFORT_RELIABILITY_QOS;
     cr.durability().kind = dds::VOLATILE_DURABILITY_QOS;
-    cr.history().depth = 1;
     cr.data_sharing().off();
+    // One instance (the topic has no key): a queue of the latest claims of every writer, taken as
+    // they arrive; the newest replace the oldest when a burst overflows it.
     d.max_claims = 2 * static_cast<std::size_t>(opts.max_agents) + 16;
-    cr.resource_limits().max_instances = static_cast<std::int32_t>(d.max_claims);
-    cr.resource_limits().max_samples_per_instance = 1;
+    cr.history().depth = static_cast<std::int32_t>(d.max_claims);
+    cr.resource_limits().max_instances = 1;
+    cr.resource_limits().max_samples_per_instance = static_cast<std::int32_t>(d.max_claims);
     cr.resource_limits().max_samples = static_cast<std::int32_t>(d.max_claims);
     d.claim_listener.d = &d;
     d.claim_reader = d.subscriber->create_datareader(d.claim_topic, cr, &d.claim_listener);
@@ -284,6 +419,10 @@ DdsBus::~DdsBus() {
     d.participant->delete_contained_entities();
     dds::DomainParticipantFactory::get_instance()->delete_participant(d.participant);
   }
+  if (!d.tally_key.empty()) {
+    std::lock_guard<std::mutex> lock(g_tallies_mu);
+    g_tallies.erase(d.tally_key);
+  }
 }
 
 void DdsBus::publish(const StateMessage& msg) {
@@ -307,8 +446,19 @@ void DdsBus::set_listener(Listener listener) {
 }
 
 BusCounters DdsBus::counters() const {
-  std::lock_guard<std::mutex> lock(impl_->mu);
-  return impl_->gate.counters();
+  BusCounters c;
+  {
+    std::lock_guard<std::mutex> lock(impl_->mu);
+    c = impl_->gate.counters();
+  }
+  std::lock_guard<std::mutex> lock(impl_->strangers->mu);
+  c.dropped += impl_->strangers->samples;
+  return c;
+}
+
+std::set<AgentId> DdsBus::strangers() const {
+  std::lock_guard<std::mutex> lock(impl_->strangers->mu);
+  return impl_->strangers->ids;
 }
 
 std::set<std::uint64_t> DdsBus::foreign_runs() const {
@@ -320,6 +470,53 @@ std::string run_partition(std::uint64_t run_id) {
   char buf[40];
   std::snprintf(buf, sizeof buf, "qswarm-run-%016llx", static_cast<unsigned long long>(run_id));
   return buf;
+}
+
+std::string roster_filter(std::vector<AgentId> roster) {
+  std::sort(roster.begin(), roster.end());
+  roster.erase(std::unique(roster.begin(), roster.end()), roster.end());
+  std::string expr;
+  for (std::size_t i = 0; i < roster.size();) {
+    std::size_t j = i;
+    while (j + 1 < roster.size() && roster[j + 1] == roster[j] + 1) ++j;
+    if (!expr.empty()) expr += ",";
+    expr += std::to_string(roster[i]);
+    if (j > i) expr += "-" + std::to_string(roster[j]);
+    i = j + 1;
+  }
+  return expr;
+}
+
+std::optional<std::vector<std::pair<AgentId, AgentId>>> parse_roster_filter(
+    const std::string& expr) {
+  std::vector<std::pair<AgentId, AgentId>> ranges;
+  std::size_t pos = 0;
+  const auto number = [&](AgentId& out) {
+    std::size_t end = pos;
+    while (end < expr.size() && end - pos < 10 &&
+           std::isdigit(static_cast<unsigned char>(expr[end])))
+      ++end;
+    if (end == pos) return false;
+    const unsigned long long v = std::stoull(expr.substr(pos, end - pos));
+    if (v > std::numeric_limits<AgentId>::max()) return false;
+    out = static_cast<AgentId>(v);
+    pos = end;
+    return true;
+  };
+  while (pos < expr.size()) {
+    AgentId lo = 0;
+    if (!number(lo)) return std::nullopt;
+    AgentId hi = lo;
+    if (pos < expr.size() && expr[pos] == '-') {
+      ++pos;
+      if (!number(hi) || hi < lo) return std::nullopt;
+    }
+    ranges.emplace_back(lo, hi);
+    if (pos < expr.size() && expr[pos++] != ',') return std::nullopt;
+    if (pos == expr.size() && expr.back() == ',') return std::nullopt;
+  }
+  if (ranges.empty()) return std::nullopt;
+  return ranges;
 }
 
 void DdsBus::publish_claim(const IdClaim& claim) {
@@ -347,7 +544,7 @@ std::vector<IdClaim> DdsBus::claims() const {
   std::lock_guard<std::mutex> lock(impl_->claims_mu);
   std::vector<IdClaim> out;
   out.reserve(impl_->claims.size());
-  for (const auto& [nonce, c] : impl_->claims) out.push_back(c);
+  for (const auto& [nonce, c] : impl_->claims) out.push_back(c.claim);
   return out;
 }
 

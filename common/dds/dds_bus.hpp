@@ -2,6 +2,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <set>
 #include <string>
 #include <utility>
@@ -31,6 +32,10 @@ struct DdsOptions {
   bool hear_all_runs = false;
   // Also join the id-claim topic "qswarm/id_claim" (swarm-agent --id auto, the compose swarm).
   bool id_claims = false;
+  // The run's agent ids: the state reader takes no other key (a DDS content filter, applied before
+  // a sample takes a slot in the reader), so a stranger publishing many keys on the run's partition
+  // cannot fill the reader and blind it. Empty: any id.
+  std::vector<AgentId> roster;
   // Fast DDS Discovery Server "HOST:PORT" (HOST a name or an IPv4 address): discover through it as
   // a client instead of by multicast (container networks). Empty: the standard simple discovery.
   std::string discovery_server;
@@ -41,6 +46,12 @@ struct DdsOptions {
 std::pair<std::string, std::uint16_t> resolve_discovery_server(const std::string& host_port);
 
 std::string run_partition(std::uint64_t run_id);
+
+// The roster filter's expression: the ids as ranges of consecutive ids ("1-8,10" for 1..8 and 10;
+// empty for an empty roster), and back (nullopt for anything else).
+std::string roster_filter(std::vector<AgentId> roster);
+std::optional<std::vector<std::pair<AgentId, AgentId>>> parse_roster_filter(
+    const std::string& expr);
 
 // The product's NeighborBus: one DomainParticipant, the keyed best-effort state topic
 // "qswarm/agent_state", a keep-last-1 writer and reader. Incoming samples are checked in the
@@ -63,6 +74,9 @@ class DdsBus final : public NeighborBus {
   int matched_readers() const override;
   // Run ids of other runs heard on this domain (only a hear_all_runs bus hears them).
   std::set<std::uint64_t> foreign_runs() const;
+  // Ids outside the roster whose samples the roster filter dropped (the first 64 of them), and how
+  // many samples it dropped (counted in counters().dropped too).
+  std::set<AgentId> strangers() const;
   // The id-claim topic (DdsOptions::id_claims): announce this replica's claim, and the latest
   // claim of every replica heard (a bounded number of them: strangers cannot grow it).
   void publish_claim(const IdClaim& claim);

@@ -37,6 +37,9 @@ class Presence {
   std::size_t present_count() const;
   std::size_t seen_count() const;
   std::size_t strangers() const { return strangers_.size(); }
+  // A stranger known without a sample (the DDS roster filter dropped its samples): true the first
+  // time its id is told.
+  bool note_stranger(AgentId id) { return tracks_.count(id) == 0 && strangers_.insert(id).second; }
 
  private:
   std::map<AgentId, Track> tracks_;

@@ -116,6 +116,12 @@ void Recorder::note_foreign_runs(const std::set<std::uint64_t>& runs, std::uint6
   tally_.foreign_samples = samples;
 }
 
+void Recorder::note_strangers(const std::set<AgentId>& ids) {
+  for (const AgentId id : ids)
+    if (presence_.note_stranger(id))
+      event("unknown_agent", id, "sample from an agent not in the scenario");
+}
+
 void Recorder::depart(AgentId id, const std::string& why) {
   ++tally_.departures;
   separation_.forget(id);

@@ -30,6 +30,9 @@ class Recorder {
   // Other runs heard on this run's domain (their samples were refused): each is an event once,
   // and the summary counts their samples.
   void note_foreign_runs(const std::set<std::uint64_t>& runs, std::uint64_t samples);
+  // Ids outside the run whose samples DDS's roster filter dropped before they arrived: each noted
+  // once, as a stranger whose samples did arrive would be.
+  void note_strangers(const std::set<AgentId>& ids);
   // Periodic work (departures, fault windows, graph snapshots, convergence); call every few tens
   // of ms.
   void tick(std::int64_t now_wall_ns);

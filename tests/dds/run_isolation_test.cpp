@@ -2,6 +2,9 @@
 // partition hears the other run and says so.
 #include <gtest/gtest.h>
 
+#include <memory>
+#include <vector>
+
 #include "common/dds/dds_bus.hpp"
 #include "common/transport/sample_gate.hpp"
 #include "tests/swarm/domain_lease.hpp"
@@ -65,6 +68,54 @@ TEST(RunIsolation, ASampleCarryingAnotherRunsIdInsideThePartitionIsRefused) {
       },
       30.0));
   EXPECT_TRUE(receiver.latest(0).empty());
+}
+
+TEST(RosterFilter, RangesOfConsecutiveIdsBothWays) {
+  EXPECT_EQ(roster_filter({}), "");
+  EXPECT_EQ(roster_filter({3, 1, 2, 2}), "1-3");
+  EXPECT_EQ(roster_filter({7, 1, 2, 9, 10}), "1-2,7,9-10");
+  EXPECT_EQ(roster_filter({4294967295u}), "4294967295");
+  using Ranges = std::vector<std::pair<AgentId, AgentId>>;
+  EXPECT_EQ(parse_roster_filter("1-2,7,9-10"), (Ranges{{1, 2}, {7, 7}, {9, 10}}));
+  EXPECT_EQ(parse_roster_filter("4294967295"), (Ranges{{4294967295u, 4294967295u}}));
+  for (const char* bad : {"", ",", "1,", ",1", "1-", "-1", "3-1", "1;2", "4294967296", "1--2",
+                          "12345678901", "a", "1-2-3"})
+    EXPECT_FALSE(parse_roster_filter(bad).has_value()) << bad;
+}
+
+TEST(RunIsolation, AStrangerFloodingKeysOnTheRunsPartitionCannotBlindAReader) {
+  // 60 keys outside the run's roster (six participants of 10 keys each: a writer keeps 10
+  // instances) would fill a reader sized for 16 agents + 16; with the roster filter they never
+  // take a slot, and the run's own agents are still heard.
+  DdsOptions o = options(0xE, "receiver");
+  o.roster = {1, 2, 3, 4};
+  DdsBus receiver(o);
+  std::vector<std::unique_ptr<DdsBus>> strangers;
+  strangers.reserve(6);
+  for (int k = 0; k < 6; ++k)
+    strangers.push_back(std::make_unique<DdsBus>(options(0xE, "stranger")));
+  std::uint64_t seq = 0;
+  ASSERT_TRUE(test::wait_for(  // the strangers come first
+      [&] {
+        ++seq;
+        for (std::size_t k = 0; k < strangers.size(); ++k)
+          for (AgentId id = 0; id < 10; ++id)
+            strangers[k]->publish(sample(100 + 10 * static_cast<AgentId>(k) + id, 0xE, seq));
+        return receiver.strangers().size() + receiver.latest(0).size() >= 60;
+      },
+      30.0));
+  DdsBus agents(options(0xE, "agents"));
+  ASSERT_TRUE(test::wait_for(
+      [&] {
+        ++seq;
+        for (AgentId id = 1; id <= 4; ++id) agents.publish(sample(id, 0xE, seq));
+        return receiver.latest(0).size() == 4;
+      },
+      30.0));
+  for (const StateMessage& m : receiver.latest(0)) EXPECT_LE(m.view.id, 4u);
+  // The strangers are told apart and counted, not silently lost.
+  for (const AgentId id : receiver.strangers()) EXPECT_TRUE(id >= 100 && id < 160) << id;
+  EXPECT_GE(receiver.counters().dropped, 60u);
 }
 
 TEST(SampleGate, AnIncarnationFromTheFutureCannotLockTheRealAgentOut) {
