@@ -60,15 +60,22 @@ IdClaimer::Step IdClaimer::step(double now_s, const std::vector<IdClaim>& heard,
     it->second.seq = c.seq;
     it->second.claim = c;
   }
+  std::set<std::uint64_t> reported;
+  for (const IdClaim& c : heard) reported.insert(c.nonce);
   std::vector<std::uint64_t> view{mine_.nonce};
   std::map<std::uint64_t, IdClaim> now_live;
-  for (const auto& [nonce, s] : seen_) {
+  for (auto it = seen_.begin(); it != seen_.end();) {
+    const auto& [nonce, s] = *it;
     if (now_s - s.heard_s > cfg_.expire_s) {
       if (live_.count(nonce)) ++expiries_;
+      // Forgotten once the bus no longer reports it either: a nonce heard again after that comes
+      // with a new claim, so it is alive. seen_ stays as large as the bus's bounded map.
+      it = reported.count(nonce) ? std::next(it) : seen_.erase(it);
       continue;
     }
     now_live[nonce] = s.claim;
     view.push_back(nonce);
+    ++it;
   }
   live_.swap(now_live);
   std::sort(view.begin(), view.end());
@@ -187,7 +194,9 @@ IdClaimer::Step IdClaimer::step(double now_s, const std::vector<IdClaim>& heard,
   if (now_s - start_s_ > cfg_.timeout_s)
     return refuse("heard " + std::to_string(live()) + " of " + std::to_string(mine_.expected) +
                   " replicas after " + std::to_string(static_cast<int>(cfg_.timeout_s)) +
-                  " s: is QSWARM_AGENTS the number of agent replicas?");
+                  " s: is QSWARM_AGENTS the number of agent replicas? (If it is and the "
+                  "replicas all run: with some 30 or more containers on one host, the host's "
+                  "neighbour table may overflow, see dmesg and README \"Docker compose\")");
   return s;
 }
 

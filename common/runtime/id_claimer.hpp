@@ -71,6 +71,9 @@ class IdClaimer {
   AgentId id() const { return mine_.id; }
   // Live replicas heard, itself included.
   std::size_t live() const { return live_.size() + 1; }
+  // Other replicas it remembers: the live ones and those the bus still reports (bounded by the
+  // bus, not by how many replicas ever came and went).
+  std::size_t remembered() const { return seen_.size(); }
 
  private:
   struct Seen {
@@ -86,7 +89,7 @@ class IdClaimer {
   double confirm_since_s_ = 0.0;
   double flying_since_s_ = 0.0;
   double next_announce_s_ = 0.0;
-  std::map<std::uint64_t, Seen> seen_;     // every nonce ever heard
+  std::map<std::uint64_t, Seen> seen_;     // the nonces the bus reports, and live ones
   std::map<std::uint64_t, IdClaim> live_;  // heard within expire_s, without mine
   std::vector<std::uint64_t> view_;        // the live nonces at the last change
   double view_since_s_ = 0.0;

@@ -226,6 +226,48 @@ TEST(IdClaimer, TooFewReplicasTimeOutWithAMessage) {
   }
 }
 
+TEST(IdClaimer, ForgetsReplicasTheBusNoLongerReportsOnceTheyFellSilent) {
+  // Hundreds of replicas come and go (restarts, strangers): what the claimer remembers is bounded
+  // by what the bus reports, and a departed replica still counts until it expires.
+  IdClaimer::Config cfg;
+  IdClaimer c(roster(4), 1, 7, 0, cfg, 0.0);
+  double now = 0.0;
+  for (std::uint64_t wave = 0; wave < 50; ++wave) {
+    std::vector<IdClaim> heard;
+    for (std::uint64_t k = 0; k < 8; ++k) {
+      IdClaim claim;
+      claim.nonce = 100 + wave * 8 + k;
+      claim.seq = 1;
+      claim.run_id = 7;
+      claim.expected = 4;
+      heard.push_back(claim);
+    }
+    c.step(now, heard);
+    EXPECT_EQ(c.live(), 9u);  // this wave is live
+    now += cfg.expire_s / 2.0;
+    c.step(now, {});  // the bus forgot them: still live until they expire
+    EXPECT_EQ(c.live(), 9u);
+    now += cfg.expire_s;
+    c.step(now, {});
+    EXPECT_EQ(c.live(), 1u);
+    EXPECT_EQ(c.remembered(), 0u);
+  }
+  // A nonce the bus still reports is remembered (its next claim is told apart from the last).
+  IdClaim kept;
+  kept.nonce = 5;
+  kept.seq = 3;
+  kept.run_id = 7;
+  kept.expected = 4;
+  c.step(now, {kept});
+  now += 2.0 * cfg.expire_s;
+  c.step(now, {kept});
+  EXPECT_EQ(c.live(), 1u);
+  EXPECT_EQ(c.remembered(), 1u);
+  kept.seq = 4;
+  c.step(now, {kept});
+  EXPECT_EQ(c.live(), 2u);
+}
+
 TEST(IdClaimer, AReplacementTakesTheIdOfAReplicaThatDiedBeforeTakingIt) {
   // Three of three rank; one dies before taking its id: the other two take theirs (it was still
   // live when the view settled), its id stays free, and a replacement replica takes it.
