@@ -12,6 +12,35 @@ SRC="$(cd "$(dirname "$0")/.." && pwd)"
 export CONTAINERS_CONF="$SRC/tests/compose/containers.conf"
 RUNTIME="--runtime runc"
 command -v runc >/dev/null || RUNTIME=""
+# Every container keeps a kernel neighbour (ARP) entry for each peer it sends to, and the kernel
+# counts those entries for the whole host against net.ipv4.neigh.default.gc_thresh3 (1024 by
+# default): about (N + 2)^2 of them overflow it near N = 30, and then replicas discover only some
+# of the others ("neighbor table overflow" in dmesg). As root, raise the limits for the bench and
+# put them back afterwards; otherwise say what is needed.
+NEIGH=/proc/sys/net/ipv4/neigh/default
+max_n=0
+for n in "$@"; do ((n > max_n)) && max_n=$n; done
+need=$((2 * (max_n + 2) * (max_n + 2) + 1024))
+saved=()
+if (($(cat $NEIGH/gc_thresh3) < need)); then
+  if [[ $(id -u) -eq 0 ]]; then
+    saved=("$(cat $NEIGH/gc_thresh1)" "$(cat $NEIGH/gc_thresh2)" "$(cat $NEIGH/gc_thresh3)")
+    echo $((need / 4)) >$NEIGH/gc_thresh1
+    echo $((need / 2)) >$NEIGH/gc_thresh2
+    echo "$need" >$NEIGH/gc_thresh3
+    echo "host neighbour table limits raised to $need for the bench (were ${saved[2]})"
+  else
+    echo "warning: net.ipv4.neigh.default.gc_thresh3 is $(cat $NEIGH/gc_thresh3), $need needed for" \
+      "$max_n containers: run as root or raise it (README, Docker compose)" >&2
+  fi
+fi
+restore_neigh() {
+  ((${#saved[@]} == 3)) || return 0
+  echo "${saved[0]}" >$NEIGH/gc_thresh1
+  echo "${saved[1]}" >$NEIGH/gc_thresh2
+  echo "${saved[2]}" >$NEIGH/gc_thresh3
+}
+trap restore_neigh EXIT
 printf '%-4s %-18s %-18s %-10s %-10s %-10s %-6s %s\n' N "claim_s p50/max" "discovery_s p50/max" \
   "cpu%/agent" "cgroup_MiB" "RSS_MiB" exit converged_at_s
 for N in "$@"; do
@@ -21,7 +50,7 @@ for N in "$@"; do
   compose=(podman-compose -p "$project" -f "$SRC/docker/docker-compose.yml")
   # Whatever happens, its containers, network and files go (down needs the same QSWARM_AGENTS).
   trap 'QSWARM_AGENTS="$N" QSWARM_RUNS="$work/runs" "${compose[@]}" down >/dev/null 2>&1 || true;
-        podman network rm -f "${project}_swarm" >/dev/null 2>&1 || true; rm -rf "$work"' EXIT
+        podman network rm -f "${project}_swarm" >/dev/null 2>&1 || true; rm -rf "$work"; restore_neigh' EXIT
   QSWARM_AGENTS="$N" QSWARM_RUNS="$work/runs" QSWARM_USER="$(id -u):$(id -g)" \
     "${compose[@]}" --podman-run-args="$RUNTIME" up -d --no-build >"$work/up.log" 2>&1
   sup="${project}_supervisor_1"
@@ -75,5 +104,5 @@ PY
   (trap - EXIT; QSWARM_AGENTS="$N" QSWARM_RUNS="$work/runs" "${compose[@]}" down >/dev/null 2>&1 || true)
   podman network rm -f "${project}_swarm" >/dev/null 2>&1 || true
   rm -rf "$work"
-  trap - EXIT
+  trap restore_neigh EXIT
 done
