@@ -247,7 +247,10 @@ TEST(SwarmRun, TheSameGridWithAvoidanceOffComesCloserThanTheSafeDistance) {
 TEST(SwarmRun, SixtyFourAgentsFormALatticeOverRadioRangeAndTheGraphStaysSparse) {
   // scenarios/formation_lattice64.txtpb: 64 agent processes, links only within 4.5 m.
   const auto dir = fresh_dir("lattice64");
-  const Result r = swarm_run(scenario("formation_lattice64"), dir, 1.0);
+  // Half real time: 64 processes need about 1.5 of the 2 cores at full speed on a good day, and
+  // these shared machines run at half speed on a bad one (RK4 step 463 ns one day, 1.2 us another);
+  // overloaded, the supervisor misses most samples and takes live agents for departed ones.
+  const Result r = swarm_run(scenario("formation_lattice64"), dir, 0.5);
   ASSERT_EQ(r.code, 0) << r.output;
   const records::Summary s = read_summary(dir);
   EXPECT_TRUE(s.converged());
