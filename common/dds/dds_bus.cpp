@@ -190,14 +190,7 @@ struct DdsBus::Impl : public dds::DataReaderListener {
       }
       it = claims.emplace(s.nonce(), HeardClaim{}).first;
     }
-    IdClaim& c = it->second.claim;
-    c.nonce = s.nonce();
-    c.seq = s.seq();
-    c.run_id = s.run_id();
-    c.expected = s.expected();
-    c.id = s.id();
-    c.stage = s.stage();
-    c.flying_s = s.flying_s();
+    it->second.claim = from_idl(s);
     it->second.heard = ++claims_heard;
   }
   struct ClaimListener : public dds::DataReaderListener {
@@ -523,13 +516,7 @@ void DdsBus::publish_claim(const IdClaim& claim) {
   Impl& d = *impl_;
   if (!d.claim_writer) return;
   qswarm_msgs::IdClaim s;
-  s.nonce(claim.nonce);
-  s.seq(claim.seq);
-  s.run_id(claim.run_id);
-  s.expected(claim.expected);
-  s.id(claim.id);
-  s.stage(claim.stage);
-  s.flying_s(claim.flying_s);
+  to_idl(claim, s);
   d.claim_writer->write(&s);
 }
 

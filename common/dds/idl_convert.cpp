@@ -111,4 +111,26 @@ StateMessage from_idl(const qswarm_msgs::AgentState& s) {
   return m;
 }
 
+void to_idl(const IdClaim& c, qswarm_msgs::IdClaim& s) {
+  s.nonce(c.nonce);
+  s.seq(c.seq);
+  s.run_id(c.run_id);
+  s.expected(c.expected);
+  s.id(c.id);
+  s.stage(c.stage);
+  s.flying_s(c.flying_s);
+}
+
+IdClaim from_idl(const qswarm_msgs::IdClaim& s) {
+  IdClaim c;
+  c.nonce = s.nonce();
+  c.seq = s.seq();
+  c.run_id = s.run_id();
+  c.expected = s.expected();
+  c.id = s.id();
+  c.stage = s.stage();
+  c.flying_s = s.flying_s();
+  return c;
+}
+
 }  // namespace qswarm

@@ -2,6 +2,7 @@
 
 #include <cstddef>
 
+#include "common/transport/id_claim.hpp"
 #include "common/transport/state_message.hpp"
 #include "swarm_state.h"
 
@@ -16,5 +17,9 @@ static_assert(kMaxWireEntries + 1 >= kMaxSwarmAgents, "the wire must carry the l
 // wire's bound (never cuts it).
 void to_idl(const StateMessage& m, qswarm_msgs::AgentState& s);
 StateMessage from_idl(const qswarm_msgs::AgentState& s);
+
+// IdClaim <-> its DDS type.
+void to_idl(const IdClaim& c, qswarm_msgs::IdClaim& s);
+IdClaim from_idl(const qswarm_msgs::IdClaim& s);
 
 }  // namespace qswarm
