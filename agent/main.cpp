@@ -21,6 +21,7 @@ constexpr double kMaxSleepS = 0.05;
 
 int main(int argc, char** argv) {
   using namespace qswarm;
+  exit_cleanly_on_uncaught_exceptions("swarm-agent");
   CLI::App app{"swarm-agent: one quadcopter of the swarm, over DDS"};
   AgentFlags f;
   add_agent_options(app, f);

@@ -27,6 +27,7 @@ void on_signal(int) { g_stop = true; }
 
 int main(int argc, char** argv) {
   using namespace qswarm;
+  exit_cleanly_on_uncaught_exceptions("swarm-supervisor");
   CLI::App app{"swarm-supervisor: records a swarm run (telemetry, graph, events, summary)"};
   ProcessOptions opts;
   std::string run_dir;

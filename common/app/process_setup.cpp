@@ -9,6 +9,9 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <cstdlib>
+#include <exception>
+#include <system_error>
 
 namespace qswarm {
 
@@ -53,6 +56,38 @@ std::optional<RunConfig> load_for_process(const char* prog, const ProcessOptions
     std::fprintf(stderr, "%s: --discovery-server (QSWARM_DISCOVERY_SERVER): %s\n", prog, e.what());
     return std::nullopt;
   }
+}
+
+namespace {
+const char* g_prog = "qswarm";
+
+[[noreturn]] void on_terminate() {
+  std::string what = "std::terminate without an exception";
+  if (const std::exception_ptr e = std::current_exception()) {
+    try {
+      std::rethrow_exception(e);
+    } catch (const std::system_error& ex) {
+      what = std::string("uncaught exception: ") + ex.what();
+      const std::error_code c = ex.code();
+      if (c == std::errc::resource_unavailable_try_again || c == std::errc::not_enough_memory)
+        what +=
+            " (out of threads or memory: run fewer agents, or raise the process and thread "
+            "limits)";
+    } catch (const std::exception& ex) {
+      what = std::string("uncaught exception: ") + ex.what();
+    } catch (...) {
+      what = "uncaught exception of an unknown type";
+    }
+  }
+  std::fprintf(stderr, "%s: fatal: %s\n", g_prog, what.c_str());
+  std::fflush(stderr);
+  std::_Exit(1);
+}
+}  // namespace
+
+void exit_cleanly_on_uncaught_exceptions(const char* prog) {
+  g_prog = prog;
+  std::set_terminate(on_terminate);
 }
 
 DdsOptions dds_options(const RunConfig& rc, const std::string& participant_name,

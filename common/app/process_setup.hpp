@@ -29,6 +29,11 @@ struct ProcessOptions {
 };
 void add_process_options(CLI::App& app, ProcessOptions& o);
 
+// An exception that escapes a thread (one of Fast DDS's too: std::system_error when threads or
+// memory run out) ends the process with exit code 1 and one line on stderr that names it, instead
+// of an abort that the launcher can only report as a signal. Call first thing in main.
+void exit_cleanly_on_uncaught_exceptions(const char* prog);
+
 // Loads the scenario with the process's --domain/--seed overrides; on bad input prints
 // "PROG: message" to stderr and returns nothing (the caller exits 2).
 std::optional<RunConfig> load_for_process(const char* prog, const ProcessOptions& o);

@@ -1,0 +1,39 @@
+// An exception escaping a thread of an agent or supervisor (Fast DDS's threads included) ends the
+// process with exit code 1 and a line naming it, not an abort the launcher can only call a signal.
+#include <gtest/gtest.h>
+
+#include <cerrno>
+#include <stdexcept>
+#include <system_error>
+#include <thread>
+
+#include "common/app/process_setup.hpp"
+
+namespace qswarm {
+namespace {
+
+TEST(ProcessSetupDeathTest, AThreadOutOfResourcesExitsOneNamingIt) {
+  GTEST_FLAG_SET(death_test_style, "threadsafe");
+  EXPECT_EXIT(
+      {
+        exit_cleanly_on_uncaught_exceptions("swarm-agent");
+        std::thread([] {
+          throw std::system_error(EAGAIN, std::generic_category(), "thread creation");
+        }).join();
+      },
+      ::testing::ExitedWithCode(1),
+      "swarm-agent: fatal: uncaught exception: thread creation: .*out of threads or memory");
+}
+
+TEST(ProcessSetupDeathTest, AnyOtherEscapedExceptionExitsOneWithItsMessage) {
+  GTEST_FLAG_SET(death_test_style, "threadsafe");
+  EXPECT_EXIT(
+      {
+        exit_cleanly_on_uncaught_exceptions("swarm-supervisor");
+        std::thread([] { throw std::runtime_error("boom"); }).join();
+      },
+      ::testing::ExitedWithCode(1), "swarm-supervisor: fatal: uncaught exception: boom");
+}
+
+}  // namespace
+}  // namespace qswarm
