@@ -54,27 +54,22 @@ std::int64_t wall_now_ns() {
 
 namespace {
 
-// The roster filter (DdsOptions::roster): reads the key, the agent id, straight from the serialized
-// sample (CDR: a 4-byte encapsulation header, then the id as the first field) instead of Fast
-// DDS's SQL filter, which needs the type's description and decodes every sample in full (a 32-agent
-// swarm fell behind real time with it).
-// What a bus's roster filter turned away. The filter finds its bus's tally by the key given as the
-// filter's one parameter; a filter made for a reader elsewhere (a writer filtering for a remote
-// reader) finds none and counts nothing.
+// What a bus's roster filter turned away: the first ids and every sample.
 struct StrangerTally {
   static constexpr std::size_t kMaxIds = 64;
   std::mutex mu;
   std::set<AgentId> ids;
   std::uint64_t samples = 0;
 };
-std::mutex g_tallies_mu;
-std::map<std::string, std::weak_ptr<StrangerTally>> g_tallies;
 
+// The roster filter (DdsOptions::roster): reads the key, the agent id, straight from the serialized
+// sample (CDR: a 4-byte encapsulation header, then the id as the first field) instead of Fast
+// DDS's SQL filter, which needs the type's description and decodes every sample in full (a 32-agent
+// swarm fell behind real time with it).
 class RosterFilter final : public dds::IContentFilter {
  public:
-  RosterFilter(std::vector<std::pair<AgentId, AgentId>> ranges,
-               std::shared_ptr<StrangerTally> tally)
-      : ranges_(std::move(ranges)), tally_(std::move(tally)) {}
+  RosterFilter(std::vector<std::pair<AgentId, AgentId>> ranges, StrangerTally& tally)
+      : ranges_(std::move(ranges)), tally_(tally) {}
   bool evaluate(const SerializedPayload& payload, const FilterSampleInfo&,
                 const GUID_t&) const override {
     if (payload.data == nullptr || payload.length < 8) return false;
@@ -85,36 +80,31 @@ class RosterFilter final : public dds::IContentFilter {
                : AgentId{d[7]} | AgentId{d[6]} << 8 | AgentId{d[5]} << 16 | AgentId{d[4]} << 24;
     for (const auto& [lo, hi] : ranges_)
       if (id >= lo && id <= hi) return true;
-    if (tally_) {
-      std::lock_guard<std::mutex> lock(tally_->mu);
-      ++tally_->samples;
-      if (tally_->ids.size() < StrangerTally::kMaxIds) tally_->ids.insert(id);
-    }
+    std::lock_guard<std::mutex> lock(tally_.mu);
+    ++tally_.samples;
+    if (tally_.ids.size() < StrangerTally::kMaxIds) tally_.ids.insert(id);
     return false;
   }
 
  private:
   std::vector<std::pair<AgentId, AgentId>> ranges_;
-  std::shared_ptr<StrangerTally> tally_;
+  StrangerTally& tally_;
 };
 
 constexpr const char* kRosterFilterClass = "QSWARM_ROSTER";
 
+// One per bus, registered on the bus's own participant (writers do not filter, so it only ever
+// makes the filter of this bus's reader), counting into the bus's tally.
 class RosterFilterFactory final : public dds::IContentFilterFactory {
  public:
+  StrangerTally tally;
   ReturnCode_t create_content_filter(const char*, const char*, const dds::TopicDataType*,
-                                     const char* expression, const ParameterSeq& parameters,
+                                     const char* expression, const ParameterSeq&,
                                      dds::IContentFilter*& filter) override {
     auto ranges = parse_roster_filter(expression ? expression : "");
     if (!ranges) return ReturnCode_t::RETCODE_BAD_PARAMETER;
-    std::shared_ptr<StrangerTally> tally;
-    if (parameters.length() == 1 && parameters[0] != nullptr) {
-      std::lock_guard<std::mutex> lock(g_tallies_mu);
-      if (const auto it = g_tallies.find(parameters[0]); it != g_tallies.end())
-        tally = it->second.lock();
-    }
     delete static_cast<RosterFilter*>(filter);  // an expression update replaces the previous one
-    filter = new RosterFilter(std::move(*ranges), std::move(tally));
+    filter = new RosterFilter(std::move(*ranges), tally);
     return ReturnCode_t::RETCODE_OK;
   }
   ReturnCode_t delete_content_filter(const char*, dds::IContentFilter* filter) override {
@@ -122,8 +112,6 @@ class RosterFilterFactory final : public dds::IContentFilterFactory {
     return ReturnCode_t::RETCODE_OK;
   }
 };
-
-RosterFilterFactory roster_filter_factory;  // outlives every participant
 
 }  // namespace
 
@@ -134,8 +122,7 @@ struct DdsBus::Impl : public dds::DataReaderListener {
   dds::Subscriber* subscriber = nullptr;
   dds::Topic* topic = nullptr;
   dds::ContentFilteredTopic* roster_topic = nullptr;  // DdsOptions::roster
-  std::shared_ptr<StrangerTally> strangers = std::make_shared<StrangerTally>();
-  std::string tally_key;  // this bus's entry in g_tallies
+  RosterFilterFactory roster_factory;                 // outlives the participant (deleted first)
   dds::DataWriter* writer = nullptr;
   dds::DataReader* reader = nullptr;
   dds::TypeSupport type{new qswarm_msgs::AgentStatePubSubType()};
@@ -325,17 +312,9 @@ DdsBus::DdsBus(const DdsOptions& opts) : impl_(std::make_unique<Impl>()) {
       eprosima::fastrtps::rtps::PREALLOCATED_WITH_REALLOC_MEMORY_MODE;
   dds::TopicDescription* read_from = d.topic;
   if (!opts.roster.empty()) {
-    d.participant->register_content_filter_factory(kRosterFilterClass, &roster_filter_factory);
-    char key[32];
-    std::snprintf(key, sizeof key, "%p", static_cast<void*>(&d));
-    d.tally_key = key;
-    {
-      std::lock_guard<std::mutex> lock(g_tallies_mu);
-      g_tallies[d.tally_key] = d.strangers;
-    }
-    d.roster_topic = d.participant->create_contentfilteredtopic("qswarm/agent_state/roster",
-                                                                d.topic, roster_filter(opts.roster),
-                                                                {d.tally_key}, kRosterFilterClass);
+    d.participant->register_content_filter_factory(kRosterFilterClass, &d.roster_factory);
+    d.roster_topic = d.participant->create_contentfilteredtopic(
+        "qswarm/agent_state/roster", d.topic, roster_filter(opts.roster), {}, kRosterFilterClass);
     if (!d.roster_topic) throw std::runtime_error("dds: cannot create the roster filter");
     read_from = d.roster_topic;
   }
@@ -412,10 +391,6 @@ DdsBus::~DdsBus() {
     d.participant->delete_contained_entities();
     dds::DomainParticipantFactory::get_instance()->delete_participant(d.participant);
   }
-  if (!d.tally_key.empty()) {
-    std::lock_guard<std::mutex> lock(g_tallies_mu);
-    g_tallies.erase(d.tally_key);
-  }
 }
 
 void DdsBus::publish(const StateMessage& msg) {
@@ -444,14 +419,16 @@ BusCounters DdsBus::counters() const {
     std::lock_guard<std::mutex> lock(impl_->mu);
     c = impl_->gate.counters();
   }
-  std::lock_guard<std::mutex> lock(impl_->strangers->mu);
-  c.dropped += impl_->strangers->samples;
+  StrangerTally& t = impl_->roster_factory.tally;
+  std::lock_guard<std::mutex> lock(t.mu);
+  c.dropped += t.samples;
   return c;
 }
 
 std::set<AgentId> DdsBus::strangers() const {
-  std::lock_guard<std::mutex> lock(impl_->strangers->mu);
-  return impl_->strangers->ids;
+  StrangerTally& t = impl_->roster_factory.tally;
+  std::lock_guard<std::mutex> lock(t.mu);
+  return t.ids;
 }
 
 std::set<std::uint64_t> DdsBus::foreign_runs() const {

@@ -53,15 +53,15 @@ std::string IdClaimer::status(double now_s, int matched_writers) const {
 
 IdClaimer::Step IdClaimer::step(double now_s, const std::vector<IdClaim>& heard,
                                 int matched_writers) {
+  std::set<std::uint64_t> reported;
   for (const IdClaim& c : heard) {
+    reported.insert(c.nonce);
     if (c.nonce == mine_.nonce) continue;
     auto [it, fresh] = seen_.try_emplace(c.nonce);
     if (fresh || it->second.seq != c.seq) it->second.heard_s = now_s;
     it->second.seq = c.seq;
     it->second.claim = c;
   }
-  std::set<std::uint64_t> reported;
-  for (const IdClaim& c : heard) reported.insert(c.nonce);
   std::vector<std::uint64_t> view{mine_.nonce};
   std::map<std::uint64_t, IdClaim> now_live;
   for (auto it = seen_.begin(); it != seen_.end();) {
