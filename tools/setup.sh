@@ -2,7 +2,8 @@
 # Installs what the project needs from Debian 12's archive and configures + builds it.
 # Usage: tools/setup.sh [build-dir]     (idempotent; skips apt when everything is present)
 # Environment: QSWARM_EXTRA_PACKAGES (more Debian packages, e.g. CI's linters),
-#              QSWARM_WERROR=ON (warnings are errors, as in CI).
+#              QSWARM_WERROR=ON (warnings are errors, as in CI),
+#              QSWARM_BUILD_TYPE (default RelWithDebInfo; CI builds and tests Release).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 BUILD_DIR="${1:-build}"
@@ -28,6 +29,6 @@ if ((${#missing[@]})); then
   DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -q --no-install-recommends "${missing[@]}"
 fi
 
-cmake -S . -B "$BUILD_DIR" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+cmake -S . -B "$BUILD_DIR" -G Ninja -DCMAKE_BUILD_TYPE="${QSWARM_BUILD_TYPE:-RelWithDebInfo}" \
   -DQSWARM_WERROR="${QSWARM_WERROR:-OFF}"
 cmake --build "$BUILD_DIR" --parallel "$(nproc)"

@@ -1,0 +1,108 @@
+// Peers that leave are forgotten at once, and no participant ever runs a lease check on a peer.
+//
+// Fast DDS 2.9.1 checks each remote participant's lease on its timer thread and removes a remote
+// that leaves (its DISPOSE announcement) on a receive thread. When a lease check is already under
+// way as the same remote is removed, it wakes on a cleared proxy and PDP.cpp:1140 asserts
+// (Debian's build keeps asserts): the participant that stays aborts. That was "agent N killed by
+// signal Aborted" at the teardown of 64-agent runs (the core: the assert on the timer thread,
+// PDP::remove_remote_participant on a receive thread, the agent's own teardown on the main
+// thread). DdsBus participants therefore announce an infinite lease: no lease check is ever
+// scheduled, and a peer that leaves is still removed at once by its DISPOSE.
+#include <fastdds/dds/domain/DomainParticipant.hpp>
+#include <fastdds/dds/domain/DomainParticipantFactory.hpp>
+#include <fastdds/dds/domain/DomainParticipantListener.hpp>
+#include <fastdds/dds/domain/qos/DomainParticipantQos.hpp>
+#include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
+#include <gtest/gtest.h>
+
+#include <map>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include "common/dds/dds_bus.hpp"
+#include "tests/swarm/domain_lease.hpp"
+#include "tests/swarm/harness.hpp"
+
+namespace qswarm {
+namespace {
+
+namespace dds = eprosima::fastdds::dds;
+
+DdsOptions churn_options(const char* name) {
+  DdsOptions o;
+  o.domain_id = static_cast<std::uint32_t>(test::test_domain().domain());
+  o.max_agents = 64;
+  o.run_id = 0xC4;
+  o.participant_name = name;
+  return o;
+}
+
+// A bare participant on loopback that notes the lease every discovered participant announces.
+class LeaseWatcher : public dds::DomainParticipantListener {
+ public:
+  explicit LeaseWatcher(std::uint32_t domain) {
+    dds::DomainParticipantQos q;
+    q.name("lease-watcher");
+    q.transport().use_builtin_transports = false;
+    auto udp = std::make_shared<eprosima::fastdds::rtps::UDPv4TransportDescriptor>();
+    udp->interfaceWhiteList.push_back("127.0.0.1");
+    q.transport().user_transports.push_back(udp);
+    participant_ =
+        dds::DomainParticipantFactory::get_instance()->create_participant(domain, q, this);
+  }
+  ~LeaseWatcher() override {
+    if (participant_) dds::DomainParticipantFactory::get_instance()->delete_participant(participant_);
+  }
+  LeaseWatcher(const LeaseWatcher&) = delete;
+  LeaseWatcher& operator=(const LeaseWatcher&) = delete;
+  bool ok() const { return participant_ != nullptr; }
+  void on_participant_discovery(dds::DomainParticipant*,
+                                eprosima::fastrtps::rtps::ParticipantDiscoveryInfo&& info) override {
+    if (info.status != eprosima::fastrtps::rtps::ParticipantDiscoveryInfo::DISCOVERED_PARTICIPANT)
+      return;
+    std::lock_guard<std::mutex> lock(mu_);
+    leases_[info.info.m_participantName.to_string()] = info.info.m_leaseDuration;
+  }
+  std::map<std::string, eprosima::fastrtps::Duration_t> leases() const {
+    std::lock_guard<std::mutex> lock(mu_);
+    return leases_;
+  }
+
+ private:
+  dds::DomainParticipant* participant_ = nullptr;
+  mutable std::mutex mu_;
+  std::map<std::string, eprosima::fastrtps::Duration_t> leases_;
+};
+
+TEST(ParticipantChurn, EveryParticipantAnnouncesAnInfiniteLeaseSoNoPeerChecksIt) {
+  LeaseWatcher watcher(static_cast<std::uint32_t>(test::test_domain().domain()));
+  ASSERT_TRUE(watcher.ok());
+  DdsBus bus(churn_options("an-agent"));
+  ASSERT_TRUE(test::wait_for([&] { return watcher.leases().count("an-agent") == 1; }, 30.0));
+  EXPECT_EQ(watcher.leases().at("an-agent"), eprosima::fastrtps::c_TimeInfinite);
+}
+
+TEST(ParticipantChurn, PeersLeavingInBurstsAreForgottenAtOnceAndTheOneThatStaysLives) {
+  DdsBus stayer(churn_options("stayer"));
+  const int own = 1;  // the stayer's writer matches its own reader
+  ASSERT_TRUE(test::wait_for([&] { return stayer.matched_readers() == own; }, 30.0));
+  const DdsOptions crowd_opts = churn_options("crowd");
+  constexpr int kRounds = 6;
+  constexpr int kCrowd = 16;
+  for (int round = 0; round < kRounds; ++round) {
+    std::vector<std::unique_ptr<DdsBus>> crowd;
+    crowd.reserve(kCrowd);
+    for (int k = 0; k < kCrowd; ++k) crowd.push_back(std::make_unique<DdsBus>(crowd_opts));
+    ASSERT_TRUE(test::wait_for([&] { return stayer.matched_readers() == own + kCrowd; }, 30.0))
+        << "round " << round << ": " << stayer.matched_readers() - own << " of " << kCrowd;
+    crowd.clear();  // kCrowd DISPOSE announcements at once
+    // No lease is left to expire: only the DISPOSE can remove them.
+    ASSERT_TRUE(test::wait_for([&] { return stayer.matched_readers() == own; }, 30.0))
+        << "round " << round << ": " << stayer.matched_readers() - own << " readers left";
+  }
+}
+
+}  // namespace
+}  // namespace qswarm
