@@ -252,9 +252,21 @@ DdsBus::DdsBus(const DdsOptions& opts) : impl_(std::make_unique<Impl>()) {
   }
   // Many participants on one host: allow more port retries than the default 100.
   pqos.wire_protocol().builtin.mutation_tries = 400;
+  // Participants announce an infinite lease, so no peer ever runs a lease check on them. Fast DDS
+  // 2.9.1 races a peer's lease check (timer thread) against that peer's removal when it leaves
+  // (receive thread): the check wakes on a cleared proxy and PDP.cpp:1140 asserts, and Debian's
+  // build keeps asserts, so a participant that stays aborted (seen at 64-agent teardowns). The
+  // agents judge liveness themselves (the neighbour timeout); a participant that leaves is still
+  // removed at once by its DISPOSE, and one that crashes stays a silent proxy until the process
+  // ends. Announcements every second, not every 3 s: after the first five, a participant whose
+  // announcement was lost (a full UDP receive buffer while many processes start) is heard a
+  // period later; the supervisor missed an agent's first 2.7 s that way.
+  auto& discovery = pqos.wire_protocol().builtin.discovery_config;
+  discovery.leaseDuration = eprosima::fastrtps::c_TimeInfinite;
+  discovery.leaseDuration_announcementperiod = eprosima::fastrtps::Duration_t(1, 0);
   if (!opts.discovery_server.empty()) {
     const auto [ip, port] = resolve_discovery_server(opts.discovery_server);
-    auto& disc = pqos.wire_protocol().builtin.discovery_config;
+    auto& disc = discovery;
     disc.discoveryProtocol = eprosima::fastrtps::rtps::DiscoveryProtocol_t::CLIENT;
     rtps::RemoteServerAttributes server;
     rtps::get_server_client_default_guidPrefix(0, server.guidPrefix);

@@ -39,6 +39,9 @@ DiscoveryServer::DiscoveryServer(std::uint32_t domain_id, const std::string& lis
   pqos.transport().user_transports.push_back(std::make_shared<rtps::UDPv4TransportDescriptor>());
   auto& disc = pqos.wire_protocol().builtin.discovery_config;
   disc.discoveryProtocol = eprosima::fastrtps::rtps::DiscoveryProtocol_t::SERVER;
+  // An infinite lease, as every DdsBus participant announces: no client runs a lease check on the
+  // server, the check that races the server's removal when it leaves (dds_bus.cpp says more).
+  disc.leaseDuration = eprosima::fastrtps::c_TimeInfinite;
   rtps::get_server_client_default_guidPrefix(0, pqos.wire_protocol().prefix);
   eprosima::fastrtps::rtps::Locator_t loc;
   eprosima::fastrtps::rtps::IPLocator::setIPv4(loc, address_);

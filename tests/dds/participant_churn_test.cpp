@@ -8,12 +8,12 @@
 // PDP::remove_remote_participant on a receive thread, the agent's own teardown on the main
 // thread). DdsBus participants therefore announce an infinite lease: no lease check is ever
 // scheduled, and a peer that leaves is still removed at once by its DISPOSE.
+#include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
+#include <gtest/gtest.h>
 #include <fastdds/dds/domain/DomainParticipant.hpp>
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
 #include <fastdds/dds/domain/DomainParticipantListener.hpp>
 #include <fastdds/dds/domain/qos/DomainParticipantQos.hpp>
-#include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
-#include <gtest/gtest.h>
 
 #include <map>
 #include <memory>
@@ -53,13 +53,14 @@ class LeaseWatcher : public dds::DomainParticipantListener {
         dds::DomainParticipantFactory::get_instance()->create_participant(domain, q, this);
   }
   ~LeaseWatcher() override {
-    if (participant_) dds::DomainParticipantFactory::get_instance()->delete_participant(participant_);
+    if (participant_)
+      dds::DomainParticipantFactory::get_instance()->delete_participant(participant_);
   }
   LeaseWatcher(const LeaseWatcher&) = delete;
   LeaseWatcher& operator=(const LeaseWatcher&) = delete;
   bool ok() const { return participant_ != nullptr; }
-  void on_participant_discovery(dds::DomainParticipant*,
-                                eprosima::fastrtps::rtps::ParticipantDiscoveryInfo&& info) override {
+  void on_participant_discovery(
+      dds::DomainParticipant*, eprosima::fastrtps::rtps::ParticipantDiscoveryInfo&& info) override {
     if (info.status != eprosima::fastrtps::rtps::ParticipantDiscoveryInfo::DISCOVERED_PARTICIPANT)
       return;
     std::lock_guard<std::mutex> lock(mu_);
