@@ -100,7 +100,7 @@ int main(int argc, char** argv) {
       write_stats(f.run_dir + "/" + name + ".stats", loop, bus.counters(), clock.now_s());
     return exit_code;
   } catch (const std::exception& e) {
-    log->error("fatal: {}", e.what());
+    log->error("fatal: {}", describe_exception(e));
     return 1;
   }
 }

@@ -136,8 +136,9 @@ int main(int argc, char** argv) {
     }
     return rec.converged() ? 0 : 1;
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "swarm-supervisor: %s\n", e.what());
-    logger->error("fatal: {}", e.what());
+    const std::string what = describe_exception(e);
+    std::fprintf(stderr, "swarm-supervisor: %s\n", what.c_str());
+    logger->error("fatal: {}", what);
     return 1;
   }
 }

@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
+#include <new>
 #include <system_error>
 
 namespace qswarm {
@@ -58,6 +59,18 @@ std::optional<RunConfig> load_for_process(const char* prog, const ProcessOptions
   }
 }
 
+std::string describe_exception(const std::exception& e) {
+  std::string what = e.what();
+  const auto* sys = dynamic_cast<const std::system_error*>(&e);
+  const bool out_of_resources =
+      dynamic_cast<const std::bad_alloc*>(&e) != nullptr ||
+      (sys != nullptr && (sys->code() == std::errc::resource_unavailable_try_again ||
+                          sys->code() == std::errc::not_enough_memory));
+  if (out_of_resources)
+    what += " (out of threads or memory: run fewer agents, or raise the process and thread limits)";
+  return what;
+}
+
 namespace {
 const char* g_prog = "qswarm";
 
@@ -66,15 +79,8 @@ const char* g_prog = "qswarm";
   if (const std::exception_ptr e = std::current_exception()) {
     try {
       std::rethrow_exception(e);
-    } catch (const std::system_error& ex) {
-      what = std::string("uncaught exception: ") + ex.what();
-      const std::error_code c = ex.code();
-      if (c == std::errc::resource_unavailable_try_again || c == std::errc::not_enough_memory)
-        what +=
-            " (out of threads or memory: run fewer agents, or raise the process and thread "
-            "limits)";
     } catch (const std::exception& ex) {
-      what = std::string("uncaught exception: ") + ex.what();
+      what = "uncaught exception: " + describe_exception(ex);
     } catch (...) {
       what = "uncaught exception of an unknown type";
     }

@@ -2,6 +2,7 @@
 
 #include <spdlog/logger.h>
 
+#include <exception>
 #include <memory>
 #include <optional>
 #include <string>
@@ -33,6 +34,10 @@ void add_process_options(CLI::App& app, ProcessOptions& o);
 // memory run out) ends the process with exit code 1 and one line on stderr that names it, instead
 // of an abort that the launcher can only report as a signal. Call first thing in main.
 void exit_cleanly_on_uncaught_exceptions(const char* prog);
+
+// An exception's what(), with a hint when it means the process ran out of threads or memory
+// (std::system_error EAGAIN or ENOMEM, std::bad_alloc): what a main's last catch reports.
+std::string describe_exception(const std::exception& e);
 
 // Loads the scenario with the process's --domain/--seed overrides; on bad input prints
 // "PROG: message" to stderr and returns nothing (the caller exits 2).

@@ -3,7 +3,9 @@
 #include <gtest/gtest.h>
 
 #include <cerrno>
+#include <new>
 #include <stdexcept>
+#include <string>
 #include <system_error>
 #include <thread>
 
@@ -33,6 +35,20 @@ TEST(ProcessSetupDeathTest, AnyOtherEscapedExceptionExitsOneWithItsMessage) {
         std::thread([] { throw std::runtime_error("boom"); }).join();
       },
       ::testing::ExitedWithCode(1), "swarm-supervisor: fatal: uncaught exception: boom");
+}
+
+TEST(ProcessSetup, AMainsLastCatchNamesRunningOutOfThreadsOrMemory) {
+  const std::string hint = "out of threads or memory";
+  EXPECT_NE(
+      describe_exception(std::system_error(EAGAIN, std::generic_category(), "clone")).find(hint),
+      std::string::npos);
+  EXPECT_NE(describe_exception(std::system_error(ENOMEM, std::generic_category())).find(hint),
+            std::string::npos);
+  EXPECT_NE(describe_exception(std::bad_alloc()).find(hint), std::string::npos);
+  EXPECT_EQ(describe_exception(std::system_error(EINVAL, std::generic_category(), "join")),
+            "join: Invalid argument");
+  EXPECT_EQ(describe_exception(std::runtime_error("dds: cannot create the state topic")),
+            "dds: cannot create the state topic");
 }
 
 }  // namespace

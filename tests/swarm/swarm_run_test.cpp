@@ -8,6 +8,8 @@
 #include <fstream>
 #include <map>
 #include <sstream>
+#include <string>
+#include <system_error>
 
 #include "common/core/graph.hpp"
 #include "common/dds/dds_bus.hpp"
@@ -601,6 +603,59 @@ TEST(Record, AFullFilesystemEndsTheRunNonZeroNamingTheFileNeverConverged) {
   EXPECT_EQ(r.code, 3) << r.output;  // the record could not be written completely
   EXPECT_NE(r.output.find("could not write"), std::string::npos) << r.output;
   EXPECT_EQ(r.output.find("swarm run: converged"), std::string::npos) << r.output;
+}
+
+// The pids controller's root (cgroup v1 or v2) where this process may make a cgroup, or empty.
+std::filesystem::path pids_cgroup_root() {
+  if (std::filesystem::exists("/sys/fs/cgroup/pids/cgroup.procs")) return "/sys/fs/cgroup/pids";
+  std::ifstream controllers("/sys/fs/cgroup/cgroup.controllers");
+  std::string line;
+  std::getline(controllers, line);
+  if (line.find("pids") != std::string::npos) return "/sys/fs/cgroup";
+  return {};
+}
+
+TEST(Record, AThreadLimitEndsTheRunNamingItWithNoAbortAndNoOrphan) {
+  // A task limit (a cgroup's pids.max, what a container or a shared host sets) below what six
+  // agents need: a launcher, a supervisor and about 7 threads per agent. Agents that cannot make
+  // their threads end with exit 1 and say why; the run is not converged, no child is reported
+  // killed by a signal, and nothing is left running in the cgroup.
+  if (geteuid() != 0) GTEST_SKIP() << "needs root to make a cgroup with a task limit";
+  const std::filesystem::path root = pids_cgroup_root();
+  if (root.empty()) GTEST_SKIP() << "no pids cgroup controller here";
+  const std::filesystem::path cg = root / ("qswarm-test-" + std::to_string(getpid()));
+  std::error_code ec;
+  std::filesystem::create_directory(cg, ec);
+  if (ec) GTEST_SKIP() << "cannot make a cgroup under " << root << ": " << ec.message();
+  std::ofstream(cg / "pids.max") << 30 << std::flush;
+  const auto dir = fresh_dir("thread-limit");
+  std::filesystem::create_directories(dir);
+  // The shell joins the cgroup, then becomes the launcher: every child is born inside.
+  const Result r =
+      run({"/bin/sh", "-c", "echo $$ > \"$0\" && exec \"$@\"", (cg / "cgroup.procs").string(),
+           bin("swarm"), "run", scenario("faults_six"), "--out", (dir / "run").string(), "--domain",
+           test_domain().str(), "--time-scale", "4", "--quiet"},
+          180.0);
+  const bool emptied = wait_for([&] { return read_file(cg / "cgroup.procs").empty(); }, 10.0);
+  const std::string left = read_file(cg / "cgroup.procs");
+  const std::string events = read_file(cg / "pids.events");  // v1 and v2: "max N" refusals
+  std::filesystem::remove(cg, ec);
+  EXPECT_TRUE(emptied) << "processes left in the cgroup: " << left;
+  EXPECT_NE(events.find("max "), std::string::npos);
+  EXPECT_NE(events, "max 0\n") << "the limit never bit";
+  EXPECT_EQ(r.code, 1) << r.output;
+  EXPECT_EQ(r.output.find("signal"), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("swarm run: converged"), std::string::npos) << r.output;
+  // Who ran out says so: an agent's (or the supervisor's) own line, or the launcher's fork.
+  std::string said = r.output;
+  for (const auto& f : std::filesystem::directory_iterator(dir / "run"))
+    if (f.path().extension() == ".out") said += read_file(f.path());
+  EXPECT_TRUE(said.find("out of threads or memory") != std::string::npos ||
+              said.find("fork: Resource temporarily unavailable") != std::string::npos)
+      << said;
+  const records::Summary s = read_summary(dir / "run");
+  EXPECT_FALSE(s.converged());
+  EXPECT_FALSE(s.end_reason().empty());
 }
 
 }  // namespace
