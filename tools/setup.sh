@@ -29,6 +29,8 @@ if ((${#missing[@]})); then
   DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -q --no-install-recommends "${missing[@]}"
 fi
 
+# Tests and benchmarks on explicitly: a build directory configured earlier with them off (the
+# Release product build CI used to make in build-release/) keeps that in its cache otherwise.
 cmake -S . -B "$BUILD_DIR" -G Ninja -DCMAKE_BUILD_TYPE="${QSWARM_BUILD_TYPE:-RelWithDebInfo}" \
-  -DQSWARM_WERROR="${QSWARM_WERROR:-OFF}"
+  -DQSWARM_WERROR="${QSWARM_WERROR:-OFF}" -DQSWARM_BUILD_TESTS=ON -DQSWARM_BUILD_BENCH=ON
 cmake --build "$BUILD_DIR" --parallel "$(nproc)"

@@ -266,15 +266,14 @@ DdsBus::DdsBus(const DdsOptions& opts) : impl_(std::make_unique<Impl>()) {
   discovery.leaseDuration_announcementperiod = eprosima::fastrtps::Duration_t(1, 0);
   if (!opts.discovery_server.empty()) {
     const auto [ip, port] = resolve_discovery_server(opts.discovery_server);
-    auto& disc = discovery;
-    disc.discoveryProtocol = eprosima::fastrtps::rtps::DiscoveryProtocol_t::CLIENT;
+    discovery.discoveryProtocol = eprosima::fastrtps::rtps::DiscoveryProtocol_t::CLIENT;
     rtps::RemoteServerAttributes server;
     rtps::get_server_client_default_guidPrefix(0, server.guidPrefix);
     eprosima::fastrtps::rtps::Locator_t loc;
     eprosima::fastrtps::rtps::IPLocator::setIPv4(loc, ip);
     loc.port = port;
     server.metatrafficUnicastLocatorList.push_back(loc);
-    disc.m_DiscoveryServers.push_back(server);
+    discovery.m_DiscoveryServers.push_back(server);
   }
   d.participant =
       dds::DomainParticipantFactory::get_instance()->create_participant(opts.domain_id, pqos);
