@@ -49,6 +49,7 @@ std::string as_json(const RunConfig& rc, const InitialGraph& g, double tau) {
   ins.set_avoidance(rc.avoidance.enabled);
   ins.set_safe_distance_m(rc.avoidance.safe_distance_m);
   for (const AgentId id : rc.held_agents()) ins.add_held_agents(id);
+  *ins.mutable_resolved() = rc.resolved;
   return to_json(ins);
 }
 
