@@ -8,9 +8,9 @@
 #include <csignal>
 #include <cstdlib>
 
-#include "agent/claim.hpp"
 #include "agent/options.hpp"
 #include "agent/stats.hpp"
+#include "common/claim/claim_runner.hpp"
 
 namespace {
 std::atomic<bool> g_stop{false};
@@ -49,7 +49,10 @@ int main(int argc, char** argv) {
     DdsBus bus(dopt);
     std::optional<IdClaimRunner> claim;
     if (claiming) {
-      claim.emplace(bus, *rc, id, f.claim_timeout_s, clock);
+      const std::set<AgentId> ids = rc->ids();
+      claim.emplace(bus, std::vector<AgentId>(ids.begin(), ids.end()), rc->run_id, id,
+                    IdClaimer::Config::for_swarm(rc->agents.size(), f.claim_timeout_s),
+                    random_nonce(), clock);
       std::string why;
       const std::optional<AgentId> taken = claim->acquire(
           g_stop, why,

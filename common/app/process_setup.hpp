@@ -8,7 +8,7 @@
 #include <string>
 
 #include "common/dds/dds_bus.hpp"
-#include "common/runtime/scenario.hpp"
+#include "common/scenario/scenario.hpp"
 
 namespace CLI {
 class App;

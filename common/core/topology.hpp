@@ -7,9 +7,9 @@
 #include <utility>
 #include <vector>
 
-namespace qswarm {
+#include "common/core/agent.hpp"
 
-using AgentId = std::uint32_t;
+namespace qswarm {
 
 // How an edge's weight follows from the distance between its two agents' states.
 enum class WeightPolicy {

@@ -148,37 +148,14 @@ struct DdsBus::Impl : public dds::DataReaderListener {
   dds::Topic* claim_topic = nullptr;
   dds::DataWriter* claim_writer = nullptr;
   dds::DataReader* claim_reader = nullptr;
-  mutable std::mutex claims_mu;
-  // The latest claim of each replica heard, bounded by max_claims: a new nonce arriving when it is
-  // full evicts the one heard longest ago. The topic has no key, so DDS keeps no state per nonce
-  // either: nonces a stranger flooded once, or replicas that restarted, are gone once enough newer
-  // ones are heard, and a live replica evicted comes back with its next claim.
-  struct HeardClaim {
-    IdClaim claim;
-    std::uint64_t heard = 0;  // claims_heard when this nonce was last heard: the LRU order
-  };
-  std::map<std::uint64_t, HeardClaim> claims;
-  std::uint64_t claims_heard = 0;
-  std::uint64_t claims_evicted = 0;
-  std::size_t max_claims = 0;
+  // The topic has no key, so DDS keeps no state per nonce either: the inbox bounds what is kept.
+  std::optional<ClaimInbox> claims;
   void hear_claim(const qswarm_msgs::IdClaim& s) {
-    std::lock_guard<std::mutex> lock(claims_mu);
-    auto it = claims.find(s.nonce());
-    if (it == claims.end()) {
-      if (claims.size() >= max_claims) {
-        claims.erase(std::min_element(
-            claims.begin(), claims.end(),
-            [](const auto& a, const auto& b) { return a.second.heard < b.second.heard; }));
-        if (claims_evicted++ == 0)
-          spdlog::warn(
-              "id claims: more than {} replicas heard; the one heard longest ago is "
-              "forgotten for each new one (further evictions are counted, not logged)",
-              max_claims);
-      }
-      it = claims.emplace(s.nonce(), HeardClaim{}).first;
-    }
-    it->second.claim = from_idl(s);
-    it->second.heard = ++claims_heard;
+    if (claims->hear(from_idl(s)))
+      spdlog::warn(
+          "id claims: more than {} replicas heard; the one heard longest ago is forgotten for "
+          "each new one (further evictions are counted, not logged)",
+          claim_capacity(static_cast<std::size_t>(opts.max_agents)));
   }
   struct ClaimListener : public dds::DataReaderListener {
     Impl* d = nullptr;
@@ -186,8 +163,7 @@ struct DdsBus::Impl : public dds::DataReaderListener {
       qswarm_msgs::IdClaim s;
       dds::SampleInfo info;
       while (r->take_next_sample(&s, &info) == ReturnCode_t::RETCODE_OK) {
-        if (!info.valid_data || s.run_id() != d->opts.run_id) continue;
-        d->hear_claim(s);
+        if (info.valid_data) d->hear_claim(s);
       }
     }
   } claim_listener;
@@ -350,11 +326,12 @@ DdsBus::DdsBus(const DdsOptions& opts) : impl_(std::make_unique<Impl>()) {
     cr.data_sharing().off();
     // One instance (the topic has no key): a queue of the latest claims of every writer, taken as
     // they arrive; the newest replace the oldest when a burst overflows it.
-    d.max_claims = 2 * static_cast<std::size_t>(opts.max_agents) + 16;
-    cr.history().depth = static_cast<std::int32_t>(d.max_claims);
+    const std::size_t capacity = claim_capacity(static_cast<std::size_t>(opts.max_agents));
+    d.claims.emplace(opts.run_id, capacity);
+    cr.history().depth = static_cast<std::int32_t>(capacity);
     cr.resource_limits().max_instances = 1;
-    cr.resource_limits().max_samples_per_instance = static_cast<std::int32_t>(d.max_claims);
-    cr.resource_limits().max_samples = static_cast<std::int32_t>(d.max_claims);
+    cr.resource_limits().max_samples_per_instance = static_cast<std::int32_t>(capacity);
+    cr.resource_limits().max_samples = static_cast<std::int32_t>(capacity);
     d.claim_listener.d = &d;
     d.claim_reader = d.subscriber->create_datareader(d.claim_topic, cr, &d.claim_listener);
     if (!d.claim_writer || !d.claim_reader)
@@ -516,11 +493,7 @@ int DdsBus::claim_writers_matched() const {
 }
 
 std::vector<IdClaim> DdsBus::claims() const {
-  std::lock_guard<std::mutex> lock(impl_->claims_mu);
-  std::vector<IdClaim> out;
-  out.reserve(impl_->claims.size());
-  for (const auto& [nonce, c] : impl_->claims) out.push_back(c.claim);
-  return out;
+  return impl_->claims ? impl_->claims->claims() : std::vector<IdClaim>{};
 }
 
 int DdsBus::matched_readers() const { return impl_->writer_listener.matched; }

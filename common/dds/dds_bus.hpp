@@ -8,7 +8,7 @@
 #include <utility>
 #include <vector>
 
-#include "common/transport/id_claim.hpp"
+#include "common/claim/claim_bus.hpp"
 #include "common/transport/neighbor_bus.hpp"
 
 namespace qswarm {
@@ -57,7 +57,7 @@ std::optional<std::vector<std::pair<AgentId, AgentId>>> parse_roster_filter(
 // "qswarm/agent_state", a keep-last-1 writer and reader. Incoming samples are checked in the
 // listener through the SampleGate: bad ones are dropped, counted and logged once per peer;
 // nothing throws out of it.
-class DdsBus final : public NeighborBus {
+class DdsBus final : public NeighborBus, public ClaimBus {
  public:
   explicit DdsBus(const DdsOptions& opts);
   ~DdsBus() override;
@@ -79,10 +79,10 @@ class DdsBus final : public NeighborBus {
   std::set<AgentId> strangers() const;
   // The id-claim topic (DdsOptions::id_claims): announce this replica's claim, and the latest
   // claim of every replica heard (a bounded number of them: strangers cannot grow it).
-  void publish_claim(const IdClaim& claim);
-  std::vector<IdClaim> claims() const;
+  void publish_claim(const IdClaim& claim) override;
+  std::vector<IdClaim> claims() const override;
   // Claim writers matched to this participant's claim reader (its own included).
-  int claim_writers_matched() const;
+  int claim_writers_matched() const override;
 
   struct Impl;
 

@@ -30,7 +30,7 @@ void to_idl(const StateMessage& m, qswarm_msgs::AgentState& s) {
   s.incarnation(m.incarnation);
   s.run_id(m.run_id);
   s.mode(static_cast<uint8_t>(m.mode));
-  s.phase(m.phase);
+  s.phase(static_cast<std::uint8_t>(m.phase));
   s.consensus(arr(m.view.q));
   s.initial(arr(m.view.q0));
   s.total_weight(m.view.total_weight);
@@ -41,11 +41,11 @@ void to_idl(const StateMessage& m, qswarm_msgs::AgentState& s) {
   s.received(m.received);
   s.dropped(m.dropped);
   s.overruns(m.overruns);
-  s.fault_loss(m.fault_loss);
-  s.fault_burst(m.fault_burst);
-  s.fault_cut(m.fault_cut);
-  s.fault_partition(m.fault_partition);
-  s.fault_delayed(m.fault_delayed);
+  s.faults().loss(m.faults.loss);
+  s.faults().burst(m.faults.burst);
+  s.faults().cut(m.faults.cut);
+  s.faults().partition(m.faults.partition);
+  s.faults().delayed(m.faults.delayed);
   const auto put_links = [](const std::vector<std::pair<AgentId, double>>& in,
                             std::vector<qswarm_msgs::LinkEntry>& out) {
     out.clear();
@@ -86,7 +86,7 @@ StateMessage from_idl(const qswarm_msgs::AgentState& s) {
   m.incarnation = s.incarnation();
   m.run_id = s.run_id();
   m.mode = static_cast<AgentMode>(s.mode());
-  m.phase = s.phase();
+  m.phase = static_cast<Phase>(s.phase());
   m.view.q = vec(s.consensus());
   m.view.q0 = vec(s.initial());
   m.view.total_weight = s.total_weight();
@@ -98,11 +98,8 @@ StateMessage from_idl(const qswarm_msgs::AgentState& s) {
   m.received = s.received();
   m.dropped = s.dropped();
   m.overruns = s.overruns();
-  m.fault_loss = s.fault_loss();
-  m.fault_burst = s.fault_burst();
-  m.fault_cut = s.fault_cut();
-  m.fault_partition = s.fault_partition();
-  m.fault_delayed = s.fault_delayed();
+  m.faults = {s.faults().loss(), s.faults().burst(), s.faults().cut(), s.faults().partition(),
+              s.faults().delayed()};
   for (const auto& e : s.links()) m.links.emplace_back(e.peer(), e.weight());
   for (const auto& e : s.initial_links()) m.initial_links.emplace_back(e.peer(), e.weight());
   for (const auto& e : s.copies()) m.view.copies.push_back({e.peer(), vec(e.flow()), 0.0, false});

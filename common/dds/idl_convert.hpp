@@ -2,7 +2,7 @@
 
 #include <cstddef>
 
-#include "common/transport/id_claim.hpp"
+#include "common/claim/id_claim.hpp"
 #include "common/transport/state_message.hpp"
 #include "swarm_state.h"
 

@@ -3,7 +3,7 @@
 #include <vector>
 
 #include "common/record/presence.hpp"
-#include "common/runtime/fault_plan.hpp"
+#include "common/scenario/fault_plan.hpp"
 #include "proto/records.pb.h"
 
 namespace qswarm {

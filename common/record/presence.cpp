@@ -17,14 +17,14 @@ Presence::Change Presence::on_sample(const StateMessage& m, double now_s) {
     a.seen = true;
     a.first = m;
     change = Change::kJoin;
-  } else if (!a.present && m.phase != kStopping) {
+  } else if (!a.present && m.phase != Phase::kStopping) {
     change = Change::kRejoin;
   }
   if (a.samples > 0 && m.incarnation == a.last.incarnation && m.seq > a.last.seq + 1) {
     a.gaps += m.seq - a.last.seq - 1;
   }
-  if (m.phase == kStopping && a.present) change = Change::kDepart;
-  a.present = m.phase != kStopping;
+  if (m.phase == Phase::kStopping && a.present) change = Change::kDepart;
+  a.present = m.phase != Phase::kStopping;
   a.last = m;
   a.last_heard_s = now_s;
   ++a.samples;
@@ -44,7 +44,7 @@ std::vector<AgentId> Presence::expire(double now_s) {
 
 bool Presence::running(AgentId id) const {
   const Track& t = tracks_.at(id);
-  return t.present && t.last.phase == kRunning;
+  return t.present && t.last.phase == Phase::kRunning;
 }
 
 std::size_t Presence::present_count() const {

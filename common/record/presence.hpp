@@ -12,8 +12,8 @@ namespace qswarm {
 
 // Who of the run's agents is here, judged in simulated time like the agents judge their
 // neighbours: an agent whose samples stop for longer than the neighbour timeout (on the swarm's
-// clock) has departed; a kStopping sample is a departure at once; a sample after a departure is a
-// rejoin. Strangers (ids not in the run) are kept apart. Pure: it is told the time.
+// clock) has departed; a Phase::kStopping sample is a departure at once; a sample after a departure
+// is a rejoin. Strangers (ids not in the run) are kept apart. Pure: it is told the time.
 class Presence {
  public:
   struct Track {

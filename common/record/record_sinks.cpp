@@ -7,7 +7,7 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "common/runtime/proto_util.hpp"
+#include "common/scenario/proto_util.hpp"
 
 namespace qswarm {
 namespace {

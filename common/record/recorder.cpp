@@ -7,7 +7,7 @@
 
 #include "common/record/graph_metrics.hpp"
 
-#include "common/runtime/proto_util.hpp"
+#include "common/scenario/proto_util.hpp"
 
 namespace qswarm {
 namespace {
@@ -56,7 +56,7 @@ void Recorder::on_sample(const StateMessage& m, std::int64_t recv_wall_ns) {
     }
     return;
   }
-  if (m.phase == kRunning && m.stamp_s > t_s_ && rc_.agent(m.view.id)) {
+  if (m.phase == Phase::kRunning && m.stamp_s > t_s_ && rc_.agent(m.view.id)) {
     t_s_ = m.stamp_s;
     t_wall_ns_ = recv_wall_ns;
   }
@@ -85,19 +85,18 @@ void Recorder::on_sample(const StateMessage& m, std::int64_t recv_wall_ns) {
     case Presence::Change::kNone:
       break;
   }
-  tally_.fault_counts[{id, m.incarnation}] = {m.fault_loss, m.fault_burst, m.fault_cut,
-                                              m.fault_partition, m.fault_delayed};
+  tally_.fault_counts[{id, m.incarnation}] = m.faults;
   const double age_ms = m.wall_ns > 0 ? static_cast<double>(recv_wall_ns - m.wall_ns) / 1e6 : 0.0;
   if (m.wall_ns > 0) tally_.ages_ms.push_back(age_ms);
   sinks_.sample(m, age_ms);
   // A running sample's position is for its stamp; a waiting (or restarting) agent's stamp is not on
   // the swarm's clock yet: its position is for now.
-  if (m.phase != kStopping)
+  if (m.phase != Phase::kStopping)
     separation_.on_sample(id, m.p_W, m.v_W,
-                          m.phase == kRunning ? m.stamp_s : swarm_time_at(recv_wall_ns));
+                          m.phase == Phase::kRunning ? m.stamp_s : swarm_time_at(recv_wall_ns));
   // The initial graph, once every agent of the scenario has reported the links its law started
   // with (view seq >= 1), however late its first samples reached us.
-  if (!first_full_ && m.phase == kRunning && m.view.seq >= 1) {
+  if (!first_full_ && m.phase == Phase::kRunning && m.view.seq >= 1) {
     bool all = true;
     for (const auto& [aid, t] : presence_.tracks()) all &= t.seen && t.last.view.seq >= 1;
     if (all) initial_snapshot();

@@ -11,7 +11,7 @@
 #include "common/record/record_sinks.hpp"
 #include "common/record/separation.hpp"
 #include "common/record/summary.hpp"
-#include "common/runtime/run_config.hpp"
+#include "common/scenario/run_config.hpp"
 #include "common/transport/state_message.hpp"
 #include "proto/records.pb.h"
 

@@ -14,7 +14,7 @@
 
 namespace fs = std::filesystem;
 
-#include "common/runtime/proto_util.hpp"
+#include "common/scenario/proto_util.hpp"
 
 namespace qswarm {
 

@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-#include "common/runtime/run_config.hpp"
+#include "common/scenario/run_config.hpp"
 
 namespace qswarm {
 

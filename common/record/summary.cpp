@@ -8,7 +8,7 @@
 
 #include "common/core/graph.hpp"
 
-#include "common/runtime/proto_util.hpp"
+#include "common/scenario/proto_util.hpp"
 
 namespace qswarm {
 namespace {
@@ -143,18 +143,13 @@ records::Summary build_summary(const RunConfig& rc, const Presence& presence,
   }
   records::FaultSummary& fs = *s.mutable_faults();
   FaultCounters total;
-  for (const auto& [key, c] : tally.fault_counts) {
-    total.loss += c.loss;
-    total.burst += c.burst;
-    total.cut += c.cut;
-    total.partition += c.partition;
-    total.delayed += c.delayed;
-  }
-  fs.set_loss(count32(total.loss));
-  fs.set_burst(count32(total.burst));
-  fs.set_cut(count32(total.cut));
-  fs.set_partition(count32(total.partition));
-  fs.set_delayed(count32(total.delayed));
+  for (const auto& [key, c] : tally.fault_counts) total += c;
+  records::FaultCounts& injected = *fs.mutable_injected();
+  injected.set_loss(count32(total.loss));
+  injected.set_burst(count32(total.burst));
+  injected.set_cut(count32(total.cut));
+  injected.set_partition(count32(total.partition));
+  injected.set_delayed(count32(total.delayed));
   fs.set_dropped(count32(total.dropped()));
   for (const auto& k : rc.faults.kill) {
     if (k.at_s <= end.t_s) fs.set_kills(fs.kills() + 1);
@@ -242,10 +237,11 @@ std::string summary_text(const records::Summary& s, const RunConfig& rc, const s
   }
   if (!rc.faults.empty()) {
     const records::FaultSummary& fsum = s.faults();
-    h << "faults: dropped " << fsum.dropped() << " (loss " << fsum.loss() << ", burst "
-      << fsum.burst() << ", cut " << fsum.cut() << ", partition " << fsum.partition()
-      << "), delayed " << fsum.delayed() << ", kills " << fsum.kills() << ", restarts "
-      << fsum.restarts() << ", transport drop " << fsum.transport_drop_percent() << " %\n";
+    const records::FaultCounts& inj = fsum.injected();
+    h << "faults: dropped " << fsum.dropped() << " (loss " << inj.loss() << ", burst "
+      << inj.burst() << ", cut " << inj.cut() << ", partition " << inj.partition() << "), delayed "
+      << inj.delayed() << ", kills " << fsum.kills() << ", restarts " << fsum.restarts()
+      << ", transport drop " << fsum.transport_drop_percent() << " %\n";
     h << "relative error of the agreed value " << fmt("%.3e", s.average_relative_error())
       << ", detect " << fmt("%.2f", s.detect_s()) << " s, reconverge "
       << fmt("%.2f", s.reconverge_s()) << " s\n";

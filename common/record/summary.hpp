@@ -10,8 +10,8 @@
 
 #include "common/record/convergence.hpp"
 #include "common/record/presence.hpp"
-#include "common/runtime/link_faults.hpp"
-#include "common/runtime/run_config.hpp"
+#include "common/scenario/run_config.hpp"
+#include "common/transport/state_message.hpp"
 #include "proto/records.pb.h"
 
 namespace qswarm {

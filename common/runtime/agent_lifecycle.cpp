@@ -65,7 +65,7 @@ LifecycleStep AgentLifecycle::join_wait(double now, const std::vector<PeerStatus
   LifecycleStep s;
   double swarm_t = -1.0;
   for (const PeerStatus& p : peers)
-    if (p.phase == kRunning) swarm_t = std::max(swarm_t, p.stamp_s);
+    if (p.phase == Phase::kRunning) swarm_t = std::max(swarm_t, p.stamp_s);
   s.swarm_time_s = swarm_t;
   const double join_at = *cfg_.join_at_s;
   const bool timed_out = now - born_s_ > join_at / cfg_.time_scale + cfg_.join_timeout_s;
@@ -91,7 +91,7 @@ LifecycleStep AgentLifecycle::barrier(double now, const std::vector<PeerStatus>&
   for (const PeerStatus& p : peers) {
     if (!cfg_.barrier_peers.count(p.id)) continue;
     ++heard;
-    ready += (p.phase == kReady || p.phase == kRunning) ? 1 : 0;
+    ready += (p.phase == Phase::kReady || p.phase == Phase::kRunning) ? 1 : 0;
   }
   const std::size_t expected = cfg_.barrier_peers.size();
   const bool all_heard = heard >= expected && matched_readers >= cfg_.min_matched_readers;
@@ -108,7 +108,7 @@ LifecycleStep AgentLifecycle::barrier(double now, const std::vector<PeerStatus>&
     return s;
   }
   phase_ = all_heard ? LifePhase::kReady : LifePhase::kWaiting;
-  s.announce = all_heard ? kReady : kWaiting;
+  s.announce = all_heard ? Phase::kReady : Phase::kWaiting;
   s.wake_at_s = now + (all_heard ? cfg_.announce_period_s : cfg_.waiting_period_s);
   return s;
 }

@@ -8,12 +8,14 @@
 
 #include "common/core/topology.hpp"
 #include "common/runtime/tick_pacer.hpp"
+#include "common/transport/state_message.hpp"
 
 namespace qswarm {
 
 // The phases of one agent process, in order. A late joiner or a restarted agent starts in
 // kJoinWait (silent until the swarm's clock reaches its join time); everyone else passes the start
-// barrier (kWaiting until every barrier peer is heard, kReady until they are all ready too).
+// barrier (Phase::kWaiting until every barrier peer is heard, Phase::kReady until they are all
+// ready too).
 enum class LifePhase { kJoinWait, kWaiting, kReady, kRunning, kStopping };
 const char* to_string(LifePhase p);
 
@@ -41,14 +43,14 @@ struct LifecycleConfig {
 // What one peer last said, as the lifecycle needs it.
 struct PeerStatus {
   AgentId id = 0;
-  std::uint8_t phase = 0;  // Phase from state_message.hpp
+  Phase phase = Phase::kWaiting;
   double stamp_s = 0.0;
 };
 
 // What to do now, decided by AgentLifecycle::step().
 struct LifecycleStep {
-  std::optional<std::uint8_t> announce;  // publish a waiting/ready announcement with this phase
-  bool start = false;                    // enter kRunning now, on the swarm clock start_time_s
+  std::optional<Phase> announce;  // publish a waiting/ready announcement with this phase
+  bool start = false;             // enter Phase::kRunning now, on the swarm clock start_time_s
   double start_time_s = 0.0;
   double swarm_time_s = -1.0;  // kJoinWait: the swarm's clock as the newest running peer says
   int ticks = 0;               // consensus ticks to run now (0 or 1: a late loop catches up)
@@ -71,7 +73,7 @@ class AgentLifecycle {
   void stop() { phase_ = LifePhase::kStopping; }
 
   LifePhase phase() const { return phase_; }
-  // Wall seconds from construction to kRunning (discovery and barrier), -1 before.
+  // Wall seconds from construction to Phase::kRunning (discovery and barrier), -1 before.
   double discovery_s() const { return discovery_s_; }
   const std::optional<TickPacer>& pacer() const { return pacer_; }
 

@@ -152,7 +152,7 @@ AgentLoop::Poll AgentLoop::poll() {
 
 void AgentLoop::stop() {
   life_.stop();
-  runtime_.publish(kStopping);
+  runtime_.publish(Phase::kStopping);
 }
 
 }  // namespace qswarm

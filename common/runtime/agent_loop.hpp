@@ -5,11 +5,11 @@
 #include <string>
 #include <vector>
 
+#include "common/clock/clock.hpp"
 #include "common/runtime/agent_lifecycle.hpp"
 #include "common/runtime/agent_runtime.hpp"
-#include "common/runtime/clock.hpp"
 #include "common/runtime/faulty_bus.hpp"
-#include "common/runtime/run_config.hpp"
+#include "common/scenario/run_config.hpp"
 
 namespace qswarm {
 
@@ -47,7 +47,7 @@ class AgentLoop {
   };
   // Reads the clock and the transport, advances the lifecycle, runs what is due.
   Poll poll();
-  // Announce kStopping (a signal or the end); no more ticks.
+  // Announce Phase::kStopping (a signal or the end); no more ticks.
   void stop();
 
   LifePhase phase() const { return life_.phase(); }

@@ -36,7 +36,7 @@ Vec3 AgentRuntime::position() const {
   return p_.mode == AgentMode::kQuadcopter ? quad_.p_W : Vec3(law_->state() + p_.offset_W);
 }
 
-void AgentRuntime::publish(std::uint8_t phase) {
+void AgentRuntime::publish(Phase phase) {
   StateMessage m;
   m.view = law_->message();
   m.seq = ++seq_;
@@ -55,11 +55,7 @@ void AgentRuntime::publish(std::uint8_t phase) {
   m.received = received_;
   m.dropped = dropped_;
   m.overruns = overruns_;
-  m.fault_loss = faults_.loss;
-  m.fault_burst = faults_.burst;
-  m.fault_cut = faults_.cut;
-  m.fault_partition = faults_.partition;
-  m.fault_delayed = faults_.delayed;
+  m.faults = faults_;
   bus_.publish(m);
 }
 
@@ -80,9 +76,9 @@ void AgentRuntime::consensus_tick(std::vector<AgentEvent>& events) {
       st.v_W = m.v_W;
       // A running sample's position is for its stamp on the swarm's clock; a waiting agent's is
       // for now (it is not moving, and its stamp is not yet on the swarm's clock).
-      st.at_s = m.phase == kRunning ? m.stamp_s : t;
+      st.at_s = m.phase == Phase::kRunning ? m.stamp_s : t;
     }
-    if (m.phase != kRunning) continue;
+    if (m.phase != Phase::kRunning) continue;
     if (!listen_to_.empty() && !listen_to_.count(peer))
       continue;  // explicit graph: not a neighbour
     if (fresh && live_.insert(peer).second) events.push_back({AgentEvent::kNeighborHeard, peer, t});
@@ -98,7 +94,7 @@ void AgentRuntime::consensus_tick(std::vector<AgentEvent>& events) {
   }
   if (!started_) {
     if (views.size() < p_.expected_peers && t < p_.start_time_s + p_.start_grace_s) {
-      publish(kRunning);  // running, but the law waits for the whole initial graph
+      publish(Phase::kRunning);  // running, but the law waits for the whole initial graph
       return;
     }
     if (p_.recover_flows) law_->recover(views);
@@ -109,7 +105,7 @@ void AgentRuntime::consensus_tick(std::vector<AgentEvent>& events) {
   } else {
     law_->step(static_cast<double>(steps_per_tick_) / p_.physics_hz, views);
   }
-  publish(kRunning);
+  publish(Phase::kRunning);
 }
 
 void AgentRuntime::physics(double dt) {
@@ -123,7 +119,7 @@ void AgentRuntime::physics(double dt) {
     // near. A stopping agent is gone.
     const double t = time_s();
     for (const auto& [peer, h] : peers_) {
-      if (h.phase == kStopping || t - h.last_new_s > p_.neighbor_timeout_s) continue;
+      if (h.phase == Phase::kStopping || t - h.last_new_s > p_.neighbor_timeout_s) continue;
       obstacles_.push_back({peer, project_position(h.p_W, h.v_W, t - h.at_s)});
     }
   }

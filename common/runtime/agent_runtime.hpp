@@ -64,8 +64,9 @@ class AgentRuntime {
   // One physics step of 1/physics_hz; every physics_hz/consensus_hz steps also a consensus tick
   // (read neighbours, update the law, publish). Returns events for logging.
   std::vector<AgentEvent> step();
-  // Publish the current state (the process calls this while waiting for peers, with kWaiting).
-  void publish(std::uint8_t phase);
+  // Publish the current state (the process calls this while waiting for peers, with
+  // Phase::kWaiting).
+  void publish(Phase phase);
 
   // A late or restarted agent starts on the swarm's clock: set before the first step.
   void set_start_time(double t_s);
@@ -114,8 +115,8 @@ class AgentRuntime {
   struct Peer {
     std::uint64_t seq = 0;
     std::int64_t incarnation = 0;
-    double last_new_s = 0.0;  // this agent's time when its newest sample arrived
-    std::uint8_t phase = 0;   // of its newest sample
+    double last_new_s = 0.0;        // this agent's time when its newest sample arrived
+    Phase phase = Phase::kWaiting;  // of its newest sample
     Vec3 p_W = Vec3::Zero(), v_W = Vec3::Zero();
     double at_s = 0.0;  // the swarm time p_W is for
   };

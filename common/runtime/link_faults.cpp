@@ -13,14 +13,6 @@ bool in_group(const std::vector<AgentId>& g, AgentId id) {
 
 }  // namespace
 
-std::uint64_t link_seed(std::uint64_t seed, AgentId from, AgentId to) {
-  // splitmix64 over (seed, from, to): independent, reproducible streams per directed link.
-  std::uint64_t x = seed ^ (static_cast<std::uint64_t>(from) << 32) ^ to ^ 0x9E3779B97F4A7C15ull;
-  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
-  x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
-  return x ^ (x >> 31);
-}
-
 LinkFaults::LinkFaults(FaultPlan plan, AgentId self, std::uint64_t seed)
     : plan_(std::move(plan)), self_(self), seed_(seed) {}
 

@@ -5,15 +5,10 @@
 #include <random>
 #include <vector>
 
-#include "common/runtime/fault_plan.hpp"
+#include "common/scenario/fault_plan.hpp"
+#include "common/transport/state_message.hpp"
 
 namespace qswarm {
-
-// Counts of injected faults (per agent, published in its state and summed in the summary).
-struct FaultCounters {
-  std::uint64_t loss = 0, burst = 0, cut = 0, partition = 0, delayed = 0;
-  std::uint64_t dropped() const { return loss + burst + cut + partition; }
-};
 
 // Decides, for every message arriving at agent `self`, whether the plan drops or delays it. One
 // random stream per directed link, seeded from (seed, from, self): a run replays. Pure.
@@ -41,7 +36,5 @@ class LinkFaults {
   FaultCounters counters_;
   std::vector<double> draws_;
 };
-
-std::uint64_t link_seed(std::uint64_t seed, AgentId from, AgentId to);
 
 }  // namespace qswarm

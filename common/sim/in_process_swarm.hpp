@@ -7,10 +7,10 @@
 #include <string>
 #include <vector>
 
+#include "common/clock/clock.hpp"
 #include "common/core/graph.hpp"
 #include "common/runtime/agent_loop.hpp"
-#include "common/runtime/clock.hpp"
-#include "common/runtime/run_config.hpp"
+#include "common/scenario/run_config.hpp"
 #include "common/transport/in_memory_bus.hpp"
 
 namespace qswarm {

@@ -13,11 +13,26 @@
 
 namespace qswarm {
 
-// The largest swarm a run may have (the scenario refuses more): every list in a state message
-// (links, flows, copies) has at most kMaxSwarmAgents - 1 entries, and the wire carries them all.
-inline constexpr std::size_t kMaxSwarmAgents = 512;
+// Faults injected in one agent's receive path (this incarnation's counts, which only grow): carried
+// in its samples, summed in the record.
+struct FaultCounters {
+  std::uint64_t loss = 0, burst = 0, cut = 0, partition = 0, delayed = 0;
+  std::uint64_t dropped() const { return loss + burst + cut + partition; }
+  FaultCounters& operator+=(const FaultCounters& o) {
+    loss += o.loss;
+    burst += o.burst;
+    cut += o.cut;
+    partition += o.partition;
+    delayed += o.delayed;
+    return *this;
+  }
+  bool operator==(const FaultCounters&) const = default;
+};
 
-enum class AgentMode : std::uint8_t { kParticle = 0, kQuadcopter = 1 };
+// An agent's phase as its samples carry it. Start barrier: an agent is kWaiting until it has heard
+// every expected peer, then kReady; it runs once every expected peer is kReady or kRunning, so a
+// swarm starts within one waiting-publish period.
+enum class Phase : std::uint8_t { kWaiting = 0, kRunning = 1, kStopping = 2, kReady = 3 };
 
 // One agent's published state: the consensus part its neighbours' laws read, plus the physical
 // part the supervisor records. The DDS type in idl/ mirrors this.
@@ -37,19 +52,12 @@ struct StateMessage {
   std::int64_t wall_ns = 0;      // sender's CLOCK_REALTIME at publication
   std::int64_t incarnation = 0;  // sender's start time: a restarted agent has a newer one
   std::uint64_t run_id = 0;      // the run the sender belongs to (RunConfig::run_id)
-  std::uint8_t phase = 0;        // see Phase
-  std::uint64_t received = 0;    // samples the sender accepted
-  std::uint64_t dropped = 0;     // samples the sender rejected
-  std::uint64_t overruns = 0;    // the sender's late ticks
-  // Faults injected in the sender's receive path (this incarnation).
-  std::uint64_t fault_loss = 0, fault_burst = 0, fault_cut = 0, fault_partition = 0;
-  std::uint64_t fault_delayed = 0;
+  Phase phase = Phase::kWaiting;
+  std::uint64_t received = 0;  // samples the sender accepted
+  std::uint64_t dropped = 0;   // samples the sender rejected
+  std::uint64_t overruns = 0;  // the sender's late ticks
+  FaultCounters faults;        // injected in the sender's receive path (this incarnation)
 };
-
-// Start barrier: an agent is kWaiting until it has heard every expected peer, then kReady; it runs
-// once every expected peer is kReady or kRunning, so a swarm starts within one waiting-publish
-// period.
-enum Phase : std::uint8_t { kWaiting = 0, kRunning = 1, kStopping = 2, kReady = 3 };
 
 // Empty if a received message is usable, else why not. Anything non-finite or absurd is refused.
 std::string check_message(const StateMessage& m);

@@ -28,7 +28,7 @@ StateMessage sample(AgentId id, std::uint64_t run, std::uint64_t seq) {
   m.view.id = id;
   m.seq = seq;
   m.run_id = run;
-  m.phase = kRunning;
+  m.phase = Phase::kRunning;
   return m;
 }
 

@@ -13,7 +13,7 @@
 #include <random>
 #include <sstream>
 
-#include "common/runtime/scenario.hpp"
+#include "common/scenario/scenario.hpp"
 #include "common/transport/sample_gate.hpp"
 
 namespace qswarm {
@@ -142,7 +142,7 @@ TEST(Fuzz, TheSampleGateRefusesEveryHostileSampleAndAdmitsOnlySaneOnes) {
     m.seq = rng() % 1000;
     m.incarnation = static_cast<std::int64_t>(rng() % 3);
     m.stamp_s = hostile(rng);
-    m.phase = static_cast<std::uint8_t>(rng() % 6);
+    m.phase = static_cast<Phase>(rng() % 6);
     m.mode = static_cast<AgentMode>(rng() % 3);
     m.view.q = Vec3(hostile(rng), hostile(rng), hostile(rng)) * (rng() % 2 ? 1e-3 : 1.0);
     m.view.q0 = Vec3(hostile(rng), 0, 0) * 1e-3;

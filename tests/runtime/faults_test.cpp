@@ -3,8 +3,8 @@
 
 #include <algorithm>
 
-#include "common/runtime/fault_plan.hpp"
 #include "common/runtime/faulty_bus.hpp"
+#include "common/scenario/fault_plan.hpp"
 #include "common/transport/in_memory_bus.hpp"
 
 namespace qswarm {

@@ -34,21 +34,22 @@ TEST(TickPacer, CountsTicksThatStartMoreThanOnePeriodLateAndNeverSkips) {
 TEST(Lifecycle, BarrierWaitsForEveryPeerThenForEveryoneReady) {
   // Given an agent that waits for peers 2 and 3
   AgentLifecycle life(barrier_config(), 0.0);
-  // When it has heard only 2, it announces kWaiting every 5 ms
-  LifecycleStep s = life.step(0.0, {{2, kWaiting, 0.0}}, 0, 0.0);
+  // When it has heard only 2, it announces Phase::kWaiting every 5 ms
+  LifecycleStep s = life.step(0.0, {{2, Phase::kWaiting, 0.0}}, 0, 0.0);
   EXPECT_EQ(life.phase(), LifePhase::kWaiting);
   ASSERT_TRUE(s.announce);
-  EXPECT_EQ(*s.announce, kWaiting);
+  EXPECT_EQ(*s.announce, Phase::kWaiting);
   EXPECT_DOUBLE_EQ(s.wake_at_s, 0.005);
   // Once it hears both it is ready, but runs only once both are ready too
-  s = life.step(0.005, {{2, kWaiting, 0.0}, {3, kWaiting, 0.0}}, 0, 0.0);
+  s = life.step(0.005, {{2, Phase::kWaiting, 0.0}, {3, Phase::kWaiting, 0.0}}, 0, 0.0);
   EXPECT_EQ(life.phase(), LifePhase::kReady);
-  EXPECT_EQ(*s.announce, kReady);
+  EXPECT_EQ(*s.announce, Phase::kReady);
   EXPECT_FALSE(s.start);
   // A stranger being ready changes nothing
-  s = life.step(0.010, {{2, kReady, 0.0}, {3, kWaiting, 0.0}, {9, kReady, 0.0}}, 0, 0.0);
+  s = life.step(
+      0.010, {{2, Phase::kReady, 0.0}, {3, Phase::kWaiting, 0.0}, {9, Phase::kReady, 0.0}}, 0, 0.0);
   EXPECT_FALSE(s.start);
-  s = life.step(0.015, {{2, kReady, 0.0}, {3, kRunning, 0.0}}, 0, 0.0);
+  s = life.step(0.015, {{2, Phase::kReady, 0.0}, {3, Phase::kRunning, 0.0}}, 0, 0.0);
   EXPECT_TRUE(s.start);
   EXPECT_DOUBLE_EQ(s.start_time_s, 0.0);
   EXPECT_EQ(life.phase(), LifePhase::kRunning);
@@ -62,11 +63,11 @@ TEST(Lifecycle, WaitingForMissingPeersIsABeaconAndReadyIsFast) {
   c.waiting_period_s = 0.2;
   c.announce_period_s = 0.02;
   AgentLifecycle life(c, 0.0);
-  LifecycleStep s = life.step(0.0, {{2, kWaiting, 0.0}}, 0, 0.0);
-  EXPECT_EQ(*s.announce, kWaiting);
+  LifecycleStep s = life.step(0.0, {{2, Phase::kWaiting, 0.0}}, 0, 0.0);
+  EXPECT_EQ(*s.announce, Phase::kWaiting);
   EXPECT_DOUBLE_EQ(s.wake_at_s, 0.2);
-  s = life.step(0.2, {{2, kWaiting, 0.0}, {3, kWaiting, 0.0}}, 0, 0.0);
-  EXPECT_EQ(*s.announce, kReady);
+  s = life.step(0.2, {{2, Phase::kWaiting, 0.0}, {3, Phase::kWaiting, 0.0}}, 0, 0.0);
+  EXPECT_EQ(*s.announce, Phase::kReady);
   EXPECT_DOUBLE_EQ(s.wake_at_s, 0.22);
 }
 
@@ -74,7 +75,7 @@ TEST(Lifecycle, WithASupervisorTheBarrierAlsoWaitsForItsReader) {
   LifecycleConfig c = barrier_config();
   c.min_matched_readers = 3;  // peers 2 and 3, and the supervisor
   AgentLifecycle life(c, 0.0);
-  const std::vector<PeerStatus> ready = {{2, kReady, 0.0}, {3, kReady, 0.0}};
+  const std::vector<PeerStatus> ready = {{2, Phase::kReady, 0.0}, {3, Phase::kReady, 0.0}};
   EXPECT_FALSE(life.step(0.0, ready, 2, 0.0).start);
   EXPECT_EQ(life.phase(), LifePhase::kWaiting);
   EXPECT_TRUE(life.step(0.005, ready, 3, 0.0).start);
@@ -82,8 +83,8 @@ TEST(Lifecycle, WithASupervisorTheBarrierAlsoWaitsForItsReader) {
 
 TEST(Lifecycle, StartsAnywayAfterTheStartTimeoutAndSaysSo) {
   AgentLifecycle life(barrier_config(), 0.0);
-  EXPECT_FALSE(life.step(29.9, {{2, kReady, 0.0}}, 0, 0.0).start);
-  const LifecycleStep s = life.step(30.1, {{2, kReady, 0.0}}, 0, 0.0);
+  EXPECT_FALSE(life.step(29.9, {{2, Phase::kReady, 0.0}}, 0, 0.0).start);
+  const LifecycleStep s = life.step(30.1, {{2, Phase::kReady, 0.0}}, 0, 0.0);
   EXPECT_TRUE(s.start);
   EXPECT_NE(s.warning.find("1 of 2 peers ready"), std::string::npos) << s.warning;
 }
@@ -120,11 +121,11 @@ TEST(Lifecycle, ALateJoinerStaysSilentUntilTheSwarmClockReachesItsTime) {
   c.kill_at_s = {1.0, 6.0};  // the kill at 1 s was a predecessor's
   AgentLifecycle life(c, 0.0);
   EXPECT_EQ(life.phase(), LifePhase::kJoinWait);
-  LifecycleStep s = life.step(0.1, {{2, kRunning, 2.5}, {3, kWaiting, 9.0}}, 0, 0.0);
+  LifecycleStep s = life.step(0.1, {{2, Phase::kRunning, 2.5}, {3, Phase::kWaiting, 9.0}}, 0, 0.0);
   EXPECT_FALSE(s.announce);  // silent
   EXPECT_FALSE(s.start);
   EXPECT_DOUBLE_EQ(s.swarm_time_s, 2.5);  // only running peers' stamps count
-  s = life.step(0.2, {{2, kRunning, 3.02}}, 0, 0.0);
+  s = life.step(0.2, {{2, Phase::kRunning, 3.02}}, 0, 0.0);
   EXPECT_TRUE(s.start);
   EXPECT_DOUBLE_EQ(s.start_time_s, 3.02);
   EXPECT_FALSE(life.step(0.2, {}, 0, 3.02).kill);

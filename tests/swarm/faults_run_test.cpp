@@ -13,7 +13,7 @@
 #include <sstream>
 
 #include "common/core/graph.hpp"
-#include "common/runtime/scenario.hpp"
+#include "common/scenario/scenario.hpp"
 #include "tests/swarm/domain_lease.hpp"
 #include "tests/swarm/harness.hpp"
 
@@ -59,9 +59,9 @@ TEST(Faults, EdgeFlowKeepsTheAverageUnderLossJitterAndCutsAndLaplacianDrifts) {
   const records::Summary ef = fly("loss-edge-flow", faults);
   EXPECT_TRUE(ef.converged());
   EXPECT_LT(ef.average_relative_error(), 1e-9);
-  EXPECT_GT(ef.faults().loss(), 1000u);
-  EXPECT_GT(ef.faults().cut(), 0u);
-  EXPECT_GT(ef.faults().delayed(), 1000u);
+  EXPECT_GT(ef.faults().injected().loss(), 1000u);
+  EXPECT_GT(ef.faults().injected().cut(), 0u);
+  EXPECT_GT(ef.faults().injected().delayed(), 1000u);
   EXPECT_GE(ef.faults().events(), 5u);  // loss, two cuts and their ends
   EXPECT_TRUE(has_event("loss-edge-flow", "cut", "1"));
   EXPECT_TRUE(has_event("loss-edge-flow", "cut_end", "3"));
@@ -79,7 +79,7 @@ TEST(Faults, PartitionAgreesPerSideThenGloballyAfterHealing) {
   const records::Summary s = fly("partition", {"--partition", "1,2,3@0:8", "--loss", "0.3"});
   EXPECT_TRUE(s.converged());
   EXPECT_LT(s.average_relative_error(), 1e-9);
-  EXPECT_GT(s.faults().partition(), 0u);
+  EXPECT_GT(s.faults().injected().partition(), 0u);
   EXPECT_GT(s.reconverge_s(), 0.0);
   // Just before the heal, each side sits at its own initial average.
   const Vec3 side_a = (Vec3(4, 17, 24) + Vec3(18, 10, 32) + Vec3(15, 10, 26)) / 3.0;

@@ -13,7 +13,7 @@
 
 #include "common/core/graph.hpp"
 #include "common/dds/dds_bus.hpp"
-#include "common/runtime/scenario.hpp"
+#include "common/scenario/scenario.hpp"
 #include "tests/swarm/domain_lease.hpp"
 #include "tests/swarm/harness.hpp"
 
@@ -229,7 +229,7 @@ TEST(SwarmRun, TheGridFormsApartUnder30PercentLossAndAKilledAndRestartedAgent) {
   const records::Summary s = read_summary(dir);
   EXPECT_EQ(s.faults().kills(), 1u);
   EXPECT_EQ(s.faults().restarts(), 1u);
-  EXPECT_GT(s.faults().loss(), 1000u);
+  EXPECT_GT(s.faults().injected().loss(), 1000u);
 }
 
 TEST(SwarmRun, TheSameGridWithAvoidanceOffComesCloserThanTheSafeDistance) {
@@ -426,7 +426,7 @@ TEST(SwarmRun, BadSamplesFromATestParticipantAreDroppedByEveryAgentAndChangeNoth
     StateMessage nan_msg;  // a stranger with NaN consensus
     nan_msg.view.id = 99;
     nan_msg.view.q = Vec3(std::nan(""), 0, 0);
-    nan_msg.phase = kRunning;
+    nan_msg.phase = Phase::kRunning;
     nan_msg.seq = ++seq;
     nan_msg.incarnation = life;
     nan_msg.run_id = run_id;
@@ -435,7 +435,7 @@ TEST(SwarmRun, BadSamplesFromATestParticipantAreDroppedByEveryAgentAndChangeNoth
     absurd.view.id = 2;
     absurd.view.q = Vec3(1e12, 0, 0);
     absurd.view.flows.push_back({3, Vec3(0, 1e300 * 10, 0), 1.0, true});
-    absurd.phase = kRunning;
+    absurd.phase = Phase::kRunning;
     absurd.seq = ++seq;
     absurd.incarnation = life;
     absurd.run_id = run_id;
@@ -444,7 +444,7 @@ TEST(SwarmRun, BadSamplesFromATestParticipantAreDroppedByEveryAgentAndChangeNoth
     stranger.view.id = 77;
     stranger.view.q = Vec3(100, 100, 100);
     stranger.p_W = stranger.view.q;
-    stranger.phase = kRunning;
+    stranger.phase = Phase::kRunning;
     stranger.seq = ++seq;
     stranger.incarnation = wall_now_ns();  // plausible: a far-future one is refused as such
     stranger.run_id = run_id;

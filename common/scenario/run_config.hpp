@@ -1,0 +1,81 @@
+#pragma once
+
+#include <cstdint>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "common/core/agent.hpp"
+#include "common/core/airframe.hpp"
+#include "common/core/avoidance.hpp"
+#include "common/core/tracking_controller.hpp"
+#include "common/core/update_law.hpp"
+#include "common/scenario/fault_plan.hpp"
+#include "proto/scenario.pb.h"
+
+namespace qswarm {
+
+struct AgentSpec {
+  AgentId id = 0;
+  Vec3 position_W = Vec3::Zero();
+  double yaw_rad = 0.0;
+  Vec3 offset_W = Vec3::Zero();  // its slot relative to the swarm's centre (formation)
+  // Its initial consensus state: its estimate of the centre.
+  Vec3 q0() const { return position_W - offset_W; }
+};
+
+// A scenario with every default filled in and random agents resolved: what a run actually uses.
+struct RunConfig {
+  std::string name;
+  std::vector<AgentSpec> agents;
+  AgentMode mode = AgentMode::kParticle;
+  LawConfig law;
+  double physics_hz = 500.0;
+  double consensus_hz = 50.0;
+  Airframe airframe;
+  TrackingGains gains;
+  double reference_speed_mps = 3.0;
+  double reference_accel_mps2 = 2.0;
+  // Collision avoidance (enabled: quadcopters filter their references) and the safe distance the
+  // record judges separation by, in every mode.
+  AvoidanceConfig avoidance;
+  double tolerance_m = 0.01;
+  double hold_s = 1.0;
+  double duration_s = 60.0;
+  std::uint64_t seed = 1;
+  std::uint32_t domain_id = 0;
+  std::string interface = "127.0.0.1";
+  bool shared_memory = false;
+  double neighbor_timeout_s = 1.0;
+  std::uint64_t run_id = 0;  // transport.run_id: isolates this run on a shared DDS domain
+  FaultPlan faults;
+  scenario::Scenario resolved;  // the scenario as run (agents listed, defaults explicit)
+
+  // The average of the agents' initial consensus states (their estimates of the centre): the
+  // point the swarm agrees on.
+  Vec3 initial_average() const;
+  const AgentSpec* agent(AgentId id) const;
+  // Whether any agent has a formation slot (else every agent flies to the agreed point).
+  bool has_formation() const;
+  std::set<AgentId> ids() const;
+  // With avoidance: the agents whose slot is closer than the filter keeps agents apart to another
+  // agent's slot (every agent of a rendezvous to one point). They cannot all reach their slots; the
+  // record counts them arrived when they hold still. Empty without avoidance.
+  std::set<AgentId> held_agents() const;
+  // The one definition of the peers agent `id` waits for at the start (the barrier, and the law's
+  // first tick): its listed neighbours on a FIXED graph, every other agent otherwise, and never an
+  // agent that the fault plan has joining late.
+  std::set<AgentId> start_peers(AgentId id) const;
+};
+
+// The slots of a generated formation for n agents (scenario Formation.Shape as an int), centred on
+// the origin, in the order the agents are assigned them (by ascending id).
+std::vector<Vec3> formation_slots(int shape, int n, double spacing_m);
+
+// n agents uniformly in a cube of side box_m, ids 1..n, from the seed. With min_separation_m > 0 a
+// draw closer than that to an earlier agent is drawn again (std::runtime_error when the cube has no
+// room after many draws); 0 gives the plain uniform draw.
+std::vector<AgentSpec> random_agent_specs(int n, std::uint64_t seed, double box_m,
+                                          double min_separation_m = 0.0);
+
+}  // namespace qswarm

@@ -1,0 +1,71 @@
+#pragma once
+
+#include <functional>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "common/clock/clock.hpp"
+#include "common/scenario/run_config.hpp"
+#include "launcher/process_group.hpp"
+
+namespace qswarm {
+
+// How `swarm run` starts one run (the resolved scenario is in `rc`).
+struct LaunchSpec {
+  RunConfig rc;
+  std::string run_dir;        // absolute
+  std::string scenario_path;  // the scenario as run, inside run_dir
+  std::string bin_dir;        // where swarm-agent and swarm-supervisor are
+  double time_scale = 1.0;
+  double grace_s = 5.0;
+  bool progress = true;  // the supervisor prints a live line (else its output goes to a file)
+  bool stop_on_agent_exit = false;
+  std::vector<unsigned> ignore_sigterm;  // (tests) agents started with --ignore-sigterm
+  double supervisor_ready_timeout_s = 20.0;
+};
+
+// The launcher as a unit: it starts the supervisor and, once it listens, one process per agent;
+// respawns an agent that died by its planned kill so that it rejoins at its restart time; ends the
+// run when the supervisor ends, on a signal, or at the wall limit; and tears everything down.
+// Processes and time are injected, so the policy is tested without processes or waiting.
+class Launcher {
+ public:
+  Launcher(LaunchSpec spec, ChildProcesses& procs, Clock& clock,
+           std::function<bool()> supervisor_ready);
+
+  // Starts the supervisor, waits until it listens, then starts every agent. Throws
+  // std::runtime_error (saying why) if the supervisor does not come up; no agent is started then.
+  void start();
+  // One pass of the watch loop. Returns why the run is over, or nothing while it goes on.
+  std::optional<std::string> poll(bool interrupted);
+  // Tears everything down (SIGTERM, grace, SIGKILL). Returns how many needed SIGKILL.
+  int stop();
+
+  // Lines for the user about children that exited abnormally (reported as they happen and at
+  // teardown): a crash anywhere makes the run's exit code non-zero.
+  const std::vector<std::string>& problems() const { return problems_; }
+  // The supervisor's waitpid status (valid once it exited).
+  int supervisor_status() const;
+  double wall_limit_s() const;
+  std::vector<std::string> agent_argv(AgentId id, double join_at_s, bool restart) const;
+  std::vector<std::string> supervisor_argv() const;
+  std::string agent_log(AgentId id, int life) const;
+
+ private:
+  void on_agent_exit(const ChildProcesses::Child& c);
+  void note_abnormal(const ChildProcesses::Child& c, bool at_teardown);
+
+  LaunchSpec spec_;
+  ChildProcesses& procs_;
+  Clock& clock_;
+  std::function<bool()> supervisor_ready_;
+  double started_s_ = 0.0;
+  std::map<AgentId, int> lives_;
+  std::map<AgentId, int> kills_seen_;
+  std::string why_;
+  std::vector<std::string> problems_;
+};
+
+}  // namespace qswarm

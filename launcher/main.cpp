@@ -1,0 +1,398 @@
+// swarm: launch a swarm of agent processes plus a supervisor (`swarm run`), analyse a scenario's
+// initial graph without flying (`swarm inspect`), draw a run (`swarm plot`), or regenerate the
+// paper's figures and report (`swarm paper`).
+#include <sys/wait.h>
+#include <unistd.h>
+#include <CLI/CLI.hpp>
+
+#include <atomic>
+#include <cerrno>
+#include <csignal>
+#include <cstdlib>
+#include <cstring>
+#include <ctime>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <optional>
+#include <random>
+
+#include "common/app/cli_checks.hpp"
+#include "common/record/run_dir.hpp"
+#include "common/scenario/fault_flags.hpp"
+#include "common/scenario/scenario.hpp"
+#include "common/sim/paper_maneuvers.hpp"
+#include "launcher/inspect.hpp"
+#include "launcher/launcher.hpp"
+#include "launcher/process_group.hpp"
+
+namespace fs = std::filesystem;
+using namespace qswarm;
+
+namespace {
+
+std::atomic<int> g_signal{0};
+void on_signal(int sig) { g_signal = sig; }
+
+fs::path bin_dir() { return fs::read_symlink("/proc/self/exe").parent_path(); }
+
+// The scenario `swarm run --agents N` flies when no file is given.
+scenario::Scenario random_scenario() {
+  scenario::Scenario s;
+  s.set_name("random");
+  s.set_description("seeded random agents in a 30 m cube, sticky proximity 20 m, distance weights");
+  s.mutable_topology()->set_policy(scenario::STICKY_PROXIMITY);
+  s.mutable_topology()->set_threshold_m(20.0);
+  s.mutable_weight()->set_policy(scenario::DISTANCE);
+  s.mutable_random_agents()->set_box_m(30.0);
+  return s;
+}
+
+struct RunOptions {
+  std::string scenario;
+  std::string out;
+  int agents = -1;
+  std::int64_t seed = -1;
+  double duration = -1;
+  double time_scale = 1.0;
+  int domain = -1;
+  double grace_s = 5.0;
+  bool quiet = false;
+  bool stop_on_agent_exit = false;
+  std::vector<unsigned> ignore_sigterm;  // (tests) agents started with --ignore-sigterm
+  // Fault shortcuts (added to the scenario's fault plan).
+  std::string law;
+  double loss = -1.0;
+  std::vector<std::string> cuts, partitions, kills;
+  std::string delay;
+  int transport_loss = -1;
+  int random_cuts = 0;
+};
+
+// The scenario file (or random agents) with the command line's overrides and fault shortcuts.
+RunConfig resolve_run(const RunOptions& opt) {
+  if (opt.scenario.empty() && opt.agents < 0) {
+    throw ScenarioError("give a SCENARIO file, or --agents N for seeded random agents");
+  }
+  ScenarioOverrides o;
+  o.agents = opt.agents;
+  o.seed = opt.seed;
+  o.duration_s = opt.duration;
+  o.domain_id = opt.domain;
+  o.law = opt.law;
+  scenario::Scenario s =
+      opt.scenario.empty() ? random_scenario() : read_scenario_file(opt.scenario);
+  if (opt.loss >= 0) add_loss_shortcut(s, opt.loss);
+  for (const auto& c : opt.cuts) add_cut_shortcut(s, c);
+  for (const auto& p : opt.partitions) add_partition_shortcut(s, p);
+  for (const auto& k : opt.kills) add_kill_shortcut(s, k);
+  if (!opt.delay.empty()) add_delay_shortcut(s, opt.delay);
+  if (opt.transport_loss >= 0) {
+    s.mutable_faults()->set_transport_drop_percent(static_cast<std::uint32_t>(opt.transport_loss));
+  }
+  if (opt.random_cuts > 0) {
+    const RunConfig first = resolve_scenario(s, o);  // agents, duration and seed for the draw
+    add_random_cuts(s, opt.random_cuts, static_cast<int>(first.agents.size()), first.duration_s,
+                    first.seed);
+  }
+  RunConfig rc = resolve_scenario(s, o);
+  {
+    // A fresh id for every run, even when the scenario is a previous run's scenario.txtpb (which
+    // holds that run's id): two runs on one domain never hear each other.
+    std::random_device rd;
+    std::uint64_t id = 0;
+    while (id == 0)
+      id = (static_cast<std::uint64_t>(rd()) << 32) ^ rd() ^ static_cast<std::uint64_t>(::getpid());
+    rc.run_id = id;
+    rc.resolved.mutable_transport()->set_run_id(id);
+  }
+  return rc;
+}
+
+int run(const RunOptions& opt) {
+  RunConfig rc;
+  try {
+    rc = resolve_run(opt);
+  } catch (const ScenarioError& e) {
+    std::cerr << "swarm run: " << e.what() << "\n";
+    return 2;
+  }
+  fs::path dir;
+  try {
+    dir = claim_run_dir(opt.out, rc.name, run_timestamp());
+  } catch (const RunDirError& e) {
+    std::cerr << "swarm run: " << e.what() << "\n";
+    return 2;
+  }
+  LaunchSpec spec;
+  spec.rc = rc;
+  spec.run_dir = dir.string();
+  spec.scenario_path = (dir / "scenario.txtpb").string();
+  spec.bin_dir = bin_dir().string();
+  spec.time_scale = opt.time_scale;
+  spec.grace_s = opt.grace_s;
+  spec.progress = !opt.quiet;
+  spec.stop_on_agent_exit = opt.stop_on_agent_exit;
+  spec.ignore_sigterm = opt.ignore_sigterm;
+  {
+    std::ofstream scen(spec.scenario_path);
+    scen << "# The scenario as run (defaults filled in, agents listed).\n" << to_text(rc.resolved);
+    scen.flush();
+    if (!scen) {
+      std::cerr << "swarm run: cannot write " << spec.scenario_path << " (disk full?)\n";
+      return 3;
+    }
+  }
+  if (!opt.quiet) {
+    const InitialGraph g = initial_graph(rc);
+    std::cout << "swarm run: " << rc.name << ", " << rc.agents.size() << " agents, domain "
+              << rc.domain_id << ", time scale " << opt.time_scale << ", seed " << rc.seed << "\n"
+              << "initial graph: " << g.edges.size() << " edges, lambda2 " << g.spectrum.lambda2
+              << (g.spectrum.components > 1 ? " (not connected yet)" : "")
+              << "\nrun directory: " << dir.string() << std::endl;
+  }
+
+  std::signal(SIGINT, on_signal);
+  std::signal(SIGTERM, on_signal);
+  std::signal(SIGHUP, on_signal);
+  ProcessGroup procs;
+  SteadyClock clock;
+  Launcher launcher(spec, procs, clock, [&] { return fs::exists(dir / "supervisor.ready"); });
+  try {
+    launcher.start();
+  } catch (const std::exception& e) {
+    std::cerr << "swarm run: " << e.what() << "\n";
+    launcher.stop();
+    write_fallback_summary(dir, rc, e.what(), clock.now_s());
+    return 1;
+  }
+  std::optional<std::string> why;
+  while (!(why = launcher.poll(g_signal != 0))) clock.sleep_until(clock.now_s() + 0.02);
+  const int killed = launcher.stop();
+  if (!opt.quiet || killed > 0) {
+    std::cout << "swarm run: stopped " << procs.children().size() << " processes"
+              << (killed ? " (" + std::to_string(killed) + " needed SIGKILL)" : std::string())
+              << "\n";
+  }
+  if (*why != "supervisor finished") std::cerr << "swarm run: " << *why << "\n";
+  for (const std::string& p : launcher.problems()) std::cerr << "swarm run: " << p << "\n";
+  const int sup = launcher.supervisor_status();
+  if (!fs::exists(dir / "summary.json")) {
+    // The supervisor died before it could write the summary: the launcher says why.
+    const std::string reason = "supervisor " + describe_status(sup);
+    std::cerr << "swarm run: " << reason << "; the summary says so\n";
+    if (!write_fallback_summary(dir, rc, reason, clock.now_s())) return 3;
+    return 1;
+  }
+  if (WIFEXITED(sup) && WEXITSTATUS(sup) == 3) {
+    std::cout << "swarm run: the run record is incomplete (see above); run directory "
+              << dir.string() << std::endl;
+    return 3;
+  }
+  // A crash the supervisor could not see (at teardown) still unmakes "converged" in the record.
+  if (!launcher.problems().empty() && !amend_summary(dir, launcher.problems())) return 3;
+  const bool converged = WIFEXITED(sup) && WEXITSTATUS(sup) == 0 && launcher.problems().empty();
+  std::cout << "swarm run: " << (converged ? "converged" : "not converged") << "; run record in "
+            << dir.string() << std::endl;
+  return converged ? 0 : 1;
+}
+
+// Runs a figure script installed beside this binary (tools/plot/) with Debian's interpreter
+// first, where python3-matplotlib lives. Returns only when it cannot be started.
+int exec_script(const std::string& command, const std::string& script,
+                std::vector<std::string> script_args) {
+  const std::string python = fs::exists("/usr/bin/python3") ? "/usr/bin/python3" : "python3";
+  std::vector<std::string> args = {python, (bin_dir() / script).string()};
+  args.insert(args.end(), script_args.begin(), script_args.end());
+  std::vector<char*> argv;
+  argv.reserve(args.size() + 1);
+  for (std::string& a : args) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  execvp(argv[0], argv.data());
+  std::cerr << command << ": cannot run " << python << " (" << std::strerror(errno)
+            << "); tools/setup.sh installs python3-matplotlib\n";
+  return 2;
+}
+
+// `swarm plot`: the figures are drawn by tools/plot/swarm_plot.py (matplotlib).
+int plot(const std::string& run_dir, const std::string& out) {
+  std::vector<std::string> args = {run_dir};
+  if (!out.empty()) {
+    args.push_back("--out");
+    args.push_back(out);
+  }
+  return exec_script("swarm plot", "swarm_plot.py", args);
+}
+
+struct PaperOptions {
+  std::string out = "docs/paper";
+  std::string runs;  // where the runs go (default runs/TIMESTAMP-paper)
+  std::string from;  // redraw from these runs, fly nothing
+  std::string scenarios = "scenarios/paper";
+  double time_scale = 4.0;
+  int domain = -1;  // DDS domain for the runs (default: each scenario's)
+};
+
+// `swarm paper`: the section 4 maneuvers are simulated here (core primitives, in-process); the
+// rendezvous scenarios are flown by `swarm run` and the figures and report are drawn by
+// tools/plot/swarm_paper.py.
+int paper(const PaperOptions& opt) {
+  std::string runs = opt.from;
+  if (runs.empty()) {
+    const fs::path rendezvous = fs::path(opt.scenarios) / "rendezvous3.txtpb";
+    RunConfig rc;
+    try {
+      rc = resolve_scenario(read_scenario_file(rendezvous.string()));
+    } catch (const ScenarioError& e) {
+      std::cerr << "swarm paper: " << e.what() << "\n";
+      return 2;
+    }
+    try {
+      runs = claim_run_dir(opt.runs, "paper", run_timestamp()).string();
+      fs::create_directories(fs::path(runs) / "maneuvers");
+      write_paper_maneuvers(rc, (fs::path(runs) / "maneuvers").string());
+    } catch (const RunDirError& e) {
+      // claim_run_dir speaks of --out, the flag of `swarm run`; here the directory is --runs.
+      std::string what = e.what();
+      for (std::size_t at = what.find("--out"); at != std::string::npos;
+           at = what.find("--out", at + 6)) {
+        what.replace(at, 5, "--runs");
+      }
+      std::cerr << "swarm paper: " << what << "\n";
+      return 2;
+    } catch (const std::exception& e) {
+      std::cerr << "swarm paper: " << e.what() << "\n";
+      return 3;
+    }
+  }
+  std::vector<std::string> args = {"--swarm",      (bin_dir() / "swarm").string(),
+                                   "--scenarios",  opt.scenarios,
+                                   "--runs",       runs,
+                                   "--out",        opt.out,
+                                   "--time-scale", std::to_string(opt.time_scale)};
+  if (opt.domain >= 0) {
+    args.emplace_back("--domain");
+    args.push_back(std::to_string(opt.domain));
+  }
+  if (opt.from.empty()) args.emplace_back("--fly");
+  return exec_script("swarm paper", "swarm_paper.py", args);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  // The compose swarm's variables are read by swarm-agent and swarm-supervisor as flag defaults;
+  // `swarm run` passes everything its children need, so a shell that exported them for compose
+  // must not change a local run.
+  for (const char* v : {"QSWARM_AGENTS", "QSWARM_DISCOVERY_SERVER", "QSWARM_AGENT_ID"}) unsetenv(v);
+  CLI::App app{"swarm: a quadcopter swarm that agrees over DDS"};
+  app.require_subcommand(1);
+  RunOptions ro;
+  CLI::App* run_cmd =
+      app.add_subcommand("run", "launch the supervisor and one agent process per agent");
+  run_cmd->add_option("scenario", ro.scenario, "scenario file (Protobuf text format)")
+      ->check(CLI::ExistingFile);
+  run_cmd->add_option("--out", ro.out, "run directory to create (default runs/TIMESTAMP-NAME)");
+  run_cmd->add_option("--agents", ro.agents, "fly N agents from seeded random positions")
+      ->check(CLI::Range(1, 512));
+  run_cmd->add_option("--seed", ro.seed, "seed (overrides the scenario)")
+      ->check(CLI::Range(std::int64_t{0}, std::int64_t{4294967295}));
+  run_cmd->add_option("--duration", ro.duration, "simulated seconds before giving up")
+      ->check(finite_range(1e-3, 1e7));
+  run_cmd
+      ->add_option("--time-scale", ro.time_scale, "simulated seconds per wall second (default 1)")
+      ->check(finite_range(0.01, 100.0));
+  run_cmd->add_option("--domain", ro.domain, "DDS domain id (overrides the scenario)")
+      ->check(CLI::Range(0, 232));
+  run_cmd->add_option("--grace", ro.grace_s, "seconds between SIGTERM and SIGKILL at teardown")
+      ->check(finite_range(0.0, 600.0));
+  run_cmd->add_flag("--quiet", ro.quiet, "no progress line");
+  run_cmd->add_flag("--stop-on-agent-exit", ro.stop_on_agent_exit,
+                    "end the run when any agent exits");
+  run_cmd->add_option("--law", ro.law,
+                      "update law: edge-flow or laplacian (overrides the scenario)");
+  run_cmd->add_option("--loss", ro.loss, "fault: drop each received message with this probability")
+      ->check(finite_range(0.0, 1.0))
+      ->allow_extra_args(false)
+      ->group("Faults");
+  run_cmd
+      ->add_option("--cut", ro.cuts,
+                   "fault: cut link A-B over a window, e.g. 1-2@5:15 (repeatable)")
+      ->allow_extra_args(false)
+      ->group("Faults");
+  run_cmd
+      ->add_option("--partition", ro.partitions,
+                   "fault: cut group off from the rest, e.g. 1,2,3@5:15")
+      ->allow_extra_args(false)
+      ->group("Faults");
+  run_cmd
+      ->add_option("--delay", ro.delay,
+                   "fault: delay every message MEAN[:JITTER] seconds, e.g. 0.05:0.02")
+      ->allow_extra_args(false)
+      ->group("Faults");
+  run_cmd
+      ->add_option("--kill", ro.kills, "fault: SIGKILL agent ID at AT, restart at RESTART: 3@10:20")
+      ->allow_extra_args(false)
+      ->group("Faults");
+  run_cmd
+      ->add_option(
+          "--transport-loss", ro.transport_loss,
+          "fault below the application: Fast DDS test transport drops this % of data messages")
+      ->check(CLI::Range(0, 100))
+      ->allow_extra_args(false)
+      ->group("Faults");
+  run_cmd
+      ->add_option("--random-cuts", ro.random_cuts,
+                   "fault: N seeded random link cuts of 1-5 s, in the first 75% of the run")
+      ->check(CLI::Range(0, 10000))
+      ->allow_extra_args(false)
+      ->group("Faults");
+  run_cmd
+      ->add_option("--test-ignore-sigterm", ro.ignore_sigterm, "(tests) agents that ignore SIGTERM")
+      ->group("");
+
+  std::string inspect_path;
+  bool json = false;
+  CLI::App* inspect_cmd =
+      app.add_subcommand("inspect", "initial graph, Laplacian, eigenvalues, predicted agreement");
+  inspect_cmd->add_option("scenario", inspect_path, "scenario file")
+      ->required()
+      ->check(CLI::ExistingFile);
+  inspect_cmd->add_flag("--json", json, "machine-readable output");
+
+  std::string plot_dir, plot_out;
+  CLI::App* plot_cmd = app.add_subcommand("plot", "PNG figures of a run directory (matplotlib)");
+  plot_cmd->add_option("run_dir", plot_dir, "run directory written by swarm run")->required();
+  plot_cmd->add_option("--out", plot_out, "figure directory (default RUN_DIR/plots)");
+  PaperOptions po;
+  CLI::App* paper_cmd = app.add_subcommand(
+      "paper", "fly the paper's scenarios and write its figures and a report (docs/paper)");
+  paper_cmd->add_option("--out", po.out, "figure and report directory (default docs/paper)");
+  CLI::Option* paper_runs = paper_cmd->add_option(
+      "--runs", po.runs, "directory for the runs (default runs/TIMESTAMP-paper)");
+  CLI::Option* paper_from =
+      paper_cmd
+          ->add_option("--from", po.from,
+                       "redraw from the runs of an earlier `swarm paper`, fly nothing")
+          ->check(CLI::ExistingDirectory)
+          ->excludes(paper_runs);
+  paper_cmd
+      ->add_option("--scenarios", po.scenarios, "the paper's scenarios (default scenarios/paper)")
+      ->check(CLI::ExistingDirectory);
+  paper_cmd
+      ->add_option("--time-scale", po.time_scale, "simulated seconds per wall second (default 4)")
+      ->check(finite_range(0.01, 100.0))
+      ->excludes(paper_from);
+  paper_cmd->add_option("--domain", po.domain, "DDS domain id for the runs")
+      ->check(CLI::Range(0, 232))
+      ->excludes(paper_from);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 2;
+  }
+  if (*run_cmd) return run(ro);
+  if (*plot_cmd) return plot(plot_dir, plot_out);
+  if (*paper_cmd) return paper(po);
+  return inspect_scenario(inspect_path, json);
+}

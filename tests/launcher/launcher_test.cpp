@@ -1,0 +1,201 @@
+// The launcher's policy without processes or waiting: a fake process table and a manual clock.
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <filesystem>
+
+#include "common/scenario/scenario.hpp"
+#include "launcher/launcher.hpp"
+
+namespace qswarm {
+namespace {
+
+// waitpid statuses, as the kernel encodes them.
+int exited(int code) { return (code & 0xff) << 8; }
+int signalled(int sig) { return sig & 0x7f; }
+
+class FakeProcesses final : public ChildProcesses {
+ public:
+  pid_t spawn(const std::string& role, unsigned id, const std::vector<std::string>& argv,
+              const std::string&, bool) override {
+    children_.push_back({role, id, next_pid_, true, 0, false});
+    argv_.push_back(argv);
+    return next_pid_++;
+  }
+  std::vector<Child> reap() override {
+    std::vector<Child> out;
+    out.swap(exited_);
+    return out;
+  }
+  int terminate_all(double) override {
+    int killed = 0;
+    for (Child& c : children_) {
+      if (!c.running) continue;
+      c.running = false;
+      if (c.id == stubborn_) {
+        c.status = signalled(SIGKILL);
+        c.killed_at_teardown = true;
+        ++killed;
+      } else {
+        c.status = c.id == aborts_at_teardown_ ? signalled(SIGABRT) : exited(0);
+      }
+    }
+    return killed;
+  }
+  const std::vector<Child>& children() const override { return children_; }
+
+  // The newest process of role/id exits with `status`.
+  void exit_child(const std::string& role, unsigned id, int status) {
+    for (auto it = children_.rbegin(); it != children_.rend(); ++it) {
+      if (it->role == role && it->id == id && it->running) {
+        it->running = false;
+        it->status = status;
+        exited_.push_back(*it);
+        return;
+      }
+    }
+    FAIL() << "no running " << role << " " << id;
+  }
+  int spawned(const std::string& role, unsigned id) const {
+    return static_cast<int>(std::count_if(children_.begin(), children_.end(), [&](const Child& c) {
+      return c.role == role && c.id == id;
+    }));
+  }
+  std::vector<std::vector<std::string>> argv_;
+  unsigned stubborn_ = 0, aborts_at_teardown_ = 0;
+
+ private:
+  std::vector<Child> children_, exited_;
+  pid_t next_pid_ = 100;
+};
+
+LaunchSpec spec_for(const std::string& extra) {
+  LaunchSpec spec;
+  spec.rc = resolve_scenario(parse_scenario_text(
+      "agents { id: 1 }\nagents { id: 2 }\nagents { id: 3 }\nduration_s: 30\n" + extra, "s"));
+  // One directory per test and process: ctest runs the tests of this file at once.
+  spec.run_dir = (std::filesystem::temp_directory_path() /
+                  ("qswarm-launcher-test-" +
+                   std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) +
+                   "-" + std::to_string(::getpid())))
+                     .string();
+  std::filesystem::create_directories(spec.run_dir);
+  spec.scenario_path = spec.run_dir + "/scenario.txtpb";
+  spec.bin_dir = "/bin-dir";
+  spec.time_scale = 2.0;
+  return spec;
+}
+
+bool has(const std::vector<std::string>& argv, const std::string& a) {
+  return std::find(argv.begin(), argv.end(), a) != argv.end();
+}
+
+TEST(Launcher, StartsNoAgentWhenTheSupervisorNeverListens) {
+  FakeProcesses procs;
+  ManualClock clock;
+  Launcher l(spec_for(""), procs, clock, [] { return false; });
+  EXPECT_THROW(l.start(), std::runtime_error);
+  EXPECT_GE(clock.now_s(), 20.0);  // waited its 20 s (on the manual clock: instantly)
+  EXPECT_EQ(procs.children().size(), 1u);
+}
+
+TEST(Launcher, AnUnmarkedSigkillIsNotThePlansEvenWithKillsPlanned) {
+  FakeProcesses procs;
+  ManualClock clock;
+  Launcher l(spec_for("faults { kill { agent: 2 at_s: 3 restart_at_s: 6 } }"), procs, clock,
+             [] { return true; });
+  l.start();
+  ASSERT_EQ(procs.children().size(), 4u);  // supervisor + 3 agents
+  EXPECT_TRUE(has(procs.argv_[2], "--wait-supervisor"));
+  std::filesystem::remove(planned_kills_file(spec_for("").run_dir, 2));
+  // A SIGKILL from outside before the planned one (the agent marked nothing): not the plan's.
+  procs.exit_child("agent", 2, signalled(SIGKILL));
+  EXPECT_FALSE(l.poll(false));
+  EXPECT_EQ(procs.spawned("agent", 2), 1);
+  ASSERT_EQ(l.problems().size(), 1u);
+  EXPECT_NE(l.problems()[0].find("agent 2"), std::string::npos);
+}
+
+TEST(Launcher, RespawnsAMarkedPlannedKillAtItsRestartTime) {
+  FakeProcesses procs;
+  ManualClock clock;
+  const LaunchSpec spec = spec_for("faults { kill { agent: 2 at_s: 3 restart_at_s: 6 } }");
+  std::filesystem::remove(planned_kills_file(spec.run_dir, 2));
+  Launcher l(spec, procs, clock, [] { return true; });
+  l.start();
+  ASSERT_TRUE(mark_planned_kill(spec.run_dir, 2, 3.0));  // what the agent does before dying
+  procs.exit_child("agent", 2, signalled(SIGKILL));
+  EXPECT_FALSE(l.poll(false));
+  ASSERT_EQ(procs.spawned("agent", 2), 2);
+  const auto& argv = procs.argv_.back();
+  EXPECT_TRUE(has(argv, "--restart"));
+  EXPECT_TRUE(has(argv, "6.000000"));  // --join-at the planned restart
+  EXPECT_TRUE(l.problems().empty());   // a planned kill is no problem
+  // A second SIGKILL is not planned: no respawn, and it is reported.
+  procs.exit_child("agent", 2, signalled(SIGKILL));
+  EXPECT_FALSE(l.poll(false));
+  EXPECT_EQ(procs.spawned("agent", 2), 2);
+  ASSERT_EQ(l.problems().size(), 1u);
+  EXPECT_NE(l.problems()[0].find("agent 2"), std::string::npos);
+}
+
+TEST(Launcher, EndsWithTheSupervisorOnASignalOrAtTheWallLimit) {
+  {
+    FakeProcesses procs;
+    ManualClock clock;
+    Launcher l(spec_for(""), procs, clock, [] { return true; });
+    l.start();
+    procs.exit_child("supervisor", 0, exited(0));
+    EXPECT_EQ(l.poll(false), "supervisor finished");
+  }
+  {
+    FakeProcesses procs;
+    ManualClock clock;
+    Launcher l(spec_for(""), procs, clock, [] { return true; });
+    l.start();
+    EXPECT_EQ(l.poll(true), "interrupted");
+  }
+  {
+    FakeProcesses procs;
+    ManualClock clock;
+    Launcher l(spec_for(""), procs, clock, [] { return true; });
+    l.start();
+    EXPECT_DOUBLE_EQ(l.wall_limit_s(), 30.0 / 2.0 + 120.0);
+    clock.advance(134.0);
+    EXPECT_FALSE(l.poll(false));
+    clock.advance(2.0);
+    EXPECT_EQ(l.poll(false), "the supervisor did not finish in time");
+  }
+}
+
+TEST(Launcher, ACrashAtTeardownIsReportedNotHidden) {
+  FakeProcesses procs;
+  ManualClock clock;
+  Launcher l(spec_for(""), procs, clock, [] { return true; });
+  l.start();
+  procs.aborts_at_teardown_ = 3;
+  procs.stubborn_ = 1;
+  EXPECT_EQ(l.poll(true), "interrupted");
+  EXPECT_EQ(l.stop(), 1);  // agent 1 needed SIGKILL: escalation, not a crash
+  ASSERT_EQ(l.problems().size(), 1u);
+  EXPECT_NE(l.problems()[0].find("agent 3"), std::string::npos) << l.problems()[0];
+  EXPECT_NE(l.problems()[0].find("teardown"), std::string::npos) << l.problems()[0];
+}
+
+TEST(Launcher, AnUnplannedAgentExitEndsTheRunWhenAsked) {
+  LaunchSpec spec = spec_for("");
+  spec.stop_on_agent_exit = true;
+  FakeProcesses procs;
+  ManualClock clock;
+  Launcher l(spec, procs, clock, [] { return true; });
+  l.start();
+  procs.exit_child("agent", 3, exited(1));
+  EXPECT_EQ(l.poll(false), "agent 3 exited");
+  EXPECT_EQ(l.problems().size(), 1u);
+}
+
+}  // namespace
+}  // namespace qswarm

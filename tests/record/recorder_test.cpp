@@ -1,0 +1,242 @@
+// The recorder's parts, fed with messages and told the time.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "common/record/convergence.hpp"
+#include "common/record/graph_metrics.hpp"
+#include "common/record/presence.hpp"
+#include "common/record/recorder.hpp"
+#include "common/record/separation.hpp"
+#include "common/scenario/scenario.hpp"
+#include "tests/core/paper_data.hpp"
+
+namespace qswarm {
+namespace {
+
+StateMessage sample(AgentId id, std::uint64_t seq, double t, const Vec3& q,
+                    Phase phase = Phase::kRunning) {
+  StateMessage m;
+  m.view.id = id;
+  m.view.q = q;
+  m.view.q0 = q;
+  m.view.seq = seq;
+  m.p_W = q;
+  m.seq = seq;
+  m.stamp_s = t;
+  m.phase = phase;
+  m.incarnation = 1;
+  return m;
+}
+
+TEST(Presence, JoinsDepartsInSwarmTimeAndRejoins) {
+  Presence p({1, 2}, 1.0);
+  EXPECT_EQ(p.on_sample(sample(1, 1, 0.0, Vec3::Zero()), 0.0), Presence::Change::kJoin);
+  EXPECT_EQ(p.on_sample(sample(1, 2, 0.02, Vec3::Zero()), 0.02), Presence::Change::kNone);
+  EXPECT_EQ(p.on_sample(sample(1, 5, 0.08, Vec3::Zero()), 0.08), Presence::Change::kNone);
+  EXPECT_EQ(p.track(1).gaps, 2u);  // seq 3 and 4 never arrived
+  EXPECT_TRUE(p.expire(1.0).empty());
+  EXPECT_EQ(p.expire(1.2), std::vector<AgentId>{1});  // silent for more than 1 s of swarm time
+  EXPECT_FALSE(p.running(1));
+  EXPECT_EQ(p.on_sample(sample(1, 6, 1.3, Vec3::Zero()), 1.3), Presence::Change::kRejoin);
+  EXPECT_EQ(p.on_sample(sample(1, 7, 1.32, Vec3::Zero(), Phase::kStopping), 1.32),
+            Presence::Change::kDepart);
+  EXPECT_EQ(p.on_sample(sample(9, 1, 0.0, Vec3::Zero()), 1.4), Presence::Change::kStranger);
+  EXPECT_EQ(p.on_sample(sample(9, 2, 0.0, Vec3::Zero()), 1.5), Presence::Change::kStrangerAgain);
+  EXPECT_EQ(p.seen_count(), 1u);
+  EXPECT_EQ(p.strangers(), 1u);
+}
+
+TEST(GraphMetrics, ThePapersWeightedNetworkHasItsSpectrum) {
+  // Paper 2.7.1: graph 1 with initial-distance weights, lambda2 = 13.060.
+  const std::vector<AgentId> ids = {1, 2, 3, 4};
+  std::vector<std::vector<std::pair<AgentId, double>>> links(4);
+  for (const auto& [a, b] : paper::kGraph1) {
+    const double w = (paper::kWeightedQ0[a - 1] - paper::kWeightedQ0[b - 1]).norm();
+    links[a - 1].emplace_back(b, w);
+  }
+  const records::GraphSnapshot g = measure_graph(
+      0.0, ids, paper::kWeightedQ0,
+      paper::kWeightedQ0, [&](int i) -> const auto& { return links[static_cast<size_t>(i)]; },
+      paper::kWeightedAgreement);
+  EXPECT_EQ(g.edges_size(), 4);
+  EXPECT_NEAR(g.lambda2(), 13.060, 5e-4);
+  EXPECT_EQ(g.components(), 1u);
+  EXPECT_NEAR(g.mean_drift_m(), 0.0, 1e-12);  // the initial states' mean is the agreement point
+  EXPECT_NEAR(g.min_separation_m(), std::sqrt(77.0), 1e-12);  // agents 2 and 4
+}
+
+TEST(ConvergenceJudge, HoldsForHoldSecondsAndWaitsForThePlanAndDueAgents) {
+  FaultPlan plan;
+  plan.kill.push_back({2, 1.0, 3.0});  // agent 2 killed at 1 s, back at 3 s
+  ConvergenceJudge judge(0.01, 0.5, 1.0, plan);
+  Presence p({1, 2}, 1.0);
+  p.on_sample(sample(1, 1, 0.0, Vec3::Zero()), 0.0);
+  p.on_sample(sample(2, 1, 0.0, Vec3::Zero()), 0.0);
+  records::GraphSnapshot agree;
+  agree.set_agents(2);
+  agree.set_disagreement_m(0.001);
+  agree.set_spread_m(0.001);
+  // Before the last planned fault ends (the restart at 3 s), agreement does not count.
+  EXPECT_EQ(ConvergenceJudge::Verdict::kNone, judge.update(2.0, agree, p));
+  EXPECT_EQ(ConvergenceJudge::Verdict::kNone, judge.update(2.9, agree, p));
+  // After it, agent 2 is due back: it must be running.
+  p.expire(3.5);  // both silent: departed
+  p.on_sample(sample(1, 2, 3.5, Vec3::Zero()), 3.5);
+  EXPECT_EQ(ConvergenceJudge::Verdict::kNone, judge.update(3.5, agree, p));
+  EXPECT_EQ(ConvergenceJudge::Verdict::kNone, judge.update(4.5, agree, p));
+  p.on_sample(sample(2, 2, 4.6, Vec3::Zero()), 4.6);
+  EXPECT_EQ(ConvergenceJudge::Verdict::kNone, judge.update(4.6, agree, p));  // the hold starts
+  records::GraphSnapshot apart = agree;
+  apart.set_disagreement_m(0.5);
+  EXPECT_EQ(ConvergenceJudge::Verdict::kNone, judge.update(4.8, apart, p));  // and restarts
+  EXPECT_EQ(ConvergenceJudge::Verdict::kNone, judge.update(4.9, agree, p));
+  EXPECT_EQ(ConvergenceJudge::Verdict::kConverged, judge.update(5.4, agree, p));
+  EXPECT_TRUE(judge.converged());
+  EXPECT_DOUBLE_EQ(judge.converged_at_s(), 4.9);
+  EXPECT_EQ(ConvergenceJudge::Verdict::kNone, judge.update(5.5, agree, p));  // once
+}
+
+TEST(ConvergenceJudge, AgentsThatAgreeWithoutAnExpectedAgentHaveNotConverged) {
+  ConvergenceJudge judge(0.01, 0.5, 1.0, FaultPlan{});
+  Presence p({1, 2, 3}, 1.0);
+  for (AgentId id : {1u, 2u, 3u}) p.on_sample(sample(id, 1, 0.0, Vec3::Zero()), 0.0);
+  p.on_sample(sample(3, 2, 0.1, Vec3::Zero(), Phase::kStopping), 0.1);  // agent 3 gone (or stopped)
+  records::GraphSnapshot agree;
+  agree.set_agents(2);
+  agree.set_disagreement_m(0.001);
+  agree.set_spread_m(0.001);
+  EXPECT_EQ(ConvergenceJudge::Verdict::kNone, judge.update(1.0, agree, p));
+  EXPECT_EQ(ConvergenceJudge::Verdict::kNone, judge.update(2.0, agree, p));  // hold + timeout
+  EXPECT_EQ(ConvergenceJudge::Verdict::kAgreedWithoutSome, judge.update(2.6, agree, p));
+  EXPECT_FALSE(judge.converged());
+  EXPECT_EQ(judge.missing(), std::vector<AgentId>{3});
+  // An agent the plan kills without restart is not missing.
+  FaultPlan plan;
+  plan.kill.push_back({3, 0.05, 0.0});
+  ConvergenceJudge planned(0.01, 0.5, 1.0, plan);
+  EXPECT_EQ(ConvergenceJudge::Verdict::kNone, planned.update(1.0, agree, p));
+  EXPECT_EQ(ConvergenceJudge::Verdict::kConverged, planned.update(1.5, agree, p));
+}
+
+TEST(SeparationMonitor, JudgesEverySampleCountsEachViolationOnceAndForgetsTheDeparted) {
+  SeparationMonitor m(1.0);
+  EXPECT_FALSE(m.measured());
+  // Two agents closing head-on at 1 m/s each, sampled every 20 ms at slightly different times:
+  // agent 2's sample is moved to agent 1's instant by its velocity.
+  for (int k = 0; k <= 100; ++k) {
+    const double t = 0.02 * k;
+    m.on_sample(1, Vec3(-2 + t, 0, 0), Vec3(1, 0, 0), t);
+    m.on_sample(2, Vec3(2 - (t + 0.01), 0, 0), Vec3(-1, 0, 0), t + 0.01);
+  }
+  // Closest at t = 2 s (both at 0): measured on the samples, not on 10 Hz rows.
+  EXPECT_NEAR(m.min_m(), 0.0, 1e-9);
+  EXPECT_NEAR(m.min_t_s(), 2.0, 0.011);
+  EXPECT_EQ(m.min_pair(), std::make_pair(AgentId{1}, AgentId{2}));
+  EXPECT_EQ(m.violations(), 1u);  // below 1 m for many samples: one violation
+  // Hovering at the boundary (in and out by less than kRearmM) is the same violation.
+  m.on_sample(1, Vec3(-0.51, 0, 0), Vec3::Zero(), 2.5);
+  m.on_sample(2, Vec3(0.51, 0, 0), Vec3::Zero(), 2.5);
+  m.on_sample(1, Vec3(-0.48, 0, 0), Vec3::Zero(), 2.52);
+  EXPECT_EQ(m.violations(), 1u);
+  // Apart again, then close again: a second violation.
+  m.on_sample(1, Vec3(-5, 0, 0), Vec3::Zero(), 3.0);
+  m.on_sample(2, Vec3(5, 0, 0), Vec3::Zero(), 3.0);
+  m.on_sample(1, Vec3(4.5, 0, 0), Vec3::Zero(), 3.02);
+  EXPECT_EQ(m.violations(), 2u);
+  // A departed agent's last position no longer counts: apart, agent 2 departs, agent 1 flies
+  // through where 2 was.
+  m.on_sample(1, Vec3(-5, 0, 0), Vec3::Zero(), 3.04);
+  m.forget(2);
+  m.on_sample(1, Vec3(5, 0, 0), Vec3::Zero(), 3.06);
+  EXPECT_EQ(m.violations(), 2u);
+  // A non-finite sample is ignored: it neither counts nor stays to be measured against.
+  m.on_sample(3, Vec3(std::nan(""), 0, 0), Vec3::Zero(), 3.08);
+  m.on_sample(4, Vec3(5.1, 0, 0), Vec3::Zero(), 3.08);  // close to agent 1: a third violation
+  EXPECT_EQ(m.violations(), 3u);
+  EXPECT_EQ(m.min_pair(), std::make_pair(AgentId{1}, AgentId{2}));
+}
+
+TEST(ConvergenceJudge, AnAgentHeldOffItsSlotByAvoidanceHasArrivedOnceItHoldsStill) {
+  ConvergenceJudge judge(0.01, 0.5, 1.0, FaultPlan{});
+  Presence p({1, 2}, 1.0);
+  for (AgentId id : {1u, 2u}) p.on_sample(sample(id, 1, 0.0, Vec3::Zero()), 0.0);
+  records::GraphSnapshot g;
+  g.set_agents(2);
+  g.set_disagreement_m(0.001);
+  g.set_spread_m(0.0);  // the held agents are not in the spread
+  g.set_held_speed_mps(0.2);
+  EXPECT_EQ(ConvergenceJudge::Verdict::kNone, judge.update(1.0, g, p));
+  EXPECT_EQ(ConvergenceJudge::Verdict::kNone, judge.update(2.0, g, p));  // still moving
+  g.set_held_speed_mps(0.005);  // below tolerance_m per second
+  EXPECT_EQ(ConvergenceJudge::Verdict::kNone, judge.update(2.1, g, p));
+  EXPECT_EQ(ConvergenceJudge::Verdict::kConverged, judge.update(2.6, g, p));
+}
+
+TEST(GraphMetrics, HeldAgentsAreLeftOutOfTheSpreadFromTheSlots) {
+  const std::vector<AgentId> ids{1, 2, 3};
+  const Positions q(3, Vec3::Zero());
+  const Positions p{Vec3(0.7, 0, 0), Vec3(-0.7, 0, 0), Vec3(5, 0.02, 0)};
+  const Positions offsets{Vec3::Zero(), Vec3::Zero(), Vec3(5, 0, 0)};
+  const std::vector<std::pair<AgentId, double>> none;
+  const auto links = [&](int) -> const auto& { return none; };
+  EXPECT_NEAR(measure_graph(0, ids, q, p, links, Vec3::Zero(), offsets).spread_m(), 0.7, 1e-12);
+  EXPECT_NEAR(
+      measure_graph(0, ids, q, p, links, Vec3::Zero(), offsets, {true, true, false}).spread_m(),
+      0.02, 1e-12);
+}
+
+TEST(Recorder, FedWithMessagesWritesTheRunRecordAndASummary) {
+  const RunConfig rc = resolve_scenario(parse_scenario_text(
+      "name: \"rec\"\nagents { id: 1 position { x: 0 } }\nagents { id: 2 position { x: 2 } }\n"
+      "weight { policy: UNWEIGHTED }\nconvergence { tolerance_m: 0.1 hold_s: 0.2 }\n"
+      "faults { cut { a: 1 b: 2 start_s: 0.1 end_s: 0.2 } }\n",
+      "rec"));
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("qswarm-recorder-" + std::to_string(::getpid()));
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  std::string text;
+  {
+    Recorder rec(rc, dir.string(), 1.0);
+    std::int64_t wall = 1'000'000'000;
+    for (int k = 0; k <= 50; ++k) {
+      const double t = 0.02 * k;
+      const double x = 1.0 - std::exp(-5.0 * t);  // both move to x = 1
+      StateMessage a = sample(1, k + 1, t, Vec3(x, 0, 0)),
+                   b = sample(2, k + 1, t, Vec3(2 - x, 0, 0));
+      a.view.q0 = Vec3(0, 0, 0);
+      b.view.q0 = Vec3(2, 0, 0);
+      a.links = {{2, 1.0}};
+      a.initial_links = {{2, 1.0}};
+      b.links = {{1, 1.0}};
+      b.initial_links = {{1, 1.0}};
+      rec.on_sample(a, wall);
+      rec.on_sample(b, wall);
+      rec.tick(wall);
+      wall += 20'000'000;
+      if (rec.converged()) break;
+    }
+    EXPECT_TRUE(rec.converged());
+    text = rec.finish("converged", 1.0);
+    EXPECT_TRUE(rec.complete()) << rec.failed_file();
+    EXPECT_EQ(rec.summary().edges_initial_size(), 1);
+    EXPECT_EQ(rec.summary().agents_size(), 2);
+    EXPECT_EQ(rec.summary().joins(), 2u);
+  }
+  EXPECT_NE(text.find("CONVERGED"), std::string::npos) << text;
+  for (const char* f : {"telemetry.csv", "graph.csv", "events.csv", "records.pb", "summary.json"})
+    EXPECT_GT(std::filesystem::file_size(dir / f), 20u) << f;
+  std::ifstream ev(dir / "events.csv");
+  std::stringstream all;
+  all << ev.rdbuf();
+  for (const char* kind : {",join,", ",cut,", ",cut_end,", ",converged,", ",end,"})
+    EXPECT_NE(all.str().find(kind), std::string::npos) << kind << " in\n" << all.str();
+  std::filesystem::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace qswarm

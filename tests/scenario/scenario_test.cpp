@@ -1,0 +1,214 @@
+// The scenario resolver is a pure function: every bad field is refused with its name, in-process.
+#include <gtest/gtest.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "common/scenario/fault_flags.hpp"
+#include "common/scenario/scenario.hpp"
+
+namespace qswarm {
+namespace {
+
+const std::string kTwo =
+    "agents { id: 1 position { x: 0 y: 0 z: 0 } }\nagents { id: 2 position { x: 1 y: 0 z: 0 } }\n";
+
+std::string error_of(const std::string& text) {
+  try {
+    resolve_scenario(parse_scenario_text(text, "s.txtpb"));
+  } catch (const ScenarioError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(Scenario, EveryBadFieldIsRefusedWithItsName) {
+  struct Case {
+    std::string text, expect;
+  };
+  const std::vector<Case> cases = {
+      {"name: \"x\"\nagnets { id: 1 }\n", "s.txtpb:2:"},  // syntax: line
+      {"name: \"x\"\nagnets { id: 1 }\n", "agnets"},
+      {kTwo + "agents { id: 2 position { x: 5 } }\n", "agents[2].id"},  // duplicate
+      {kTwo + "topology { threshold_m: -3 }\n", "topology.threshold_m"},
+      {"agents { id: 1 position { x: nan } }\n", "agents[0].position"},
+      {kTwo + "topology { policy: FIXED edges { a: 1 b: 9 } }\n", "topology.edges[0].b"},
+      {kTwo + "mode: QUADCOPTER\nrates { physics_hz: 100 }\n", "rates.physics_hz"},
+      {kTwo + "law: GOSSIP\n", "GOSSIP"},
+      {"", "agents"},
+      {kTwo + "faults { loss { probability: 1.5 } }\n", "faults.loss[0].probability"},
+      {kTwo + "faults { cut { a: 1 b: 7 start_s: 1 end_s: 2 } }\n", "faults.cut[0].b"},
+      {kTwo + "faults { partition { group: 1 start_s: 5 end_s: 3 } }\n",
+       "faults.partition[0].end_s"},
+      {kTwo + "faults { kill { agent: 2 at_s: 5 restart_at_s: 4 } }\n",
+       "faults.kill[0].restart_at_s"},
+      // Values that pass a type check but no run can honour.
+      {kTwo + "rates { physics_hz: 500 consensus_hz: 30 }\n", "rates.consensus_hz"},  // 500/30
+      {kTwo + "rates { consensus_hz: 0.001 }\n", "rates.consensus_hz"},
+      {kTwo + "duration_s: nan\n", "duration_s"},
+      {kTwo + "duration_s: inf\n", "duration_s"},
+      {kTwo + "gain: 1e300\n", "gain"},
+      {kTwo + "weight { scale: 1e12 }\n", "weight.scale"},
+      {kTwo + "transport { neighbor_timeout_s: 0.001 }\n", "transport.neighbor_timeout_s"},
+      {kTwo + "convergence { hold_s: -1 }\n", "convergence.hold_s"},
+      {kTwo + "faults { delay { mean_s: nan } }\n", "faults.delay[0].mean_s"},
+      {kTwo + "faults { kill { agent: 2 at_s: inf } }\n", "faults.kill[0].at_s"},
+      {kTwo + "faults { late_join { agent: 2 at_s: 1 } late_join { agent: 2 at_s: 2 } }\n",
+       "faults.late_join[1].agent"},
+      {"random_agents { count: 513 }\n", "random_agents.count"},
+      {"random_agents { count: 3 box_m: nan }\n", "random_agents.box_m"},
+      // Collision avoidance: a point agent cannot have it; the distance must be one a run honours;
+      // a run must not start in a violation (listed or random starts).
+      {kTwo + "avoidance { enabled: true }\n", "avoidance.enabled"},
+      {kTwo + "mode: QUADCOPTER\navoidance { safe_distance_m: nan }\n",
+       "avoidance.safe_distance_m"},
+      {kTwo + "avoidance { safe_distance_m: 0 }\n", "avoidance.safe_distance_m"},
+      {kTwo + "avoidance { safe_distance_m: 1e9 }\n", "avoidance.safe_distance_m"},
+      {kTwo + "mode: QUADCOPTER\navoidance { safe_distance_m: 0.3 }\n",
+       "avoidance.safe_distance_m"},
+      {kTwo + "mode: QUADCOPTER\navoidance { safe_distance_m: 1.5 }\n", "agents[1].position"},
+      {"mode: QUADCOPTER\nrandom_agents { count: 64 box_m: 2 }\n", "random_agents.box_m"},
+  };
+  for (const Case& c : cases) {
+    const std::string why = error_of(c.text);
+    EXPECT_NE(why.find(c.expect), std::string::npos)
+        << "scenario:\n"
+        << c.text << "expected '" << c.expect << "' in: '" << why << "'";
+  }
+}
+
+TEST(Scenario, AvoidanceIsOnForQuadcoptersOffForParticlesAndKeepsRandomStartsApart) {
+  const RunConfig quad = resolve_scenario(parse_scenario_text(
+      "mode: QUADCOPTER\nrandom_agents { count: 40 box_m: 6 }\nseed: 3\n", "s"));
+  EXPECT_TRUE(quad.avoidance.enabled);
+  EXPECT_EQ(quad.avoidance.safe_distance_m, 1.0);
+  double closest = 1e300;
+  for (const AgentSpec& a : quad.agents)
+    for (const AgentSpec& b : quad.agents)
+      if (a.id != b.id) closest = std::min(closest, (a.position_W - b.position_W).norm());
+  EXPECT_GE(closest, 1.0);  // 40 in a 6 m cube: a plain draw would put some closer
+  EXPECT_TRUE(quad.resolved.avoidance().enabled());  // the record's scenario says what ran
+  EXPECT_EQ(quad.resolved.avoidance().safe_distance_m(), 1.0);
+
+  const RunConfig particle = resolve_scenario(parse_scenario_text(kTwo, "s"));
+  EXPECT_FALSE(particle.avoidance.enabled);
+  const RunConfig off = resolve_scenario(parse_scenario_text(
+      kTwo + "mode: QUADCOPTER\navoidance { enabled: false safe_distance_m: 2 }\n", "s"));
+  EXPECT_FALSE(off.avoidance.enabled);  // and listed starts closer than 2 m are then allowed
+  EXPECT_EQ(off.avoidance.safe_distance_m, 2.0);  // still what the record judges by
+  // Held agents: slots closer than the filter keeps quadcopters apart.
+  EXPECT_EQ(particle.held_agents().size(), 0u);
+  const std::string four = "mode: QUADCOPTER\nrandom_agents { count: 4 box_m: 20 }\n";
+  EXPECT_EQ(resolve_scenario(parse_scenario_text(four, "s")).held_agents().size(),
+            4u);  // one point
+  EXPECT_EQ(
+      resolve_scenario(parse_scenario_text(four + "formation { shape: GRID spacing_m: 3 }\n", "s"))
+          .held_agents()
+          .size(),
+      0u);
+  EXPECT_EQ(
+      resolve_scenario(parse_scenario_text(four + "formation { shape: LINE spacing_m: 1 }\n", "s"))
+          .held_agents()
+          .size(),
+      4u);
+  // Without avoidance the random draw is the plain one (the paper's scenarios keep their starts).
+  const RunConfig plain =
+      resolve_scenario(parse_scenario_text("random_agents { count: 40 box_m: 6 }\nseed: 3\n", "s"));
+  const std::vector<AgentSpec> uniform = random_agent_specs(40, 3, 6.0);
+  for (std::size_t i = 0; i < uniform.size(); ++i)
+    EXPECT_EQ(plain.agents[i].position_W, uniform[i].position_W);
+}
+
+TEST(Scenario, SwarmsBeyondWhatTheWireCarriesAreRefusedAndTheBoundItselfIsAccepted) {
+  std::string at_bound, beyond;
+  for (int i = 1; i <= static_cast<int>(kMaxSwarmAgents) + 1; ++i) {
+    const std::string a =
+        "agents { id: " + std::to_string(i) + " position { x: " + std::to_string(i) + " } }\n";
+    if (i <= static_cast<int>(kMaxSwarmAgents)) at_bound += a;
+    beyond += a;
+  }
+  EXPECT_EQ(resolve_scenario(parse_scenario_text(at_bound, "s")).agents.size(), kMaxSwarmAgents);
+  EXPECT_NE(error_of(beyond).find("at most 512 agents"), std::string::npos) << error_of(beyond);
+}
+
+TEST(Scenario, DefaultsAreWrittenBackSoTheRecordSaysWhatRan) {
+  const RunConfig rc = resolve_scenario(parse_scenario_text(kTwo, "s"));
+  EXPECT_DOUBLE_EQ(rc.resolved.rates().consensus_hz(), 50.0);
+  EXPECT_DOUBLE_EQ(rc.resolved.transport().neighbor_timeout_s(), 1.0);
+  EXPECT_EQ(rc.resolved.transport().interface(), "127.0.0.1");
+  const RunConfig again = resolve_scenario(parse_scenario_text(to_text(rc.resolved), "again"));
+  EXPECT_EQ(to_text(again.resolved), to_text(rc.resolved));
+}
+
+TEST(Scenario, StartPeersAreOneDefinitionFixedAwareWithoutLateJoiners) {
+  const RunConfig rc = resolve_scenario(parse_scenario_text(
+      kTwo +
+          "agents { id: 3 }\nagents { id: 4 }\n"
+          "topology { policy: FIXED edges { a: 1 b: 2 } edges { a: 2 b: 3 } edges { a: 3 b: 4 } }\n"
+          "faults { late_join { agent: 3 at_s: 2 } }\n",
+      "s"));
+  EXPECT_EQ(rc.start_peers(2), (std::set<AgentId>{1}));  // 3 joins late
+  EXPECT_EQ(rc.start_peers(4), (std::set<AgentId>{}));
+  const RunConfig open = resolve_scenario(parse_scenario_text(kTwo + "agents { id: 3 }\n", "s"));
+  EXPECT_EQ(open.start_peers(1), (std::set<AgentId>{2, 3}));
+}
+
+TEST(Scenario, FilesThatAreNotRegularOrTooLargeAreRefusedUnread) {
+  for (const std::string path : {"/dev/zero", "/dev/null", "/tmp"}) {
+    try {
+      read_scenario_file(path);
+      ADD_FAILURE() << path << " was read";
+    } catch (const ScenarioError& e) {
+      EXPECT_NE(std::string(e.what()).find("regular file"), std::string::npos) << e.what();
+    }
+  }
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() /
+                                    ("qswarm-scenario-test-" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string fifo = (dir / "fifo").string();
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  EXPECT_THROW(read_scenario_file(fifo), ScenarioError);  // never blocks on the open
+  const auto big = dir / "big.txtpb";
+  {
+    std::ofstream out(big);
+    const std::string line(1023, '#');
+    for (std::size_t i = 0; i <= kMaxScenarioBytes / 1024; ++i) out << line << '\n';
+  }
+  try {
+    read_scenario_file(big.string());
+    ADD_FAILURE() << "a file over the limit was read";
+  } catch (const ScenarioError& e) {
+    EXPECT_NE(std::string(e.what()).find("at most"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(read_scenario_file((dir / "missing.txtpb").string()), ScenarioError);
+  std::filesystem::remove_all(dir);
+}
+
+TEST(FaultFlags, ShortcutsNameTheirFlag) {
+  scenario::Scenario s;
+  const auto why = [&](auto f) -> std::string {
+    try {
+      f();
+    } catch (const ScenarioError& e) {
+      return e.what();
+    }
+    return "";
+  };
+  EXPECT_NE(why([&] {
+              add_cut_shortcut(s, "1to2@5:15");
+            }).find("--cut '1to2@5:15': expected A-B@START:END"),
+            std::string::npos);
+  EXPECT_NE(why([&] { add_loss_shortcut(s, 2.0); }).find("--loss"), std::string::npos);
+  EXPECT_NE(why([&] { add_loss_shortcut(s, std::nan("")); }).find("--loss"), std::string::npos);
+  EXPECT_NE(why([&] { add_kill_shortcut(s, "x@1"); }).find("--kill"), std::string::npos);
+  EXPECT_NE(why([&] { add_delay_shortcut(s, "nan"); }).find("--delay"), std::string::npos);
+  EXPECT_NE(why([&] { add_partition_shortcut(s, "1,2"); }).find("--partition"), std::string::npos);
+  add_cut_shortcut(s, "1-2@5:15");
+  ASSERT_EQ(s.faults().cut_size(), 1);
+  EXPECT_DOUBLE_EQ(s.faults().cut(0).end_s(), 15.0);
+}
+
+}  // namespace
+}  // namespace qswarm
