@@ -34,7 +34,7 @@ int main(int argc, char** argv) {
   if (!rc) return 2;
   const bool claiming = f.claim || f.id == "auto";
   AgentId id = f.id == "auto" ? 0 : static_cast<AgentId>(std::stoul(f.id));
-  if (id != 0 && !rc->agent(id)) {
+  if (id != 0 && !rc->spec(id)) {
     std::fprintf(stderr, "swarm-agent: --id %u: expected the id of an agent listed in %s\n", id,
                  f.process.scenario.c_str());
     return 2;
@@ -50,7 +50,7 @@ int main(int argc, char** argv) {
     std::optional<IdClaimRunner> claim;
     if (claiming) {
       const std::set<AgentId> ids = rc->ids();
-      claim.emplace(bus, std::vector<AgentId>(ids.begin(), ids.end()), rc->run_id, id,
+      claim.emplace(bus, std::vector<AgentId>(ids.begin(), ids.end()), rc->transport.run_id, id,
                     IdClaimer::Config::for_swarm(rc->agents.size(), f.claim_timeout_s),
                     random_nonce(), clock);
       std::string why;
@@ -72,8 +72,8 @@ int main(int argc, char** argv) {
     f.loop.incarnation = wall_now_ns();
     f.loop.wall_clock_ns = wall_now_ns;
     AgentLoop loop(*rc, id, f.loop, bus, clock);
-    log->info("agent {} up: domain {}, {} law, time scale {}", id, rc->domain_id,
-              to_string(rc->law.kind), f.process.time_scale);
+    log->info("agent {} up: domain {}, {} law, time scale {}", id, rc->transport.domain_id,
+              to_string(rc->agent.law.kind), f.process.time_scale);
     int exit_code = 0;
     while (!g_stop) {
       const AgentLoop::Poll p = loop.poll();

@@ -46,8 +46,8 @@ std::string as_json(const RunConfig& rc, const InitialGraph& g, double tau) {
   const Vec3 avg = rc.initial_average();
   for (int k = 0; k < 3; ++k) ins.add_agreement_point(avg[k]);
   ins.set_time_constant_s(tau);
-  ins.set_avoidance(rc.avoidance.enabled);
-  ins.set_safe_distance_m(rc.avoidance.safe_distance_m);
+  ins.set_avoidance(rc.agent.avoidance.enabled);
+  ins.set_safe_distance_m(rc.agent.avoidance.safe_distance_m);
   for (const AgentId id : rc.held_agents()) ins.add_held_agents(id);
   *ins.mutable_resolved() = rc.resolved;
   return to_json(ins);
@@ -58,9 +58,9 @@ std::string as_text(const RunConfig& rc, const InitialGraph& g, double tau) {
   const int n = static_cast<int>(rc.agents.size());
   std::ostringstream o;
   o.precision(6);
-  o << "scenario " << rc.name << ": " << n << " agents, " << to_string(rc.law.weight.policy)
-    << " weights, " << to_string(rc.law.topology.policy) << " topology, " << to_string(rc.law.kind)
-    << " law, gain " << rc.law.gain << "\n";
+  o << "scenario " << rc.name << ": " << n << " agents, " << to_string(rc.agent.law.weight.policy)
+    << " weights, " << to_string(rc.agent.law.topology.policy) << " topology, "
+    << to_string(rc.agent.law.kind) << " law, gain " << rc.agent.law.gain << "\n";
   o << "initial edges (" << g.edges.size() << "):";
   for (const Edge& e : g.edges)
     o << " " << rc.agents[e.i].id << "-" << rc.agents[e.j].id << " (w=" << e.weight << ")";
@@ -83,20 +83,20 @@ std::string as_text(const RunConfig& rc, const InitialGraph& g, double tau) {
     << (rc.has_formation() ? " of the agents' estimates of the centre" : "") << "): (" << avg.x()
     << ", " << avg.y() << ", " << avg.z() << ")\n";
   if (tau > 0) o << "time constant 1/(k lambda2) = " << tau << " s (exact for fixed weights)\n";
-  if (rc.avoidance.enabled) {
-    o << "collision avoidance on: every quadcopter keeps " << rc.avoidance.safe_distance_m
-      << " m from every agent it hears (the filter aims for " << rc.avoidance.filter_distance_m()
-      << " m)\n";
+  if (rc.agent.avoidance.enabled) {
+    o << "collision avoidance on: every quadcopter keeps " << rc.agent.avoidance.safe_distance_m
+      << " m from every agent it hears (the filter aims for "
+      << rc.agent.avoidance.filter_distance_m() << " m)\n";
     const std::set<AgentId> held = rc.held_agents();
     if (!held.empty()) {
       o << "  " << held.size() << " of " << n
         << " agents have slots closer than that to another's: they end in a cluster about "
            "their slots, not on them\n";
     }
-  } else if (rc.mode == AgentMode::kQuadcopter) {
+  } else if (rc.agent.mode == AgentMode::kQuadcopter) {
     o << "collision avoidance off: nothing keeps the quadcopters apart (the record counts "
          "approaches closer than "
-      << rc.avoidance.safe_distance_m << " m)\n";
+      << rc.agent.avoidance.safe_distance_m << " m)\n";
   }
   if (rc.has_formation()) {
     o << "formation: the agents agree on the centre above and fly to centre + slot\n";
@@ -123,16 +123,16 @@ InitialGraph initial_graph(const RunConfig& rc) {
   InitialGraph g;
   const int n = static_cast<int>(rc.agents.size());
   for (int i = 0; i < n; ++i) {
-    LinkTracker tracker(rc.agents[i].id, rc.law.topology);
+    LinkTracker tracker(rc.agents[i].id, rc.agent.law.topology);
     for (int j = i + 1; j < n; ++j) {
       // The law's initial states: the agents' estimates of the centre (position - slot). Under
       // RANGE, links follow the physical distance; weights always follow the states.
       const double d = (rc.agents[i].q0() - rc.agents[j].q0()).norm();
-      const double link_d = rc.law.topology.policy == TopologyPolicy::kRange
+      const double link_d = rc.agent.law.topology.policy == TopologyPolicy::kRange
                                 ? (rc.agents[i].position_W - rc.agents[j].position_W).norm()
                                 : d;
       if (tracker.update(rc.agents[j].id, link_d)) {
-        g.edges.push_back({i, j, weight_for_distance(rc.law.weight, d)});
+        g.edges.push_back({i, j, weight_for_distance(rc.agent.law.weight, d)});
       }
     }
   }
@@ -150,7 +150,7 @@ int inspect_scenario(const std::string& path, bool json) {
     return 2;
   }
   const InitialGraph g = initial_graph(rc);
-  const double tau = g.spectrum.lambda2 > 0 ? 1.0 / (rc.law.gain * g.spectrum.lambda2) : -1.0;
+  const double tau = g.spectrum.lambda2 > 0 ? 1.0 / (rc.agent.law.gain * g.spectrum.lambda2) : -1.0;
   std::cout << (json ? as_json(rc, g, tau) : as_text(rc, g, tau));
   return 0;
 }

@@ -27,7 +27,9 @@ Launcher::Launcher(LaunchSpec spec, ChildProcesses& procs, Clock& clock,
       clock_(clock),
       supervisor_ready_(std::move(supervisor_ready)) {}
 
-double Launcher::wall_limit_s() const { return spec_.rc.duration_s / spec_.time_scale + 120.0; }
+double Launcher::wall_limit_s() const {
+  return spec_.rc.judge.duration_s / spec_.time_scale + 120.0;
+}
 
 std::vector<std::string> Launcher::supervisor_argv() const {
   std::vector<std::string> a = {spec_.bin_dir + "/swarm-supervisor",

@@ -92,8 +92,8 @@ RunConfig resolve_run(const RunOptions& opt) {
   }
   if (opt.random_cuts > 0) {
     const RunConfig first = resolve_scenario(s, o);  // agents, duration and seed for the draw
-    add_random_cuts(s, opt.random_cuts, static_cast<int>(first.agents.size()), first.duration_s,
-                    first.seed);
+    add_random_cuts(s, opt.random_cuts, static_cast<int>(first.agents.size()),
+                    first.judge.duration_s, first.seed);
   }
   RunConfig rc = resolve_scenario(s, o);
   {
@@ -103,7 +103,7 @@ RunConfig resolve_run(const RunOptions& opt) {
     std::uint64_t id = 0;
     while (id == 0)
       id = (static_cast<std::uint64_t>(rd()) << 32) ^ rd() ^ static_cast<std::uint64_t>(::getpid());
-    rc.run_id = id;
+    rc.transport.run_id = id;
     rc.resolved.mutable_transport()->set_run_id(id);
   }
   return rc;
@@ -146,7 +146,8 @@ int run(const RunOptions& opt) {
   if (!opt.quiet) {
     const InitialGraph g = initial_graph(rc);
     std::cout << "swarm run: " << rc.name << ", " << rc.agents.size() << " agents, domain "
-              << rc.domain_id << ", time scale " << opt.time_scale << ", seed " << rc.seed << "\n"
+              << rc.transport.domain_id << ", time scale " << opt.time_scale << ", seed " << rc.seed
+              << "\n"
               << "initial graph: " << g.edges.size() << " edges, lambda2 " << g.spectrum.lambda2
               << (g.spectrum.components > 1 ? " (not connected yet)" : "")
               << "\nrun directory: " << dir.string() << std::endl;

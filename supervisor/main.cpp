@@ -93,7 +93,8 @@ int main(int argc, char** argv) {
       std::lock_guard<std::mutex> lock(mu);
       rec.on_sample(m, recv_ns);
     });
-    logger->info("supervisor up on domain {}, expecting {} agents", rc.domain_id, rc.agents.size());
+    logger->info("supervisor up on domain {}, expecting {} agents", rc.transport.domain_id,
+                 rc.agents.size());
     std::ofstream(run_dir + "/supervisor.ready") << "reader up\n";  // the launcher waits for this
     std::string reason;
     double last_print = -1.0;
@@ -117,7 +118,8 @@ int main(int argc, char** argv) {
         reason = "interrupted";
         break;
       }
-      if (rec.time_s() == 0.0 && wall_s() > start_timeout_s + rc.duration_s / opts.time_scale) {
+      if (rec.time_s() == 0.0 &&
+          wall_s() > start_timeout_s + rc.judge.duration_s / opts.time_scale) {
         reason = "no agents running";
         break;
       }

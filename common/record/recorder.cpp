@@ -25,9 +25,9 @@ Recorder::Recorder(RunConfig rc, std::string run_dir, double time_scale)
       dir_(std::move(run_dir)),
       time_scale_(time_scale),
       sinks_(dir_),
-      presence_(ids_of(rc_), rc_.neighbor_timeout_s),
-      judge_(rc_.tolerance_m, rc_.hold_s, rc_.neighbor_timeout_s, rc_.faults),
-      separation_(rc_.avoidance.safe_distance_m),
+      presence_(ids_of(rc_), rc_.agent.neighbor_timeout_s),
+      judge_(rc_.judge.tolerance_m, rc_.judge.hold_s, rc_.agent.neighbor_timeout_s, rc_.faults),
+      separation_(rc_.agent.avoidance.safe_distance_m),
       timeline_(rc_.faults.timeline()) {
   tally_.held = rc_.held_agents();
 }
@@ -45,7 +45,7 @@ void Recorder::on_sample(const StateMessage& m, std::int64_t recv_wall_ns) {
   // A stamp far ahead of the swarm's clock (as carried forward by the wall clock) cannot be one of
   // the run's agents' ticks: recording it would move the run's clock, end the run at once and fill
   // graph.csv. Refused, counted, and said once per agent.
-  if (rc_.agent(m.view.id) && m.stamp_s > swarm_time_at(recv_wall_ns) + kStampSlackS) {
+  if (rc_.spec(m.view.id) && m.stamp_s > swarm_time_at(recv_wall_ns) + kStampSlackS) {
     ++tally_.implausible_samples;
     if (implausible_.insert(m.view.id).second) {
       char buf[160];
@@ -56,7 +56,7 @@ void Recorder::on_sample(const StateMessage& m, std::int64_t recv_wall_ns) {
     }
     return;
   }
-  if (m.phase == Phase::kRunning && m.stamp_s > t_s_ && rc_.agent(m.view.id)) {
+  if (m.phase == Phase::kRunning && m.stamp_s > t_s_ && rc_.spec(m.view.id)) {
     t_s_ = m.stamp_s;
     t_wall_ns_ = recv_wall_ns;
   }
@@ -168,7 +168,7 @@ void Recorder::initial_snapshot() {
       const auto other = tracks.find(peer);
       if (other == tracks.end()) continue;
       const double d = (q0[i] - other->second.last.view.q0).norm();
-      links[i].emplace_back(peer, weight_for_distance(rc_.law.weight, d));
+      links[i].emplace_back(peer, weight_for_distance(rc_.agent.law.weight, d));
     }
   }
   first_full_ = measure_graph(
@@ -199,7 +199,8 @@ void Recorder::snapshot() {
   for (std::size_t i = 0; i < ids.size(); ++i) {
     if (!tally_.held.count(ids[i])) continue;
     for (std::size_t j = 0; j < ids.size() && !held[i]; ++j)
-      held[i] = j != i && (p[i] - p[j]).norm() <= rc_.avoidance.filter_distance_m() + kHeldReachM;
+      held[i] =
+          j != i && (p[i] - p[j]).norm() <= rc_.agent.avoidance.filter_distance_m() + kHeldReachM;
     if (held[i]) held_speed = std::max(held_speed, speed[i]);
   }
   last_ = measure_graph(
@@ -221,7 +222,7 @@ void Recorder::snapshot() {
 }
 
 Vec3 Recorder::offset_of(AgentId id) const {
-  const AgentSpec* spec = rc_.agent(id);
+  const AgentSpec* spec = rc_.spec(id);
   return spec ? spec->offset_W : Vec3::Zero();
 }
 

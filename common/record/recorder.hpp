@@ -42,7 +42,7 @@ class Recorder {
   // Why the run is over ("converged", "agreed without agent 5", "duration"), or "" while it goes
   // on.
   std::string end_reason_if_over() const;
-  bool duration_reached() const { return t_s_ >= rc_.duration_s; }
+  bool duration_reached() const { return t_s_ >= rc_.judge.duration_s; }
   std::string progress_line() const;
   int edges_now() const { return last_ ? last_->edges_size() : 0; }
   // Writes the end event and summary.json and flushes every file; returns the summary for people.

@@ -91,11 +91,11 @@ bool write_fallback_summary(const fs::path& dir, const RunConfig& rc, const std:
   s.set_convergence_time_s(-1.0);
   s.set_end_reason(reason);
   s.set_wall_time_s(wall_time_s);
-  s.set_run_id(rc.run_id);
+  s.set_run_id(rc.transport.run_id);
   s.set_seed(static_cast<std::uint32_t>(rc.seed));
   s.set_agents_expected(static_cast<std::uint32_t>(rc.agents.size()));
-  s.set_law(to_string(rc.law.kind));
-  s.set_mode(rc.mode == AgentMode::kQuadcopter ? "quadcopter" : "particle");
+  s.set_law(to_string(rc.agent.law.kind));
+  s.set_mode(rc.agent.mode == AgentMode::kQuadcopter ? "quadcopter" : "particle");
   for (int k = 0; k < 3; ++k) s.add_initial_average(rc.initial_average()[k]);
   const std::string json = to_json(s);
   std::ofstream f(dir / "summary.json");

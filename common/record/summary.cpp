@@ -42,7 +42,7 @@ records::Summary build_summary(const RunConfig& rc, const Presence& presence,
   records::Summary s;
   s.set_scenario(rc.name);
   s.set_converged(judge.converged());
-  s.set_run_id(rc.run_id);
+  s.set_run_id(rc.transport.run_id);
   s.set_foreign_samples(tally.foreign_samples);
   s.set_implausible_samples(tally.implausible_samples);
   for (const AgentId id : judge.missing()) s.add_missing_agents(id);
@@ -51,8 +51,8 @@ records::Summary build_summary(const RunConfig& rc, const Presence& presence,
   s.set_wall_time_s(end.wall_time_s);
   s.set_duration_s(end.t_s);
   s.set_seed(static_cast<std::uint32_t>(rc.seed));
-  s.set_mode(rc.mode == AgentMode::kQuadcopter ? "quadcopter" : "particle");
-  s.set_law(to_string(rc.law.kind));
+  s.set_mode(rc.agent.mode == AgentMode::kQuadcopter ? "quadcopter" : "particle");
+  s.set_law(to_string(rc.agent.law.kind));
   s.set_agents_expected(static_cast<std::uint32_t>(rc.agents.size()));
   s.set_joins(tally.joins);
   s.set_departures(tally.departures);
@@ -62,8 +62,8 @@ records::Summary build_summary(const RunConfig& rc, const Presence& presence,
     s.add_min_separation_agents(tally.min_separation_a);
     s.add_min_separation_agents(tally.min_separation_b);
   }
-  s.set_avoidance(rc.avoidance.enabled);
-  s.set_safe_distance_m(rc.avoidance.safe_distance_m);
+  s.set_avoidance(rc.agent.avoidance.enabled);
+  s.set_safe_distance_m(rc.agent.avoidance.safe_distance_m);
   s.set_separation_violations(tally.separation_violations);
   for (const AgentId id : tally.held) s.add_held_agents(id);
   put_vec3(s.mutable_initial_average(), rc.initial_average());
@@ -76,7 +76,7 @@ records::Summary build_summary(const RunConfig& rc, const Presence& presence,
   for (const auto& [id, a] : presence.tracks()) {
     records::AgentSummary* as = s.add_agents();
     as->set_id(id);
-    const AgentSpec* spec = rc.agent(id);
+    const AgentSpec* spec = rc.spec(id);
     put_vec3(as->mutable_initial_position(), spec ? spec->position_W : a.first.view.q0);
     if (!a.seen) continue;
     put_vec3(as->mutable_final_position(), a.last.p_W);
@@ -111,7 +111,7 @@ records::Summary build_summary(const RunConfig& rc, const Presence& presence,
   // Every agent's slot about the agreed centre, and how far from it the agent ended.
   double max_slot_error = 0.0;
   for (records::AgentSummary& as : *s.mutable_agents()) {
-    const AgentSpec* spec = rc.agent(as.id());
+    const AgentSpec* spec = rc.spec(as.id());
     const Vec3 offset = spec ? spec->offset_W : Vec3::Zero();
     put_vec3(as.mutable_offset(), offset);
     if (as.final_position_size() != 3 || final_q.empty()) continue;
@@ -199,7 +199,7 @@ std::string summary_text(const records::Summary& s, const RunConfig& rc, const s
       << " at t = " << fmt("%.2f", s.min_separation_t_s()) << " s)";
   }
   h << "\n";
-  if (rc.mode == AgentMode::kQuadcopter || s.avoidance()) {
+  if (rc.agent.mode == AgentMode::kQuadcopter || s.avoidance()) {
     h << "safe distance " << fmt("%g", s.safe_distance_m()) << " m, collision avoidance "
       << (s.avoidance() ? "on" : "off") << ": " << s.separation_violations()
       << (s.separation_violations() == 1 ? " violation" : " violations") << "\n";

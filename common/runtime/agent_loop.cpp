@@ -12,8 +12,7 @@ std::optional<double> join_time(const RunConfig& rc, AgentId id, const AgentLoop
   return rc.faults.late_join_at(id);
 }
 
-LifecycleConfig lifecycle_config(const RunConfig& rc, AgentId id, const AgentLoopOptions& o,
-                                 int steps_per_tick) {
+LifecycleConfig lifecycle_config(const RunConfig& rc, AgentId id, const AgentLoopOptions& o) {
   LifecycleConfig c;
   c.join_at_s = join_time(rc, id, o);
   if (!c.join_at_s) {
@@ -37,8 +36,9 @@ LifecycleConfig lifecycle_config(const RunConfig& rc, AgentId id, const AgentLoo
   // waiting agent only says it is here: 0.05 s per 8 agents (0.2 s at 32; 5 ms up to 8 agents).
   c.waiting_period_s = rc.agents.size() <= 8 ? c.announce_period_s
                                              : 0.05 * static_cast<double>(rc.agents.size()) / 8.0;
-  c.tick_wall_s = steps_per_tick / (rc.physics_hz * o.time_scale);
-  c.max_wall_s = o.max_wall_s >= 0.0 ? o.max_wall_s : 2.0 * rc.duration_s / o.time_scale + 30.0;
+  c.tick_wall_s = rc.agent.steps_per_tick() / (rc.agent.physics_hz * o.time_scale);
+  c.max_wall_s =
+      o.max_wall_s >= 0.0 ? o.max_wall_s : 2.0 * rc.judge.duration_s / o.time_scale + 30.0;
   c.kill_at_s = rc.faults.kills_of(id);
   return c;
 }
@@ -52,39 +52,20 @@ double default_start_timeout_s(std::size_t agents) {
 namespace {
 
 AgentParams params_for(const RunConfig& rc, AgentId id, const AgentLoopOptions& o) {
-  const AgentSpec* spec = rc.agent(id);
+  const AgentSpec* spec = rc.spec(id);
   if (!spec) throw std::invalid_argument("agent " + std::to_string(id) + " is not in the run");
-  AgentParams p = make_agent_params(rc, *spec);
-  p.incarnation = o.incarnation;
+  AgentParams p{*spec, rc.agent, {}};
+  p.start.incarnation = o.incarnation;
+  p.start.run_id = rc.transport.run_id;
+  p.start.expected_peers = rc.start_peers(id).size();
   if (join_time(rc, id, o)) {
-    p.expected_peers = 0;  // joins a running swarm: no first-tick wait
-    p.recover_flows = o.restarted;
+    p.start.expected_peers = 0;  // joins a running swarm: no first-tick wait
+    p.start.recover_flows = o.restarted;
   }
   return p;
 }
 
 }  // namespace
-
-AgentParams make_agent_params(const RunConfig& rc, const AgentSpec& spec) {
-  AgentParams p;
-  p.id = spec.id;
-  p.p0_W = spec.position_W;
-  p.yaw0_rad = spec.yaw_rad;
-  p.offset_W = spec.offset_W;
-  p.mode = rc.mode;
-  p.law = rc.law;
-  p.physics_hz = rc.physics_hz;
-  p.consensus_hz = rc.consensus_hz;
-  p.airframe = rc.airframe;
-  p.gains = rc.gains;
-  p.reference_speed_mps = rc.reference_speed_mps;
-  p.reference_accel_mps2 = rc.reference_accel_mps2;
-  p.avoidance = rc.avoidance;
-  p.neighbor_timeout_s = rc.neighbor_timeout_s;
-  p.run_id = rc.run_id;
-  p.expected_peers = rc.start_peers(spec.id).size();
-  return p;
-}
 
 AgentLoop::AgentLoop(const RunConfig& rc, AgentId id, const AgentLoopOptions& opts,
                      NeighborBus& transport, Clock& clock)
@@ -94,7 +75,7 @@ AgentLoop::AgentLoop(const RunConfig& rc, AgentId id, const AgentLoopOptions& op
       transport_(transport),
       faulty_(transport, LinkFaults(rc.faults, id, rc.seed), id),
       runtime_(params_for(rc, id, opts), faulty_),
-      life_(lifecycle_config(rc, id, opts, runtime_.steps_per_tick()), clock.now_s()) {
+      life_(lifecycle_config(rc, id, opts), clock.now_s()) {
   if (opts.wall_clock_ns) runtime_.set_wall_clock(opts.wall_clock_ns);
 }
 
@@ -123,9 +104,10 @@ AgentLoop::Poll AgentLoop::poll() {
     runtime_.set_start_time(s.start_time_s);
     char buf[160];
     std::snprintf(buf, sizeof buf, "%s at swarm time %.3f s after %.2f s of discovery",
-                  runtime_.params().recover_flows                                 ? "restarting"
-                  : runtime_.params().expected_peers == 0 && s.start_time_s > 0.0 ? "joining late"
-                                                                                  : "running",
+                  runtime_.params().start.recover_flows ? "restarting"
+                  : runtime_.params().start.expected_peers == 0 && s.start_time_s > 0.0
+                      ? "joining late"
+                      : "running",
                   s.start_time_s, life_.discovery_s());
     r.notes.push_back({false, buf});
   }

@@ -76,8 +76,4 @@ class AgentLoop {
 // took 25 s), so 30 s plus half a second per agent.
 double default_start_timeout_s(std::size_t agents);
 
-// One agent's parameters from the run: its start, the run's law, rates, airframe, gains, limits and
-// the peers its law waits for (start_peers()).
-AgentParams make_agent_params(const RunConfig& rc, const AgentSpec& spec);
-
 }  // namespace qswarm

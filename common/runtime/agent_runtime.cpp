@@ -10,30 +10,33 @@ namespace qswarm {
 AgentRuntime::AgentRuntime(AgentParams p, NeighborBus& bus)
     : p_(std::move(p)),
       bus_(bus),
-      law_(make_law(p_.id, p_.p0_W - p_.offset_W, p_.law)),
-      reference_(p_.p0_W, p_.reference_speed_mps, p_.reference_accel_mps2) {
-  if (!(p_.physics_hz > 0.0) || !(p_.consensus_hz > 0.0) || p_.consensus_hz > p_.physics_hz) {
+      law_(make_law(p_.spec.id, p_.spec.position_W - p_.spec.offset_W, p_.config.law)),
+      reference_(p_.spec.position_W, p_.config.reference_speed_mps,
+                 p_.config.reference_accel_mps2) {
+  if (!(p_.config.physics_hz > 0.0) || !(p_.config.consensus_hz > 0.0) ||
+      p_.config.consensus_hz > p_.config.physics_hz) {
     throw std::invalid_argument("rates: need 0 < consensus_hz <= physics_hz");
   }
-  p_.airframe.validate();
-  p_.gains.validate();
-  steps_per_tick_ = std::max(1, static_cast<int>(std::lround(p_.physics_hz / p_.consensus_hz)));
-  if (p_.law.topology.policy == TopologyPolicy::kFixed) {
-    listen_to_ = listed_peers(p_.law.topology, p_.id);
+  p_.config.airframe.validate();
+  p_.config.gains.validate();
+  steps_per_tick_ = p_.config.steps_per_tick();
+  if (p_.config.law.topology.policy == TopologyPolicy::kFixed) {
+    listen_to_ = listed_peers(p_.config.law.topology, p_.spec.id);
   }
-  quad_.p_W = p_.p0_W;
-  quad_.R_WB = rotation_from_tait_bryan({0.0, 0.0, p_.yaw0_rad});
-  if (p_.mode == AgentMode::kQuadcopter) rotors_ = hover_rotors(p_.airframe);
-  if (p_.avoidance.enabled) p_.avoidance.validate();
+  quad_.p_W = p_.spec.position_W;
+  quad_.R_WB = rotation_from_tait_bryan({0.0, 0.0, p_.spec.yaw_rad});
+  if (p_.config.mode == AgentMode::kQuadcopter) rotors_ = hover_rotors(p_.config.airframe);
+  if (p_.config.avoidance.enabled) p_.config.avoidance.validate();
 }
 
 void AgentRuntime::set_start_time(double t_s) {
   if (steps_ != 0) throw std::logic_error("set_start_time after the first step");
-  p_.start_time_s = t_s;
+  p_.start.start_time_s = t_s;
 }
 
 Vec3 AgentRuntime::position() const {
-  return p_.mode == AgentMode::kQuadcopter ? quad_.p_W : Vec3(law_->state() + p_.offset_W);
+  return p_.config.mode == AgentMode::kQuadcopter ? quad_.p_W
+                                                  : Vec3(law_->state() + p_.spec.offset_W);
 }
 
 void AgentRuntime::publish(Phase phase) {
@@ -41,17 +44,17 @@ void AgentRuntime::publish(Phase phase) {
   m.view = law_->message();
   m.seq = ++seq_;
   m.stamp_s = time_s();
-  m.mode = p_.mode;
+  m.mode = p_.config.mode;
   m.phase = phase;
   m.p_W = position();
-  m.v_W = p_.mode == AgentMode::kQuadcopter ? quad_.velocity_W() : Vec3::Zero();
+  m.v_W = p_.config.mode == AgentMode::kQuadcopter ? quad_.velocity_W() : Vec3::Zero();
   m.q_WB = Eigen::Quaterniond(quad_.R_WB);
   m.rotors_radps = rotors_;
   for (const auto& [peer, w] : law_->links()) m.links.emplace_back(peer, w);
   m.initial_links = initial_links_;
   m.wall_ns = wall_clock_ ? wall_clock_() : 0;
-  m.incarnation = p_.incarnation;
-  m.run_id = p_.run_id;
+  m.incarnation = p_.start.incarnation;
+  m.run_id = p_.start.run_id;
   m.received = received_;
   m.dropped = dropped_;
   m.overruns = overruns_;
@@ -62,9 +65,9 @@ void AgentRuntime::publish(Phase phase) {
 void AgentRuntime::consensus_tick(std::vector<AgentEvent>& events) {
   const double t = time_s();
   std::vector<NeighborView> views;
-  for (const StateMessage& m : bus_.latest(p_.id)) {
+  for (const StateMessage& m : bus_.latest(p_.spec.id)) {
     const AgentId peer = m.view.id;
-    if (peer == p_.id) continue;
+    if (peer == p_.spec.id) continue;
     Peer& st = peers_[peer];
     const bool fresh = m.incarnation != st.incarnation || m.seq != st.seq;
     if (fresh) {
@@ -82,57 +85,59 @@ void AgentRuntime::consensus_tick(std::vector<AgentEvent>& events) {
     if (!listen_to_.empty() && !listen_to_.count(peer))
       continue;  // explicit graph: not a neighbour
     if (fresh && live_.insert(peer).second) events.push_back({AgentEvent::kNeighborHeard, peer, t});
-    if (t - st.last_new_s > p_.neighbor_timeout_s) {
+    if (t - st.last_new_s > p_.config.neighbor_timeout_s) {
       if (live_.erase(peer)) events.push_back({AgentEvent::kNeighborLost, peer, t});
       continue;
     }
     views.push_back(m.view);
     // Radio range: the physical distance as this agent sees it (its own position, the
     // neighbour's last sample).
-    if (p_.law.topology.policy == TopologyPolicy::kRange)
+    if (p_.config.law.topology.policy == TopologyPolicy::kRange)
       views.back().link_distance_m = (position() - m.p_W).norm();
   }
   if (!started_) {
-    if (views.size() < p_.expected_peers && t < p_.start_time_s + p_.start_grace_s) {
+    if (views.size() < p_.start.expected_peers &&
+        t < p_.start.start_time_s + p_.start.start_grace_s) {
       publish(Phase::kRunning);  // running, but the law waits for the whole initial graph
       return;
     }
-    if (p_.recover_flows) law_->recover(views);
+    if (p_.start.recover_flows) law_->recover(views);
     law_->observe(views);
     for (const auto& [peer, w] : law_->links()) initial_links_.emplace_back(peer, w);
     started_ = true;
     law_start_s_ = t;
   } else {
-    law_->step(static_cast<double>(steps_per_tick_) / p_.physics_hz, views);
+    law_->step(static_cast<double>(steps_per_tick_) / p_.config.physics_hz, views);
   }
   publish(Phase::kRunning);
 }
 
 void AgentRuntime::physics(double dt) {
-  if (p_.mode != AgentMode::kQuadcopter) return;
+  if (p_.config.mode != AgentMode::kQuadcopter) return;
   // The consensus state is the goal; the reference moves toward it within speed and acceleration
   // limits so that it stays flyable, and the controller tracks the reference.
-  const Vec3 goal = law_->state() + p_.offset_W;  // its slot about its estimate of the centre
+  const Vec3 goal = law_->state() + p_.spec.offset_W;  // its slot about its estimate of the centre
   obstacles_.clear();
-  if (p_.avoidance.enabled) {
+  if (p_.config.avoidance.enabled) {
     // Every agent heard within the neighbour timeout, whatever the graph: a radio hears everyone
     // near. A stopping agent is gone.
     const double t = time_s();
     for (const auto& [peer, h] : peers_) {
-      if (h.phase == Phase::kStopping || t - h.last_new_s > p_.neighbor_timeout_s) continue;
+      if (h.phase == Phase::kStopping || t - h.last_new_s > p_.config.neighbor_timeout_s) continue;
       obstacles_.push_back({peer, project_position(h.p_W, h.v_W, t - h.at_s)});
     }
   }
-  TrackingReference ref = reference_.step(goal, dt, p_.id, quad_.p_W, obstacles_, p_.avoidance);
-  ref.yaw_rad = p_.yaw0_rad;
-  rotors_ = track(p_.airframe, p_.gains, quad_, ref).allocation.omega_radps;
-  quad_ = rk4_step(p_.airframe, quad_, rotors_, dt);
+  TrackingReference ref =
+      reference_.step(goal, dt, p_.spec.id, quad_.p_W, obstacles_, p_.config.avoidance);
+  ref.yaw_rad = p_.spec.yaw_rad;
+  rotors_ = track(p_.config.airframe, p_.config.gains, quad_, ref).allocation.omega_radps;
+  quad_ = rk4_step(p_.config.airframe, quad_, rotors_, dt);
 }
 
 std::vector<AgentEvent> AgentRuntime::step() {
   std::vector<AgentEvent> events;
   if (steps_ % static_cast<std::uint64_t>(steps_per_tick_) == 0) consensus_tick(events);
-  physics(1.0 / p_.physics_hz);
+  physics(1.0 / p_.config.physics_hz);
   ++steps_;
   return events;
 }

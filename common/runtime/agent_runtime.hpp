@@ -14,29 +14,15 @@
 #include "common/core/tracking_controller.hpp"
 #include "common/core/update_law.hpp"
 #include "common/runtime/link_faults.hpp"
+#include "common/scenario/run_config.hpp"
 #include "common/transport/neighbor_bus.hpp"
 
 namespace qswarm {
 
-struct AgentParams {
-  AgentId id = 0;
-  Vec3 p0_W = Vec3::Zero();
-  double yaw0_rad = 0.0;
-  // Its formation slot: the law runs on p - offset (its estimate of the centre) and the agent
-  // flies to the agreed centre + offset.
-  Vec3 offset_W = Vec3::Zero();
-  AgentMode mode = AgentMode::kParticle;
-  LawConfig law;
-  double physics_hz = 500.0;
-  double consensus_hz = 50.0;
-  Airframe airframe;
-  TrackingGains gains;
-  double reference_speed_mps = 3.0;
-  double reference_accel_mps2 = 2.0;
-  AvoidanceConfig avoidance;  // quadcopter mode: filter the reference against the agents heard
-  double neighbor_timeout_s = 1.0;  // simulated seconds without a new message
-  std::int64_t incarnation = 0;
-  std::uint64_t run_id = 0;
+// How this life of the agent starts (beyond what every agent of the run shares).
+struct AgentStart {
+  std::int64_t incarnation = 0;  // this life's identity: a restarted agent has a newer one
+  std::uint64_t run_id = 0;      // carried in every sample
   // The law starts when this many peers are running (so the first tick sees the whole initial
   // graph), or after start_grace_s when some never come (late join, dead peer).
   std::size_t expected_peers = 0;
@@ -45,6 +31,14 @@ struct AgentParams {
   double start_time_s = 0.0;
   // Restarted: recover the flows it owned from the neighbours' copies before its first tick.
   bool recover_flows = false;
+};
+
+// One agent: who it is and where it starts (its spec), what every agent of the run flies with (the
+// run's agent config), and how this life starts.
+struct AgentParams {
+  AgentSpec spec;
+  AgentConfig config;
+  AgentStart start;
 };
 
 // What happened in a step that the process should log (the runtime itself does no I/O).
@@ -71,7 +65,9 @@ class AgentRuntime {
   // A late or restarted agent starts on the swarm's clock: set before the first step.
   void set_start_time(double t_s);
 
-  double time_s() const { return p_.start_time_s + static_cast<double>(steps_) / p_.physics_hz; }
+  double time_s() const {
+    return p_.start.start_time_s + static_cast<double>(steps_) / p_.config.physics_hz;
+  }
   const QuadState& quad() const { return quad_; }
   Vec3 consensus() const { return law_->state(); }
   Vec3 position() const;

@@ -21,7 +21,7 @@ bool RunConfig::has_formation() const {
   return false;
 }
 
-const AgentSpec* RunConfig::agent(AgentId id) const {
+const AgentSpec* RunConfig::spec(AgentId id) const {
   for (const AgentSpec& a : agents)
     if (a.id == id) return &a;
   return nullptr;
@@ -33,10 +33,14 @@ std::set<AgentId> RunConfig::ids() const {
   return out;
 }
 
+int AgentConfig::steps_per_tick() const {
+  return std::max(1, static_cast<int>(std::lround(physics_hz / consensus_hz)));
+}
+
 std::set<AgentId> RunConfig::start_peers(AgentId id) const {
   std::set<AgentId> peers;
-  if (law.topology.policy == TopologyPolicy::kFixed) {
-    peers = listed_peers(law.topology, id);
+  if (agent.law.topology.policy == TopologyPolicy::kFixed) {
+    peers = listed_peers(agent.law.topology, id);
   } else {
     for (const AgentSpec& a : agents)
       if (a.id != id) peers.insert(a.id);
@@ -98,10 +102,10 @@ std::vector<Vec3> formation_slots(int shape, int n, double spacing_m) {
 
 std::set<AgentId> RunConfig::held_agents() const {
   std::set<AgentId> held;
-  if (!avoidance.enabled) return held;
+  if (!agent.avoidance.enabled) return held;
   for (const AgentSpec& a : agents)
     for (const AgentSpec& b : agents)
-      if (a.id != b.id && (a.offset_W - b.offset_W).norm() < avoidance.filter_distance_m())
+      if (a.id != b.id && (a.offset_W - b.offset_W).norm() < agent.avoidance.filter_distance_m())
         held.insert(a.id);
   return held;
 }

@@ -24,37 +24,56 @@ struct AgentSpec {
   Vec3 q0() const { return position_W - offset_W; }
 };
 
-// A scenario with every default filled in and random agents resolved: what a run actually uses.
-struct RunConfig {
-  std::string name;
-  std::vector<AgentSpec> agents;
+// What every agent of a run flies with: its dynamics, its law, its rates, its controller. Each
+// field's default is written here once; the resolver keeps it when the scenario leaves the field
+// unset and writes it back into the scenario as run.
+struct AgentConfig {
   AgentMode mode = AgentMode::kParticle;
   LawConfig law;
   double physics_hz = 500.0;
   double consensus_hz = 50.0;
   Airframe airframe;
   TrackingGains gains;
-  double reference_speed_mps = 3.0;
-  double reference_accel_mps2 = 2.0;
+  double reference_speed_mps = 3.0;   // how fast the tracked reference may move
+  double reference_accel_mps2 = 2.0;  // and accelerate
   // Collision avoidance (enabled: quadcopters filter their references) and the safe distance the
   // record judges separation by, in every mode.
   AvoidanceConfig avoidance;
-  double tolerance_m = 0.01;
-  double hold_s = 1.0;
-  double duration_s = 60.0;
-  std::uint64_t seed = 1;
+  double neighbor_timeout_s = 1.0;  // a neighbour silent this long (simulated) leaves the graph
+  // Physics steps per consensus tick (the resolver refuses rates that do not divide).
+  int steps_per_tick() const;
+};
+
+// How the record judges the run.
+struct JudgeConfig {
+  double tolerance_m = 0.01;  // agreed: every state within this of the mean
+  double hold_s = 1.0;        // for this long
+  double duration_s = 60.0;   // simulated seconds before the run gives up
+};
+
+// Where the run's DDS traffic goes.
+struct TransportConfig {
   std::uint32_t domain_id = 0;
-  std::string interface = "127.0.0.1";
+  std::string interface = "127.0.0.1";  // DDS traffic stays on this host by default
   bool shared_memory = false;
-  double neighbor_timeout_s = 1.0;
-  std::uint64_t run_id = 0;  // transport.run_id: isolates this run on a shared DDS domain
+  std::uint64_t run_id = 0;  // isolates this run on a shared DDS domain (0: the launcher draws one)
+};
+
+// A scenario with every default filled in and random agents resolved: what a run actually uses.
+struct RunConfig {
+  std::string name = "unnamed";
+  std::uint64_t seed = 1;
+  std::vector<AgentSpec> agents;
+  AgentConfig agent;
+  JudgeConfig judge;
+  TransportConfig transport;
   FaultPlan faults;
   scenario::Scenario resolved;  // the scenario as run (agents listed, defaults explicit)
 
   // The average of the agents' initial consensus states (their estimates of the centre): the
   // point the swarm agrees on.
   Vec3 initial_average() const;
-  const AgentSpec* agent(AgentId id) const;
+  const AgentSpec* spec(AgentId id) const;
   // Whether any agent has a formation slot (else every agent flies to the agreed point).
   bool has_formation() const;
   std::set<AgentId> ids() const;

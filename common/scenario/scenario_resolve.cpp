@@ -23,20 +23,95 @@ std::string num(double v) {
   return s.str();
 }
 
-// A finite value in [lo, hi] when present, else the default.
-double ranged(const std::string& field, bool has, double value, double dflt, double lo, double hi,
-              bool lo_open = false) {
-  if (!has) return dflt;
-  const bool below = lo_open ? value <= lo : value < lo;
-  if (!std::isfinite(value) || below || value > hi) {
-    fail(field,
-         std::string("a finite value in ") + (lo_open ? "(" : "[") + num(lo) + ", " + num(hi) + "]",
-         num(value));
+// One optional number of the scenario: where it is in the message (a dotted path), where it lands
+// in RunConfig, and the range a run can honour. Its default is RunConfig's: a field the scenario
+// leaves unset keeps it, and the scenario as run gets it written back. The resolver and the
+// write-back both walk this table, so no default is written twice.
+struct NumberField {
+  const char* path;
+  double& (*at)(RunConfig&);
+  double lo, hi;
+  bool lo_open;  // (lo, hi] instead of [lo, hi]
+};
+
+// clang-format off
+const NumberField kNumberFields[] = {
+  {"gain", [](RunConfig& c) -> double& { return c.agent.law.gain; }, 0.0, 1e3, true},
+  {"weight.scale", [](RunConfig& c) -> double& { return c.agent.law.weight.scale; }, 0.0, 1e3, true},
+  {"topology.threshold_m", [](RunConfig& c) -> double& { return c.agent.law.topology.threshold_m; }, 0.0, 1e6, true},
+  {"topology.hysteresis_m", [](RunConfig& c) -> double& { return c.agent.law.topology.hysteresis_m; }, 0.0, 1e6, false},
+  {"rates.physics_hz", [](RunConfig& c) -> double& { return c.agent.physics_hz; }, 0.0, 2e4, true},
+  {"rates.consensus_hz", [](RunConfig& c) -> double& { return c.agent.consensus_hz; }, 1.0, 1e3, false},
+  {"gains.pos_natural_freq_radps", [](RunConfig& c) -> double& { return c.agent.gains.pos_natural_freq_radps; }, 0.0, 1e3, true},
+  {"gains.pos_damping", [](RunConfig& c) -> double& { return c.agent.gains.pos_damping; }, 0.0, 1e3, true},
+  {"gains.att_natural_freq_radps", [](RunConfig& c) -> double& { return c.agent.gains.att_natural_freq_radps; }, 0.0, 1e4, true},
+  {"gains.att_damping", [](RunConfig& c) -> double& { return c.agent.gains.att_damping; }, 0.0, 1e3, true},
+  {"gains.max_tilt_rad", [](RunConfig& c) -> double& { return c.agent.gains.max_tilt_rad; }, 0.0, 1e9, true},
+  {"limits.reference_speed_mps", [](RunConfig& c) -> double& { return c.agent.reference_speed_mps; }, 0.0, 1e3, true},
+  {"limits.reference_accel_mps2", [](RunConfig& c) -> double& { return c.agent.reference_accel_mps2; }, 0.0, 1e3, true},
+  {"limits.rotor_min_radps", [](RunConfig& c) -> double& { return c.agent.airframe.rotor_min_radps; }, 0.0, 1e4, false},
+  {"limits.rotor_max_radps", [](RunConfig& c) -> double& { return c.agent.airframe.rotor_max_radps; }, 0.0, 1e4, true},
+  {"avoidance.safe_distance_m", [](RunConfig& c) -> double& { return c.agent.avoidance.safe_distance_m; }, 0.0, 100.0, true},
+  {"transport.neighbor_timeout_s", [](RunConfig& c) -> double& { return c.agent.neighbor_timeout_s; }, 0.0, 3600.0, true},
+  {"convergence.tolerance_m", [](RunConfig& c) -> double& { return c.judge.tolerance_m; }, 0.0, 1e9, true},
+  {"convergence.hold_s", [](RunConfig& c) -> double& { return c.judge.hold_s; }, 0.0, 1e6, false},
+  {"duration_s", [](RunConfig& c) -> double& { return c.judge.duration_s; }, 0.0, 1e7, true},
+};
+// clang-format on
+
+using google::protobuf::FieldDescriptor;
+using google::protobuf::Message;
+
+// The message that holds the last field of `path`, and that field; nullptr when a message on the
+// way is unset (so is the field).
+const Message* holder(const Message& root, const std::string& path, const FieldDescriptor*& fd) {
+  const Message* m = &root;
+  std::size_t from = 0;
+  for (std::size_t dot = path.find('.'); dot != std::string::npos; dot = path.find('.', from)) {
+    const FieldDescriptor* sub = m->GetDescriptor()->FindFieldByName(path.substr(from, dot - from));
+    if (!m->GetReflection()->HasField(*m, sub)) return nullptr;
+    m = &m->GetReflection()->GetMessage(*m, sub);
+    from = dot + 1;
   }
-  return value;
+  fd = m->GetDescriptor()->FindFieldByName(path.substr(from));
+  return m;
 }
-double positive(const std::string& field, bool has, double value, double dflt, double hi = 1e9) {
-  return ranged(field, has, value, dflt, 0.0, hi, true);
+
+void check_range(const NumberField& f, double v) {
+  const bool below = f.lo_open ? v <= f.lo : v < f.lo;
+  if (!std::isfinite(v) || below || v > f.hi) {
+    fail(f.path,
+         std::string("a finite value in ") + (f.lo_open ? "(" : "[") + num(f.lo) + ", " +
+             num(f.hi) + "]",
+         num(v));
+  }
+}
+
+// Every number the scenario sets, checked and copied into rc; unset ones keep rc's defaults.
+void resolve_numbers(const scenario::Scenario& s, RunConfig& rc) {
+  for (const NumberField& f : kNumberFields) {
+    const FieldDescriptor* fd = nullptr;
+    const Message* m = holder(s, f.path, fd);
+    if (!m || !m->GetReflection()->HasField(*m, fd)) continue;
+    const double v = m->GetReflection()->GetDouble(*m, fd);
+    check_range(f, v);
+    f.at(rc) = v;
+  }
+}
+
+void write_back_numbers(RunConfig& rc, scenario::Scenario& s) {
+  for (const NumberField& f : kNumberFields) {
+    Message* m = &s;
+    const std::string path = f.path;
+    std::size_t from = 0;
+    for (std::size_t dot = path.find('.'); dot != std::string::npos; dot = path.find('.', from)) {
+      m = m->GetReflection()->MutableMessage(
+          m, m->GetDescriptor()->FindFieldByName(path.substr(from, dot - from)));
+      from = dot + 1;
+    }
+    m->GetReflection()->SetDouble(m, m->GetDescriptor()->FindFieldByName(path.substr(from)),
+                                  f.at(rc));
+  }
 }
 
 Vec3 vec(const scenario::Vec3& v) { return Vec3(v.x(), v.y(), v.z()); }
@@ -120,6 +195,8 @@ void resolve_agents(const scenario::Scenario& s, RunConfig& rc) {
   }
 }
 
+// Avoidance is on by default for quadcopters and refused for point agents; its safe distance keeps
+// two airframes apart.
 void resolve_avoidance(const scenario::Scenario& s, RunConfig& rc) {
   const scenario::Avoidance& a = s.avoidance();
   const bool quad = s.mode() == scenario::QUADCOPTER;
@@ -129,28 +206,26 @@ void resolve_avoidance(const scenario::Scenario& s, RunConfig& rc) {
          "filter must never change; use mode: QUADCOPTER)",
          "true");
   }
-  rc.avoidance.enabled = a.has_enabled() ? a.enabled() : quad;
-  rc.avoidance.safe_distance_m = positive("avoidance.safe_distance_m", a.has_safe_distance_m(),
-                                          a.safe_distance_m(), 1.0, 100.0);
+  rc.agent.avoidance.enabled = a.has_enabled() ? a.enabled() : quad;
   // Quadcopters closer than two arms overlap: a smaller safe distance would let the record call a
   // collision safe.
-  const double span = 2.0 * rc.airframe.arm_m;
-  if (quad && rc.avoidance.safe_distance_m < span)
+  const double span = 2.0 * rc.agent.airframe.arm_m;
+  if (quad && rc.agent.avoidance.safe_distance_m < span)
     fail("avoidance.safe_distance_m",
          "at least " + num(span) +
              " m in QUADCOPTER mode (two airframes' arms: closer, their rotors overlap)",
-         num(rc.avoidance.safe_distance_m));
+         num(rc.agent.avoidance.safe_distance_m));
 }
 
 // With avoidance on, listed starts must keep the safe distance: the run would begin in a violation.
 void check_start_separation(const scenario::Scenario& s, const RunConfig& rc) {
-  if (!rc.avoidance.enabled) return;
+  if (!rc.agent.avoidance.enabled) return;
   for (std::size_t i = 0; i < rc.agents.size(); ++i) {
     for (std::size_t j = 0; j < i; ++j) {
       const double d = (rc.agents[i].position_W - rc.agents[j].position_W).norm();
-      if (d < rc.avoidance.safe_distance_m) {
+      if (d < rc.agent.avoidance.safe_distance_m) {
         fail("agents[" + std::to_string(i) + "].position",
-             "at least avoidance.safe_distance_m (" + num(rc.avoidance.safe_distance_m) +
+             "at least avoidance.safe_distance_m (" + num(rc.agent.avoidance.safe_distance_m) +
                  " m) from every other start, or avoidance { enabled: false }",
              num(d) + " m from agent " + std::to_string(rc.agents[j].id) + " (of " +
                  std::to_string(s.agents_size()) + ")");
@@ -162,8 +237,10 @@ void check_start_separation(const scenario::Scenario& s, const RunConfig& rc) {
 // Slots: the shape's, by ascending id, overridden by an agent's own offset.
 void resolve_formation(scenario::Scenario& s, RunConfig& rc) {
   const scenario::Formation& f = s.formation();
-  const double spacing =
-      positive("formation.spacing_m", f.has_spacing_m(), f.spacing_m(), 3.0, 1e4);
+  // Not part of RunConfig (it only places the slots), so its default is here.
+  const double spacing = f.has_spacing_m() ? f.spacing_m() : 3.0;
+  if (!std::isfinite(spacing) || spacing <= 0.0 || spacing > 1e4)
+    fail("formation.spacing_m", "a finite value in (0, 10000]", num(spacing));
   std::vector<AgentId> ids;
   for (const AgentSpec& a : rc.agents) ids.push_back(a.id);
   std::sort(ids.begin(), ids.end());
@@ -185,6 +262,8 @@ void resolve_formation(scenario::Scenario& s, RunConfig& rc) {
     a.offset_W = o;
     any = true;
   }
+  // Written back with or without a formation: the scenario as run states every default.
+  s.mutable_formation()->set_spacing_m(spacing);
   if (!any) return;
   // Two agents on one slot would be flown into each other on purpose.
   for (std::size_t i = 0; i < rc.agents.size(); ++i) {
@@ -196,126 +275,97 @@ void resolve_formation(scenario::Scenario& s, RunConfig& rc) {
       }
     }
   }
-  s.mutable_formation()->set_spacing_m(spacing);
 }
 
 void resolve_law(const scenario::Scenario& s, RunConfig& rc) {
-  rc.law.kind = s.law() == scenario::LAPLACIAN ? LawKind::kLaplacian : LawKind::kEdgeFlow;
-  rc.law.gain = positive("gain", s.has_gain(), s.gain(), 1.0, 1e3);
+  LawConfig& law = rc.agent.law;
+  law.kind = s.law() == scenario::LAPLACIAN ? LawKind::kLaplacian : LawKind::kEdgeFlow;
   switch (s.weight().policy()) {
     case scenario::UNWEIGHTED:
-      rc.law.weight.policy = WeightPolicy::kUnweighted;
+      law.weight.policy = WeightPolicy::kUnweighted;
       break;
     case scenario::INITIAL_DISTANCE:
-      rc.law.weight.policy = WeightPolicy::kInitialDistance;
+      law.weight.policy = WeightPolicy::kInitialDistance;
       break;
     case scenario::INVERSE_DISTANCE:
-      rc.law.weight.policy = WeightPolicy::kInverseDistance;
+      law.weight.policy = WeightPolicy::kInverseDistance;
       break;
     default:
-      rc.law.weight.policy = WeightPolicy::kDistance;
+      law.weight.policy = WeightPolicy::kDistance;
       break;
   }
-  rc.law.weight.scale =
-      positive("weight.scale", s.weight().has_scale(), s.weight().scale(), 1.0, 1e3);
   switch (s.topology().policy()) {
     case scenario::FIXED:
-      rc.law.topology.policy = TopologyPolicy::kFixed;
+      law.topology.policy = TopologyPolicy::kFixed;
       break;
     case scenario::PROXIMITY:
-      rc.law.topology.policy = TopologyPolicy::kProximity;
+      law.topology.policy = TopologyPolicy::kProximity;
       break;
     case scenario::RANGE:
-      rc.law.topology.policy = TopologyPolicy::kRange;
+      law.topology.policy = TopologyPolicy::kRange;
       break;
     default:
-      rc.law.topology.policy = TopologyPolicy::kStickyProximity;
+      law.topology.policy = TopologyPolicy::kStickyProximity;
       break;
   }
   const scenario::Topology& t = s.topology();
-  rc.law.topology.threshold_m =
-      positive("topology.threshold_m", t.has_threshold_m(), t.threshold_m(), 12.5, 1e6);
-  rc.law.topology.hysteresis_m =
-      ranged("topology.hysteresis_m", t.has_hysteresis_m(), t.hysteresis_m(), 0.5, 0.0, 1e6);
   for (int i = 0; i < t.edges_size(); ++i) {
     const scenario::Edge& e = t.edges(i);
     const std::string f = "topology.edges[" + std::to_string(i) + "]";
-    if (!rc.agent(e.a())) fail(f + ".a", "the id of a listed agent", std::to_string(e.a()));
-    if (!rc.agent(e.b())) fail(f + ".b", "the id of a listed agent", std::to_string(e.b()));
+    if (!rc.spec(e.a())) fail(f + ".a", "the id of a listed agent", std::to_string(e.a()));
+    if (!rc.spec(e.b())) fail(f + ".b", "the id of a listed agent", std::to_string(e.b()));
     if (e.a() == e.b())
       fail(f, "two different agents", std::to_string(e.a()) + "-" + std::to_string(e.b()));
-    rc.law.topology.edges.emplace_back(e.a(), e.b());
+    law.topology.edges.emplace_back(e.a(), e.b());
   }
-  if (rc.law.topology.policy == TopologyPolicy::kFixed && rc.law.topology.edges.empty() &&
+  if (law.topology.policy == TopologyPolicy::kFixed && law.topology.edges.empty() &&
       rc.agents.size() > 1) {
     fail("topology.edges", "at least one edge for a FIXED topology", "none");
   }
 }
 
-void resolve_rates(const scenario::Rates& r, RunConfig& rc) {
-  rc.physics_hz = positive("rates.physics_hz", r.has_physics_hz(), r.physics_hz(), 500.0, 20000.0);
-  rc.consensus_hz =
-      ranged("rates.consensus_hz", r.has_consensus_hz(), r.consensus_hz(), 50.0, 1.0, 1000.0);
-  if (rc.mode == AgentMode::kQuadcopter && rc.physics_hz < 500.0)
-    fail("rates.physics_hz", ">= 500 in QUADCOPTER mode", num(rc.physics_hz));
-  if (rc.consensus_hz > rc.physics_hz)
-    fail("rates.consensus_hz", "at most rates.physics_hz", num(rc.consensus_hz));
+// What holds between fields: rates a tick can keep, a controller and airframe that fly, a timeout a
+// neighbour can meet.
+void check_agent(RunConfig& rc) {
+  AgentConfig& a = rc.agent;
+  if (a.mode == AgentMode::kQuadcopter && a.physics_hz < 500.0)
+    fail("rates.physics_hz", ">= 500 in QUADCOPTER mode", num(a.physics_hz));
+  if (a.consensus_hz > a.physics_hz)
+    fail("rates.consensus_hz", "at most rates.physics_hz", num(a.consensus_hz));
   // Each consensus tick runs a whole number of physics steps; a rate that does not divide the
   // physics rate would silently run at another rate than the record says.
-  const double ratio = rc.physics_hz / rc.consensus_hz;
+  const double ratio = a.physics_hz / a.consensus_hz;
   if (std::abs(ratio - std::round(ratio)) > 1e-9 * ratio) {
-    fail("rates.consensus_hz", "a divisor of rates.physics_hz (" + num(rc.physics_hz) + ")",
-         num(rc.consensus_hz));
+    fail("rates.consensus_hz", "a divisor of rates.physics_hz (" + num(a.physics_hz) + ")",
+         num(a.consensus_hz));
   }
-}
-
-void resolve_gains(const scenario::Gains& g, TrackingGains& out) {
-  out.pos_natural_freq_radps =
-      positive("gains.pos_natural_freq_radps", g.has_pos_natural_freq_radps(),
-               g.pos_natural_freq_radps(), out.pos_natural_freq_radps, 1e3);
-  out.pos_damping =
-      positive("gains.pos_damping", g.has_pos_damping(), g.pos_damping(), out.pos_damping, 1e3);
-  out.att_natural_freq_radps =
-      positive("gains.att_natural_freq_radps", g.has_att_natural_freq_radps(),
-               g.att_natural_freq_radps(), out.att_natural_freq_radps, 1e4);
-  out.att_damping =
-      positive("gains.att_damping", g.has_att_damping(), g.att_damping(), out.att_damping, 1e3);
-  out.max_tilt_rad =
-      positive("gains.max_tilt_rad", g.has_max_tilt_rad(), g.max_tilt_rad(), out.max_tilt_rad);
   try {
-    out.validate();
+    a.gains.validate();
   } catch (const std::invalid_argument& e) {
     throw ScenarioError(std::string("scenario field '") + e.what());
   }
-}
-
-void resolve_limits(const scenario::Limits& l, RunConfig& rc) {
-  rc.reference_speed_mps = positive("limits.reference_speed_mps", l.has_reference_speed_mps(),
-                                    l.reference_speed_mps(), 3.0, 1e3);
-  rc.reference_accel_mps2 = positive("limits.reference_accel_mps2", l.has_reference_accel_mps2(),
-                                     l.reference_accel_mps2(), 2.0, 1e3);
-  rc.airframe.rotor_min_radps = ranged("limits.rotor_min_radps", l.has_rotor_min_radps(),
-                                       l.rotor_min_radps(), rc.airframe.rotor_min_radps, 0.0, 1e4);
-  rc.airframe.rotor_max_radps = positive("limits.rotor_max_radps", l.has_rotor_max_radps(),
-                                         l.rotor_max_radps(), rc.airframe.rotor_max_radps, 1e4);
   try {
-    rc.airframe.validate();
+    a.airframe.validate();
   } catch (const std::invalid_argument& e) {
     throw ScenarioError(std::string("scenario limits: ") + e.what());
+  }
+  // At least two consensus ticks: a shorter timeout makes every neighbour flap.
+  if (a.neighbor_timeout_s < 2.0 / a.consensus_hz) {
+    fail("transport.neighbor_timeout_s",
+         "a finite value in [" + num(2.0 / a.consensus_hz) + ", 3600] (two consensus ticks)",
+         num(a.neighbor_timeout_s));
   }
 }
 
 void resolve_transport(const scenario::Transport& t, RunConfig& rc) {
-  rc.domain_id = t.has_domain_id() ? t.domain_id() : 0;
-  if (rc.domain_id > 232) fail("transport.domain_id", "0..232", std::to_string(rc.domain_id));
-  rc.interface = t.has_interface() ? t.interface() : "127.0.0.1";
-  if (rc.interface.empty())
+  TransportConfig& tc = rc.transport;
+  if (t.has_domain_id()) tc.domain_id = t.domain_id();
+  if (tc.domain_id > 232) fail("transport.domain_id", "0..232", std::to_string(tc.domain_id));
+  if (t.has_interface()) tc.interface = t.interface();
+  if (tc.interface.empty())
     fail("transport.interface", "an IPv4 address such as 127.0.0.1", "\"\"");
-  rc.shared_memory = t.has_shared_memory() && t.shared_memory();
-  // At least two consensus ticks: a shorter timeout makes every neighbour flap.
-  rc.run_id = t.run_id();
-  rc.neighbor_timeout_s = ranged("transport.neighbor_timeout_s", t.has_neighbor_timeout_s(),
-                                 t.neighbor_timeout_s(), 1.0, 2.0 / rc.consensus_hz, 3600.0);
+  if (t.has_shared_memory()) tc.shared_memory = t.shared_memory();
+  tc.run_id = t.run_id();
 }
 
 // Checks shared by the fault entries: agent ids, time windows, probabilities.
@@ -323,7 +373,7 @@ class FaultFields {
  public:
   explicit FaultFields(const RunConfig& rc) : rc_(rc) {}
   void agent(const std::string& field, std::uint32_t id, bool zero_ok) const {
-    if ((id == 0 && !zero_ok) || (id != 0 && !rc_.agent(id))) {
+    if ((id == 0 && !zero_ok) || (id != 0 && !rc_.spec(id))) {
       fail(field, zero_ok ? "0 (any) or the id of a listed agent" : "the id of a listed agent",
            std::to_string(id));
     }
@@ -444,7 +494,7 @@ void resolve_faults(const scenario::Faults& f, RunConfig& rc) {
     fail("faults.transport_drop_percent", "0..100", std::to_string(f.transport_drop_percent()));
   }
   rc.faults.transport_drop_percent = f.transport_drop_percent();
-  if (rc.faults.transport_drop_percent > 0 && rc.shared_memory) {
+  if (rc.faults.transport_drop_percent > 0 && rc.transport.shared_memory) {
     fail("faults.transport_drop_percent",
          "transport.shared_memory off (shared memory bypasses the test transport)",
          "shared_memory on");
@@ -452,23 +502,14 @@ void resolve_faults(const scenario::Faults& f, RunConfig& rc) {
 }
 
 // Every default written back, so that the run directory's scenario says exactly what ran.
-void write_back_defaults(scenario::Scenario& s, const RunConfig& rc) {
-  s.set_gain(rc.law.gain);
-  s.set_duration_s(rc.duration_s);
-  s.mutable_transport()->set_domain_id(rc.domain_id);
-  s.mutable_transport()->set_interface(rc.interface);
-  s.mutable_transport()->set_shared_memory(rc.shared_memory);
-  s.mutable_transport()->set_neighbor_timeout_s(rc.neighbor_timeout_s);
-  s.mutable_transport()->set_run_id(rc.run_id);
-  s.mutable_rates()->set_physics_hz(rc.physics_hz);
-  s.mutable_rates()->set_consensus_hz(rc.consensus_hz);
-  s.mutable_convergence()->set_tolerance_m(rc.tolerance_m);
-  s.mutable_convergence()->set_hold_s(rc.hold_s);
-  s.mutable_topology()->set_threshold_m(rc.law.topology.threshold_m);
-  s.mutable_topology()->set_hysteresis_m(rc.law.topology.hysteresis_m);
-  s.mutable_weight()->set_scale(rc.law.weight.scale);
-  s.mutable_avoidance()->set_enabled(rc.avoidance.enabled);
-  s.mutable_avoidance()->set_safe_distance_m(rc.avoidance.safe_distance_m);
+void write_back_defaults(RunConfig& rc, scenario::Scenario& s) {
+  write_back_numbers(rc, s);
+  s.set_seed(rc.seed);
+  s.mutable_transport()->set_domain_id(rc.transport.domain_id);
+  s.mutable_transport()->set_interface(rc.transport.interface);
+  s.mutable_transport()->set_shared_memory(rc.transport.shared_memory);
+  s.mutable_transport()->set_run_id(rc.transport.run_id);
+  s.mutable_avoidance()->set_enabled(rc.agent.avoidance.enabled);
 }
 
 }  // namespace
@@ -476,28 +517,23 @@ void write_back_defaults(scenario::Scenario& s, const RunConfig& rc) {
 RunConfig resolve_scenario(scenario::Scenario s, const ScenarioOverrides& o) {
   apply_overrides(s, o);
   RunConfig rc;
-  rc.seed = s.has_seed() ? s.seed() : 1;
+  if (s.has_seed()) rc.seed = s.seed();
   if (rc.seed > 0xFFFFFFFFull) fail("seed", "a value below 2^32", std::to_string(rc.seed));
-  s.set_seed(rc.seed);
-  rc.name = s.name().empty() ? "unnamed" : s.name();
+  if (!s.name().empty()) rc.name = s.name();
+  rc.agent.mode = s.mode() == scenario::QUADCOPTER ? AgentMode::kQuadcopter : AgentMode::kParticle;
+  resolve_numbers(s, rc);
   resolve_avoidance(s, rc);
-  expand_random_agents(s, rc.seed, rc.avoidance.enabled ? rc.avoidance.safe_distance_m : 0.0);
+  const AvoidanceConfig& av = rc.agent.avoidance;
+  expand_random_agents(s, rc.seed, av.enabled ? av.safe_distance_m : 0.0);
   resolve_agents(s, rc);
   check_start_separation(s, rc);
   resolve_formation(s, rc);
-  rc.mode = s.mode() == scenario::QUADCOPTER ? AgentMode::kQuadcopter : AgentMode::kParticle;
   resolve_law(s, rc);
-  resolve_rates(s.rates(), rc);
-  resolve_gains(s.gains(), rc.gains);
-  resolve_limits(s.limits(), rc);
-  const scenario::Convergence& c = s.convergence();
-  rc.tolerance_m = positive("convergence.tolerance_m", c.has_tolerance_m(), c.tolerance_m(), 0.01);
-  rc.hold_s = ranged("convergence.hold_s", c.has_hold_s(), c.hold_s(), 1.0, 0.0, 1e6);
-  rc.duration_s = positive("duration_s", s.has_duration_s(), s.duration_s(), 60.0, 1e7);
+  check_agent(rc);
   resolve_transport(s.transport(), rc);
   resolve_faults(s.faults(), rc);
-  write_back_defaults(s, rc);
-  rc.resolved = s;
+  write_back_defaults(rc, s);
+  rc.resolved = std::move(s);
   return rc;
 }
 

@@ -7,6 +7,7 @@
 
 #include "common/core/graph.hpp"
 #include "common/core/update_law.hpp"
+#include "common/scenario/run_config.hpp"
 
 namespace qswarm {
 
@@ -18,7 +19,7 @@ struct SwarmAgentSpec {
 struct LockstepConfig {
   std::vector<SwarmAgentSpec> agents;
   LawConfig law;
-  double consensus_rate_hz = 50.0;
+  double consensus_rate_hz = AgentConfig{}.consensus_hz;  // the run's default tick
 };
 
 // N bare agreement laws in exact lockstep: every tick each law reads the others' views from the

@@ -87,13 +87,14 @@ void expect_invariants(const RunConfig& rc) {
     ASSERT_TRUE(a.position_W.allFinite());
     ASSERT_TRUE(std::isfinite(a.yaw_rad));
   }
-  for (const double v : {rc.physics_hz, rc.consensus_hz, rc.duration_s, rc.tolerance_m,
-                         rc.neighbor_timeout_s, rc.law.gain, rc.law.weight.scale}) {
+  for (const double v :
+       {rc.agent.physics_hz, rc.agent.consensus_hz, rc.judge.duration_s, rc.judge.tolerance_m,
+        rc.agent.neighbor_timeout_s, rc.agent.law.gain, rc.agent.law.weight.scale}) {
     ASSERT_TRUE(std::isfinite(v) && v > 0.0) << v;
   }
-  const double ratio = rc.physics_hz / rc.consensus_hz;
+  const double ratio = rc.agent.physics_hz / rc.agent.consensus_hz;
   ASSERT_NEAR(ratio, std::round(ratio), 1e-6 * ratio);
-  ASSERT_LE(rc.domain_id, 232u);
+  ASSERT_LE(rc.transport.domain_id, 232u);
   for (const auto& k : rc.faults.kill) ASSERT_TRUE(std::isfinite(k.at_s) && k.at_s > 0.0);
   for (const auto& d : rc.faults.delay) ASSERT_TRUE(std::isfinite(d.mean_s + d.jitter_s));
 }

@@ -5,6 +5,8 @@
 
 #include <filesystem>
 #include <fstream>
+#include <map>
+#include <regex>
 
 #include "common/scenario/fault_flags.hpp"
 #include "common/scenario/scenario.hpp"
@@ -82,8 +84,8 @@ TEST(Scenario, EveryBadFieldIsRefusedWithItsName) {
 TEST(Scenario, AvoidanceIsOnForQuadcoptersOffForParticlesAndKeepsRandomStartsApart) {
   const RunConfig quad = resolve_scenario(parse_scenario_text(
       "mode: QUADCOPTER\nrandom_agents { count: 40 box_m: 6 }\nseed: 3\n", "s"));
-  EXPECT_TRUE(quad.avoidance.enabled);
-  EXPECT_EQ(quad.avoidance.safe_distance_m, 1.0);
+  EXPECT_TRUE(quad.agent.avoidance.enabled);
+  EXPECT_EQ(quad.agent.avoidance.safe_distance_m, 1.0);
   double closest = 1e300;
   for (const AgentSpec& a : quad.agents)
     for (const AgentSpec& b : quad.agents)
@@ -93,11 +95,11 @@ TEST(Scenario, AvoidanceIsOnForQuadcoptersOffForParticlesAndKeepsRandomStartsApa
   EXPECT_EQ(quad.resolved.avoidance().safe_distance_m(), 1.0);
 
   const RunConfig particle = resolve_scenario(parse_scenario_text(kTwo, "s"));
-  EXPECT_FALSE(particle.avoidance.enabled);
+  EXPECT_FALSE(particle.agent.avoidance.enabled);
   const RunConfig off = resolve_scenario(parse_scenario_text(
       kTwo + "mode: QUADCOPTER\navoidance { enabled: false safe_distance_m: 2 }\n", "s"));
-  EXPECT_FALSE(off.avoidance.enabled);  // and listed starts closer than 2 m are then allowed
-  EXPECT_EQ(off.avoidance.safe_distance_m, 2.0);  // still what the record judges by
+  EXPECT_FALSE(off.agent.avoidance.enabled);  // and listed starts closer than 2 m are then allowed
+  EXPECT_EQ(off.agent.avoidance.safe_distance_m, 2.0);  // still what the record judges by
   // Held agents: slots closer than the filter keeps quadcopters apart.
   EXPECT_EQ(particle.held_agents().size(), 0u);
   const std::string four = "mode: QUADCOPTER\nrandom_agents { count: 4 box_m: 20 }\n";
@@ -140,6 +142,46 @@ TEST(Scenario, DefaultsAreWrittenBackSoTheRecordSaysWhatRan) {
   EXPECT_EQ(rc.resolved.transport().interface(), "127.0.0.1");
   const RunConfig again = resolve_scenario(parse_scenario_text(to_text(rc.resolved), "again"));
   EXPECT_EQ(to_text(again.resolved), to_text(rc.resolved));
+}
+
+// proto/scenario.proto is the users' reference for every default ("// default 50"); the defaults
+// themselves live once, in RunConfig's structs. Every number the schema documents must be what an
+// unset field resolves to, so the comment cannot drift from the code.
+TEST(Scenario, TheSchemasDocumentedDefaultsAreTheResolvedOnes) {
+  std::ifstream in(std::string(QSWARM_SOURCE_DIR) + "/proto/scenario.proto");
+  ASSERT_TRUE(in) << "cannot read proto/scenario.proto";
+  const RunConfig rc = resolve_scenario(parse_scenario_text(kTwo, "s"));
+  const google::protobuf::Descriptor* top = scenario::Scenario::descriptor();
+  // The message type each of Scenario's fields holds, by type name: "Rates" -> "rates".
+  std::map<std::string, std::string> prefix_of{{"Scenario", ""}};
+  for (int i = 0; i < top->field_count(); ++i)
+    if (top->field(i)->message_type())
+      prefix_of[top->field(i)->message_type()->name()] = top->field(i)->name() + ".";
+  const std::regex message_re(R"(^message (\w+) \{)");
+  const std::regex field_re(R"(^\s*optional double (\w+) = \d+;\s*//.*\bdefault ([-+0-9.eE]+))");
+  std::string line, message;
+  int checked = 0;
+  std::smatch m;
+  while (std::getline(in, line)) {
+    if (std::regex_search(line, m, message_re)) message = m[1];
+    if (!std::regex_search(line, m, field_re) || !prefix_of.count(message)) continue;
+    const std::string path = prefix_of[message] + m[1].str();
+    const double documented = std::stod(m[2]);
+    // The resolved value, read through the scenario as run (every default is written back).
+    const google::protobuf::Message* holder = &rc.resolved;
+    std::string rest = path;
+    for (auto dot = rest.find('.'); dot != std::string::npos; dot = rest.find('.')) {
+      const auto* fd = holder->GetDescriptor()->FindFieldByName(rest.substr(0, dot));
+      holder = &holder->GetReflection()->GetMessage(*holder, fd);
+      rest = rest.substr(dot + 1);
+    }
+    const auto* fd = holder->GetDescriptor()->FindFieldByName(rest);
+    ASSERT_NE(fd, nullptr) << path;
+    EXPECT_TRUE(holder->GetReflection()->HasField(*holder, fd)) << path << " is not written back";
+    EXPECT_DOUBLE_EQ(holder->GetReflection()->GetDouble(*holder, fd), documented) << path;
+    ++checked;
+  }
+  EXPECT_GE(checked, 21) << "the schema's defaults were not found: has its comment style changed?";
 }
 
 TEST(Scenario, StartPeersAreOneDefinitionFixedAwareWithoutLateJoiners) {

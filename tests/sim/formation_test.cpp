@@ -87,11 +87,11 @@ TEST(FormationScenario, SlotsGoByAscendingIdAndTheAgreedPointIsTheAverageOfTheEs
     agents { id: 2 position { x: 5 y: 0 z: 0 } }
     formation { shape: LINE spacing_m: 2 })",
                                                                 "listed"));
-  EXPECT_EQ(listed.agent(2)->offset_W, Vec3(-1, 0, 0));
-  EXPECT_EQ(listed.agent(9)->offset_W, Vec3(1, 0, 0));
+  EXPECT_EQ(listed.spec(2)->offset_W, Vec3(-1, 0, 0));
+  EXPECT_EQ(listed.spec(9)->offset_W, Vec3(1, 0, 0));
   // The scenario as run re-resolves to the same slots.
   const RunConfig again = resolve_scenario(rc.resolved);
-  for (const AgentSpec& a : rc.agents) EXPECT_EQ(again.agent(a.id)->offset_W, a.offset_W);
+  for (const AgentSpec& a : rc.agents) EXPECT_EQ(again.spec(a.id)->offset_W, a.offset_W);
 }
 
 TEST(FormationScenario, AnAgentsOwnOffsetOverridesItsSlot) {
@@ -100,14 +100,14 @@ TEST(FormationScenario, AnAgentsOwnOffsetOverridesItsSlot) {
     agents { id: 2 position { x: 5 y: 0 z: 0 } offset { x: 0 y: 0 z: 7 } }
     formation { shape: LINE })",
                                                             "own"));
-  EXPECT_EQ(rc.agent(1)->offset_W, Vec3(-1.5, 0, 0));  // the line's default spacing is 3 m
-  EXPECT_EQ(rc.agent(2)->offset_W, Vec3(0, 0, 7));
+  EXPECT_EQ(rc.spec(1)->offset_W, Vec3(-1.5, 0, 0));  // the line's default spacing is 3 m
+  EXPECT_EQ(rc.spec(2)->offset_W, Vec3(0, 0, 7));
   // Without a shape, only the agents' own offsets; without either, the paper's rendezvous.
   const RunConfig plain = resolve_scenario(parse_scenario_text(R"(
     agents { id: 1 position { x: 0 y: 0 z: 0 } }
     agents { id: 2 position { x: 5 y: 0 z: 0 } })",
                                                                "plain"));
-  EXPECT_EQ(plain.agent(1)->offset_W, Vec3::Zero());
+  EXPECT_EQ(plain.spec(1)->offset_W, Vec3::Zero());
   EXPECT_EQ(plain.initial_average(), Vec3(2.5, 0, 0));
 }
 
@@ -173,7 +173,7 @@ TEST(FormationSwarm, AKilledAndRestartedAgentStillFindsItsSlotAndTheCentreStaysE
   const RunConfig& rc = swarm.config();
   const Vec3 centre = average(swarm.running_states());
   EXPECT_LT((centre - rc.initial_average()).norm() / rc.initial_average().norm(), 1e-9);
-  EXPECT_LT((position_of(swarm, 6) - (centre + rc.agent(6)->offset_W)).norm(), 1e-7);
+  EXPECT_LT((position_of(swarm, 6) - (centre + rc.spec(6)->offset_W)).norm(), 1e-7);
 }
 
 // The degree of every running agent at the end: how many links its law holds.

@@ -197,7 +197,7 @@ void expect_grid_formed(const std::filesystem::path& dir, const RunConfig& rc) {
   EXPECT_LT(s.average_relative_error(), 1e-9);  // edge-flow: the centre is exact
   EXPECT_LT(s.max_slot_error_m(), 0.10);        // everyone within 10 cm of its slot
   for (const auto& a : s.agents()) {
-    const AgentSpec* spec = rc.agent(a.id());
+    const AgentSpec* spec = rc.spec(a.id());
     ASSERT_NE(spec, nullptr);
     EXPECT_LT((vec(a.offset()) - spec->offset_W).norm(), 1e-12) << "agent " << a.id();
     EXPECT_LT(a.slot_error_m(), 0.10) << "agent " << a.id();
@@ -412,7 +412,7 @@ TEST(SwarmRun, BadSamplesFromATestParticipantAreDroppedByEveryAgentAndChangeNoth
                  dir.parent_path() / "bad-samples.log");
   // The saboteur is inside the run: it knows the run's id (its DDS partition) from the record.
   ASSERT_TRUE(wait_for([&] { return std::filesystem::exists(dir / "processes.csv"); }, 30.0));
-  const std::uint64_t run_id = load_scenario((dir / "scenario.txtpb").string()).run_id;
+  const std::uint64_t run_id = load_scenario((dir / "scenario.txtpb").string()).transport.run_id;
   ASSERT_NE(run_id, 0u);
   DdsOptions opt;
   opt.domain_id = static_cast<std::uint32_t>(test_domain().domain());
