@@ -11,6 +11,7 @@
 #include "agent/options.hpp"
 #include "agent/stats.hpp"
 #include "common/claim/claim_runner.hpp"
+#include "common/record/run_dir.hpp"
 
 namespace {
 std::atomic<bool> g_stop{false};
@@ -64,13 +65,13 @@ int main(int argc, char** argv) {
       id = *taken;
     }
     const std::string name = "agent-" + std::to_string(id);
-    log = make_process_logger(name, f.run_dir.empty() ? "" : f.run_dir + "/" + name + ".log");
+    const RunDir dir(f.run_dir);
+    log = make_process_logger(name, dir.empty() ? "" : dir.agent_log(id).string());
     if (claim)
       log->info("replica {:016x} after {:.2f} s of claiming flies as agent {}", claim->nonce(),
                 clock.now_s(), id);
     f.loop.time_scale = f.process.time_scale;
-    f.loop.incarnation = wall_now_ns();
-    f.loop.wall_clock_ns = wall_now_ns;
+    f.loop.incarnation = clock.wall_ns();
     AgentLoop loop(*rc, id, f.loop, bus, clock);
     log->info("agent {} up: domain {}, {} law, time scale {}", id, rc->transport.domain_id,
               to_string(rc->agent.law.kind), f.process.time_scale);
@@ -81,8 +82,8 @@ int main(int argc, char** argv) {
         log->log(n.warning ? spdlog::level::warn : spdlog::level::info, n.text);
       if (p.kill) {
         log->warn("t={:.3f} s: planned kill: SIGKILL to myself", loop.runtime().time_s());
-        if (!f.run_dir.empty() && !mark_planned_kill(f.run_dir, id, loop.runtime().time_s()))
-          log->error("cannot mark the planned kill in {}", planned_kills_file(f.run_dir, id));
+        if (!dir.empty() && !dir.mark_planned_kill(id, loop.runtime().time_s()))
+          log->error("cannot mark the planned kill in {}", dir.planned_kills(id).string());
         log->flush();
         std::raise(SIGKILL);
         std::_Exit(137);  // as PID 1 of a container the kernel ignores our own SIGKILL
@@ -99,8 +100,10 @@ int main(int argc, char** argv) {
     }
     loop.stop();
     log->info(final_report(loop, bus.counters()));
-    if (!f.run_dir.empty())
-      write_stats(f.run_dir + "/" + name + ".stats", loop, bus.counters(), clock.now_s());
+    if (!dir.empty() && !write_stats(dir.agent_stats(id), loop, bus.counters(), clock.now_s())) {
+      log->error("cannot write {}", dir.agent_stats(id).string());
+      exit_code = 3;  // the record is incomplete: say so, as the supervisor does
+    }
     return exit_code;
   } catch (const std::exception& e) {
     log->error("fatal: {}", describe_exception(e));

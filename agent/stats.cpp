@@ -25,18 +25,19 @@ std::string final_report(const AgentLoop& loop, const BusCounters& c) {
   return buf;
 }
 
-void write_stats(const std::string& path, const AgentLoop& loop, const BusCounters& c,
+bool write_stats(const std::filesystem::path& path, const AgentLoop& loop, const BusCounters& c,
                  double wall_now_s) {
   rusage ru{};
   getrusage(RUSAGE_SELF, &ru);
   const double cpu_s = static_cast<double>(ru.ru_utime.tv_sec + ru.ru_stime.tv_sec) +
                        static_cast<double>(ru.ru_utime.tv_usec + ru.ru_stime.tv_usec) * 1e-6;
   const double since = loop.running_since_s();
-  std::ofstream(path) << "cpu_s " << cpu_s << "\nwall_s " << (since >= 0 ? wall_now_s - since : 0.0)
-                      << "\nsteps " << loop.ticks() << "\nphysics_steps " << loop.physics_steps()
-                      << "\noverruns " << loop.overruns() << "\ndiscovery_s "
-                      << loop.lifecycle().discovery_s() << "\nmax_rss_kb " << ru.ru_maxrss
-                      << "\nreceived " << c.received << "\ndropped " << c.dropped << "\n";
+  std::ofstream out(path);
+  out << "cpu_s " << cpu_s << "\nwall_s " << (since >= 0 ? wall_now_s - since : 0.0) << "\nsteps "
+      << loop.ticks() << "\nphysics_steps " << loop.physics_steps() << "\noverruns "
+      << loop.overruns() << "\ndiscovery_s " << loop.lifecycle().discovery_s() << "\nmax_rss_kb "
+      << ru.ru_maxrss << "\nreceived " << c.received << "\ndropped " << c.dropped << "\n";
+  return static_cast<bool>(out.flush());
 }
 
 }  // namespace qswarm

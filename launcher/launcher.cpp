@@ -25,7 +25,8 @@ Launcher::Launcher(LaunchSpec spec, ChildProcesses& procs, Clock& clock,
     : spec_(std::move(spec)),
       procs_(procs),
       clock_(clock),
-      supervisor_ready_(std::move(supervisor_ready)) {}
+      supervisor_ready_(std::move(supervisor_ready)),
+      restarts_(spec_.rc.faults) {}
 
 double Launcher::wall_limit_s() const {
   return spec_.rc.judge.duration_s / spec_.time_scale + 120.0;
@@ -34,9 +35,9 @@ double Launcher::wall_limit_s() const {
 std::vector<std::string> Launcher::supervisor_argv() const {
   std::vector<std::string> a = {spec_.bin_dir + "/swarm-supervisor",
                                 "--scenario",
-                                spec_.scenario_path,
+                                spec_.dir.scenario().string(),
                                 "--run-dir",
-                                spec_.run_dir,
+                                spec_.dir.str(),
                                 "--time-scale",
                                 num(spec_.time_scale)};
   if (spec_.progress) a.push_back("--progress");
@@ -46,11 +47,11 @@ std::vector<std::string> Launcher::supervisor_argv() const {
 std::vector<std::string> Launcher::agent_argv(AgentId id, double join_at_s, bool restart) const {
   std::vector<std::string> a = {spec_.bin_dir + "/swarm-agent",
                                 "--scenario",
-                                spec_.scenario_path,
+                                spec_.dir.scenario().string(),
                                 "--id",
                                 std::to_string(id),
                                 "--run-dir",
-                                spec_.run_dir,
+                                spec_.dir.str(),
                                 "--time-scale",
                                 num(spec_.time_scale)};
   if (join_at_s >= 0) {
@@ -64,16 +65,11 @@ std::vector<std::string> Launcher::agent_argv(AgentId id, double join_at_s, bool
   return a;
 }
 
-std::string Launcher::agent_log(AgentId id, int life) const {
-  return spec_.run_dir + "/agent-" + std::to_string(id) +
-         (life ? "-restart" + std::to_string(life) : "") + ".out";
-}
-
 void Launcher::start() {
   started_s_ = clock_.now_s();
   // Its errors reach the user even when its output goes to a file (that file may be what failed).
   procs_.spawn("supervisor", 0, supervisor_argv(),
-               spec_.progress ? "" : spec_.run_dir + "/supervisor.out", true);
+               spec_.progress ? "" : spec_.dir.supervisor_out().string(), true);
   // The supervisor's reader first, so that it records the start.
   const double ready_by = clock_.now_s() + spec_.supervisor_ready_timeout_s;
   while (!supervisor_ready_() && clock_.now_s() < ready_by && procs_.children().front().running) {
@@ -88,11 +84,11 @@ void Launcher::start() {
         "the supervisor did not come up (" +
         (sup.running ? "no reader after " + num(spec_.supervisor_ready_timeout_s) + " s"
                      : describe_status(sup.status)) +
-        ")" + (spec_.progress ? "" : "; see " + spec_.run_dir + "/supervisor.out"));
+        ")" + (spec_.progress ? "" : "; see " + spec_.dir.supervisor_out().string()));
   }
   for (const AgentSpec& a : spec_.rc.agents)
-    procs_.spawn("agent", a.id, agent_argv(a.id, -1.0, false), agent_log(a.id, 0));
-  std::ofstream pids(spec_.run_dir + "/processes.csv");
+    procs_.spawn("agent", a.id, agent_argv(a.id, -1.0, false), spec_.dir.agent_out(a.id, 0));
+  std::ofstream pids(spec_.dir.processes());
   pids << "role,id,pid\n";
   for (const auto& c : procs_.children()) pids << c.role << ',' << c.id << ',' << c.pid << '\n';
 }
@@ -104,23 +100,20 @@ void Launcher::note_abnormal(const ChildProcesses::Child& c, bool at_teardown) {
 }
 
 void Launcher::on_agent_exit(const ChildProcesses::Child& c) {
-  const std::vector<double> restarts = spec_.rc.faults.restarts_of(c.id);
-  int& life = lives_[c.id];
-  // A SIGKILL is the plan's when the agent marked it before killing itself (a line in
-  // agent-ID.planned-kills); a SIGKILL from outside, even while planned kills are left, is not.
+  // A SIGKILL is the plan's when the agent marked it before killing itself; one from outside,
+  // even while planned kills are left, is not.
   const bool planned = planned_kill_status(c.status) &&
-                       kills_seen_[c.id] < planned_kills_marked(spec_.run_dir, c.id) &&
-                       kills_seen_[c.id] < static_cast<int>(spec_.rc.faults.kills_of(c.id).size());
-  if (planned) ++kills_seen_[c.id];
-  if (planned && life < static_cast<int>(restarts.size())) {
-    // Its planned kill: a new process rejoins at the planned restart time.
-    const double at = restarts[static_cast<std::size_t>(life)];
-    ++life;
-    std::fprintf(stderr, "swarm run: restarting agent %u (joins at t=%.2f s)\n", c.id, at);
-    procs_.spawn("agent", c.id, agent_argv(c.id, at, true), agent_log(c.id, life));
-    std::ofstream(spec_.run_dir + "/processes.csv", std::ios::app)
-        << "agent," << c.id << ',' << procs_.children().back().pid << '\n';
-    return;
+                       restarts_.is_planned_kill(c.id, spec_.dir.planned_kills_marked(c.id));
+  if (planned) {
+    if (const std::optional<double> at = restarts_.after_planned_kill(c.id)) {
+      // A new process rejoins at the planned restart time.
+      std::fprintf(stderr, "swarm run: restarting agent %u (joins at t=%.2f s)\n", c.id, *at);
+      procs_.spawn("agent", c.id, agent_argv(c.id, *at, true),
+                   spec_.dir.agent_out(c.id, restarts_.restarts(c.id)));
+      std::ofstream(spec_.dir.processes(), std::ios::app)
+          << "agent," << c.id << ',' << procs_.children().back().pid << '\n';
+      return;
+    }
   }
   const bool clean = WIFEXITED(c.status) && WEXITSTATUS(c.status) == 0;
   if (!planned && !clean) note_abnormal(c, false);
@@ -148,7 +141,9 @@ int Launcher::stop() {
   const auto& children = procs_.children();
   for (std::size_t i = 0; i < children.size(); ++i) {
     const auto& c = children[i];
-    if (!was_running[i] || c.killed_at_teardown) continue;
+    if (!was_running[i]) continue;
+    if (c.role == "agent") at_teardown_.push_back(c.id);
+    if (c.killed_at_teardown) continue;
     // A child that stopped on our SIGTERM exits 0 (agents, supervisor) or by SIGTERM; anything
     // else (an abort, a segfault, a non-zero exit) is a crash the record must not hide.
     const bool clean =
@@ -161,5 +156,50 @@ int Launcher::stop() {
 }
 
 int Launcher::supervisor_status() const { return procs_.children().front().status; }
+
+Launcher::Outcome Launcher::conclude(double wall_time_s) {
+  Outcome out;
+  const int sup = supervisor_status();
+  const RunDir& dir = spec_.dir;
+  if (!std::filesystem::exists(dir.summary())) {
+    // The supervisor died before it could write the summary: the launcher says why.
+    const std::string reason = "supervisor " + describe_status(sup);
+    out.lines.push_back(reason + "; the summary says so");
+    out.exit_code = dir.write_fallback_summary(spec_.rc, reason, wall_time_s) ? 1 : 3;
+    return out;
+  }
+  if (WIFEXITED(sup) && WEXITSTATUS(sup) == 3) {
+    out.lines.push_back("the run record is incomplete (see above); run directory " + dir.str());
+    out.exit_code = 3;
+    return out;
+  }
+  // Every agent still running at teardown ends by writing its stats; one that did not (killed after
+  // the grace period, a full disk) leaves the record incomplete.
+  std::vector<std::string> missing;
+  for (const AgentId id : at_teardown_) {
+    if (std::filesystem::exists(dir.agent_stats(id))) continue;
+    missing.push_back("record incomplete: agent " + std::to_string(id) + " wrote no " +
+                      dir.agent_stats(id).filename().string() + " (stopped at teardown after " +
+                      num(spec_.grace_s) + " s of grace?)");
+  }
+  std::vector<std::string> unseen = problems_;
+  unseen.insert(unseen.end(), missing.begin(), missing.end());
+  for (const std::string& m : missing) out.lines.push_back(m);
+  // What the supervisor could not see still unmakes "converged" in the record.
+  if (!unseen.empty() && !dir.amend_summary(unseen)) {
+    out.lines.push_back("cannot amend " + dir.summary().string());
+    out.exit_code = 3;
+    return out;
+  }
+  if (!missing.empty()) {
+    out.exit_code = 3;
+    return out;
+  }
+  const bool converged = WIFEXITED(sup) && WEXITSTATUS(sup) == 0 && problems_.empty();
+  out.lines.push_back(std::string(converged ? "converged" : "not converged") + "; run record in " +
+                      dir.str());
+  out.exit_code = converged ? 0 : 1;
+  return out;
+}
 
 }  // namespace qswarm

@@ -7,6 +7,8 @@
 #include <vector>
 
 #include "common/clock/clock.hpp"
+#include "common/record/run_dir.hpp"
+#include "common/runtime/restart_policy.hpp"
 #include "common/scenario/run_config.hpp"
 #include "launcher/process_group.hpp"
 
@@ -15,9 +17,8 @@ namespace qswarm {
 // How `swarm run` starts one run (the resolved scenario is in `rc`).
 struct LaunchSpec {
   RunConfig rc;
-  std::string run_dir;        // absolute
-  std::string scenario_path;  // the scenario as run, inside run_dir
-  std::string bin_dir;        // where swarm-agent and swarm-supervisor are
+  RunDir dir;           // absolute; the scenario as run is written there
+  std::string bin_dir;  // where swarm-agent and swarm-supervisor are
   double time_scale = 1.0;
   double grace_s = 5.0;
   bool progress = true;  // the supervisor prints a live line (else its output goes to a file)
@@ -42,6 +43,15 @@ class Launcher {
   std::optional<std::string> poll(bool interrupted);
   // Tears everything down (SIGTERM, grace, SIGKILL). Returns how many needed SIGKILL.
   int stop();
+  // After stop(): the run's exit code, with the record made honest. The launcher writes the
+  // summary if the supervisor died first, and amends it with what only the launcher saw: a child
+  // that crashed, an agent that wrote no stats (killed after the grace period). 0 converged, 1 not,
+  // 3 the record is incomplete. `lines` says why, for the user.
+  struct Outcome {
+    int exit_code = 1;
+    std::vector<std::string> lines;
+  };
+  Outcome conclude(double wall_time_s);
 
   // Lines for the user about children that exited abnormally (reported as they happen and at
   // teardown): a crash anywhere makes the run's exit code non-zero.
@@ -51,7 +61,6 @@ class Launcher {
   double wall_limit_s() const;
   std::vector<std::string> agent_argv(AgentId id, double join_at_s, bool restart) const;
   std::vector<std::string> supervisor_argv() const;
-  std::string agent_log(AgentId id, int life) const;
 
  private:
   void on_agent_exit(const ChildProcesses::Child& c);
@@ -62,8 +71,8 @@ class Launcher {
   Clock& clock_;
   std::function<bool()> supervisor_ready_;
   double started_s_ = 0.0;
-  std::map<AgentId, int> lives_;
-  std::map<AgentId, int> kills_seen_;
+  RestartPolicy restarts_;
+  std::vector<AgentId> at_teardown_;  // agents whose life was still running at teardown
   std::string why_;
   std::vector<std::string> problems_;
 };

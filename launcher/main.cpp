@@ -117,31 +117,25 @@ int run(const RunOptions& opt) {
     std::cerr << "swarm run: " << e.what() << "\n";
     return 2;
   }
-  fs::path dir;
+  RunDir dir;
   try {
-    dir = claim_run_dir(opt.out, rc.name, run_timestamp());
+    dir = RunDir::claim(opt.out, rc.name, run_timestamp());
   } catch (const RunDirError& e) {
     std::cerr << "swarm run: " << e.what() << "\n";
     return 2;
   }
   LaunchSpec spec;
   spec.rc = rc;
-  spec.run_dir = dir.string();
-  spec.scenario_path = (dir / "scenario.txtpb").string();
+  spec.dir = dir;
   spec.bin_dir = bin_dir().string();
   spec.time_scale = opt.time_scale;
   spec.grace_s = opt.grace_s;
   spec.progress = !opt.quiet;
   spec.stop_on_agent_exit = opt.stop_on_agent_exit;
   spec.ignore_sigterm = opt.ignore_sigterm;
-  {
-    std::ofstream scen(spec.scenario_path);
-    scen << "# The scenario as run (defaults filled in, agents listed).\n" << to_text(rc.resolved);
-    scen.flush();
-    if (!scen) {
-      std::cerr << "swarm run: cannot write " << spec.scenario_path << " (disk full?)\n";
-      return 3;
-    }
+  if (!dir.write_scenario(rc.resolved)) {
+    std::cerr << "swarm run: cannot write " << dir.scenario().string() << " (disk full?)\n";
+    return 3;
   }
   if (!opt.quiet) {
     const InitialGraph g = initial_graph(rc);
@@ -150,7 +144,7 @@ int run(const RunOptions& opt) {
               << "\n"
               << "initial graph: " << g.edges.size() << " edges, lambda2 " << g.spectrum.lambda2
               << (g.spectrum.components > 1 ? " (not connected yet)" : "")
-              << "\nrun directory: " << dir.string() << std::endl;
+              << "\nrun directory: " << dir.str() << std::endl;
   }
 
   std::signal(SIGINT, on_signal);
@@ -158,13 +152,13 @@ int run(const RunOptions& opt) {
   std::signal(SIGHUP, on_signal);
   ProcessGroup procs;
   SteadyClock clock;
-  Launcher launcher(spec, procs, clock, [&] { return fs::exists(dir / "supervisor.ready"); });
+  Launcher launcher(spec, procs, clock, [&] { return fs::exists(dir.supervisor_ready()); });
   try {
     launcher.start();
   } catch (const std::exception& e) {
     std::cerr << "swarm run: " << e.what() << "\n";
     launcher.stop();
-    write_fallback_summary(dir, rc, e.what(), clock.now_s());
+    dir.write_fallback_summary(rc, e.what(), clock.now_s());
     return 1;
   }
   std::optional<std::string> why;
@@ -177,25 +171,10 @@ int run(const RunOptions& opt) {
   }
   if (*why != "supervisor finished") std::cerr << "swarm run: " << *why << "\n";
   for (const std::string& p : launcher.problems()) std::cerr << "swarm run: " << p << "\n";
-  const int sup = launcher.supervisor_status();
-  if (!fs::exists(dir / "summary.json")) {
-    // The supervisor died before it could write the summary: the launcher says why.
-    const std::string reason = "supervisor " + describe_status(sup);
-    std::cerr << "swarm run: " << reason << "; the summary says so\n";
-    if (!write_fallback_summary(dir, rc, reason, clock.now_s())) return 3;
-    return 1;
-  }
-  if (WIFEXITED(sup) && WEXITSTATUS(sup) == 3) {
-    std::cout << "swarm run: the run record is incomplete (see above); run directory "
-              << dir.string() << std::endl;
-    return 3;
-  }
-  // A crash the supervisor could not see (at teardown) still unmakes "converged" in the record.
-  if (!launcher.problems().empty() && !amend_summary(dir, launcher.problems())) return 3;
-  const bool converged = WIFEXITED(sup) && WEXITSTATUS(sup) == 0 && launcher.problems().empty();
-  std::cout << "swarm run: " << (converged ? "converged" : "not converged") << "; run record in "
-            << dir.string() << std::endl;
-  return converged ? 0 : 1;
+  const Launcher::Outcome outcome = launcher.conclude(clock.now_s());
+  for (const std::string& line : outcome.lines)
+    (outcome.exit_code == 0 ? std::cout : std::cerr) << "swarm run: " << line << std::endl;
+  return outcome.exit_code;
 }
 
 // Runs a figure script installed beside this binary (tools/plot/) with Debian's interpreter
@@ -249,17 +228,11 @@ int paper(const PaperOptions& opt) {
       return 2;
     }
     try {
-      runs = claim_run_dir(opt.runs, "paper", run_timestamp()).string();
+      runs = RunDir::claim(opt.runs, "paper", run_timestamp(), "runs", "--runs").str();
       fs::create_directories(fs::path(runs) / "maneuvers");
       write_paper_maneuvers(rc, (fs::path(runs) / "maneuvers").string());
     } catch (const RunDirError& e) {
-      // claim_run_dir speaks of --out, the flag of `swarm run`; here the directory is --runs.
-      std::string what = e.what();
-      for (std::size_t at = what.find("--out"); at != std::string::npos;
-           at = what.find("--out", at + 6)) {
-        what.replace(at, 5, "--runs");
-      }
-      std::cerr << "swarm paper: " << what << "\n";
+      std::cerr << "swarm paper: " << e.what() << "\n";
       return 2;
     } catch (const std::exception& e) {
       std::cerr << "swarm paper: " << e.what() << "\n";

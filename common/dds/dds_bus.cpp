@@ -46,12 +46,6 @@ namespace qswarm {
 namespace dds = eprosima::fastdds::dds;
 namespace rtps = eprosima::fastdds::rtps;
 
-std::int64_t wall_now_ns() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(
-             std::chrono::system_clock::now().time_since_epoch())
-      .count();
-}
-
 namespace {
 
 // What a bus's roster filter turned away: the first ids and every sample.
@@ -117,6 +111,7 @@ class RosterFilterFactory final : public dds::IContentFilterFactory {
 
 struct DdsBus::Impl : public dds::DataReaderListener {
   DdsOptions opts;
+  const Clock* clock = nullptr;  // the receiver's wall time, for the gate
   dds::DomainParticipant* participant = nullptr;
   dds::Publisher* publisher = nullptr;
   dds::Subscriber* subscriber = nullptr;
@@ -188,7 +183,7 @@ struct DdsBus::Impl : public dds::DataReaderListener {
     SampleGate::Result r;
     {
       std::lock_guard<std::mutex> lock(mu);
-      r = gate.admit(m, why, wall_now_ns());
+      r = gate.admit(m, why, clock->wall_ns());
     }
     if (r.verdict == SampleGate::Verdict::kForeign && r.first_from) {
       spdlog::warn("samples of another run (run id {:x}) on this domain: dropped and counted",
@@ -205,9 +200,10 @@ struct DdsBus::Impl : public dds::DataReaderListener {
   }
 };
 
-DdsBus::DdsBus(const DdsOptions& opts) : impl_(std::make_unique<Impl>()) {
+DdsBus::DdsBus(const DdsOptions& opts, const Clock& clock) : impl_(std::make_unique<Impl>()) {
   Impl& d = *impl_;
   d.opts = opts;
+  d.clock = &clock;
   d.gate = SampleGate(opts.run_id);
   dds::DomainParticipantQos pqos;
   pqos.name(opts.participant_name);

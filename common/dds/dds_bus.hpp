@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "common/claim/claim_bus.hpp"
+#include "common/clock/clock.hpp"
 #include "common/transport/neighbor_bus.hpp"
 
 namespace qswarm {
@@ -59,7 +60,8 @@ std::optional<std::vector<std::pair<AgentId, AgentId>>> parse_roster_filter(
 // nothing throws out of it.
 class DdsBus final : public NeighborBus, public ClaimBus {
  public:
-  explicit DdsBus(const DdsOptions& opts);
+  // `clock`'s wall time judges incarnations from the future (read on DDS threads).
+  explicit DdsBus(const DdsOptions& opts, const Clock& clock = system_clock());
   ~DdsBus() override;
   DdsBus(const DdsBus&) = delete;
   DdsBus& operator=(const DdsBus&) = delete;
@@ -73,10 +75,10 @@ class DdsBus final : public NeighborBus, public ClaimBus {
   // Number of readers matched to our writer (DDS discovery; the start barrier waits on it).
   int matched_readers() const override;
   // Run ids of other runs heard on this domain (only a hear_all_runs bus hears them).
-  std::set<std::uint64_t> foreign_runs() const;
-  // Ids outside the roster whose samples the roster filter dropped (the first 64 of them), and how
-  // many samples it dropped (counted in counters().dropped too).
-  std::set<AgentId> strangers() const;
+  std::set<std::uint64_t> foreign_runs() const override;
+  // Ids outside the roster whose samples the roster filter dropped (the first 64 of them; their
+  // samples are counted in counters().dropped too).
+  std::set<AgentId> strangers() const override;
   // The id-claim topic (DdsOptions::id_claims): announce this replica's claim, and the latest
   // claim of every replica heard (a bounded number of them: strangers cannot grow it).
   void publish_claim(const IdClaim& claim) override;
@@ -89,7 +91,5 @@ class DdsBus final : public NeighborBus, public ClaimBus {
  private:
   std::unique_ptr<Impl> impl_;
 };
-
-std::int64_t wall_now_ns();
 
 }  // namespace qswarm

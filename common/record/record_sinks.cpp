@@ -24,13 +24,13 @@ std::string quoted(const std::string& s) {
 
 }  // namespace
 
-RecordSinks::RecordSinks(const std::string& dir) : dir_(dir) {
-  telemetry_.open(dir_ + "/telemetry.csv");
-  graph_.open(dir_ + "/graph.csv");
-  events_.open(dir_ + "/events.csv");
-  records_.open(dir_ + "/records.pb", std::ios::binary);
+RecordSinks::RecordSinks(const RunDir& dir) : dir_(dir) {
+  telemetry_.open(dir_.telemetry());
+  graph_.open(dir_.graph());
+  events_.open(dir_.events());
+  records_.open(dir_.records(), std::ios::binary);
   if (!telemetry_ || !graph_ || !events_ || !records_) {
-    throw std::runtime_error("cannot write the run directory " + dir_);
+    throw std::runtime_error("cannot write the run directory " + dir_.str());
   }
   telemetry_ << "stamp_s,id,seq,phase,mode,qx,qy,qz,px,py,pz,vx,vy,vz,qw,qxr,qyr,qzr,w1,w2,w3,w4,"
                 "total_weight,links,age_ms\n";
@@ -39,13 +39,13 @@ RecordSinks::RecordSinks(const std::string& dir) : dir_(dir) {
   events_ << "t_s,kind,agent,detail\n";
   telemetry_ << std::setprecision(10);
   graph_ << std::setprecision(10);
-  check(telemetry_, "telemetry.csv");
-  check(graph_, "graph.csv");
-  check(events_, "events.csv");
+  check(telemetry_, dir_.telemetry());
+  check(graph_, dir_.graph());
+  check(events_, dir_.events());
 }
 
-void RecordSinks::check(std::ofstream& f, const char* name) {
-  if (!f && failed_.empty()) failed_ = dir_ + "/" + name;
+void RecordSinks::check(std::ofstream& f, const std::filesystem::path& path) {
+  if (!f && failed_.empty()) failed_ = path.string();
 }
 
 void RecordSinks::write_record(const records::Record& r) {
@@ -54,9 +54,9 @@ void RecordSinks::write_record(const records::Record& r) {
     google::protobuf::io::CodedOutputStream out(&raw);
     out.WriteVarint32(static_cast<std::uint32_t>(r.ByteSizeLong()));
     r.SerializeWithCachedSizes(&out);
-    if (out.HadError() && failed_.empty()) failed_ = dir_ + "/records.pb";
+    if (out.HadError() && failed_.empty()) failed_ = dir_.records();
   }
-  check(records_, "records.pb");
+  check(records_, dir_.records());
 }
 
 void RecordSinks::sample(const StateMessage& m, double age_ms) {
@@ -69,7 +69,7 @@ void RecordSinks::sample(const StateMessage& m, double age_ms) {
              << m.rotors_radps[0] << ',' << m.rotors_radps[1] << ',' << m.rotors_radps[2] << ','
              << m.rotors_radps[3] << ',' << m.view.total_weight << ',' << m.links.size() << ','
              << age_ms << '\n';
-  check(telemetry_, "telemetry.csv");
+  check(telemetry_, dir_.telemetry());
   records::Record r;
   records::AgentSample* s = r.mutable_sample();
   s->set_id(m.view.id);
@@ -95,7 +95,7 @@ void RecordSinks::graph(const records::GraphSnapshot& g) {
   graph_ << g.t_s() << ',' << g.agents() << ',' << g.edges_size() << ',' << g.lambda2() << ','
          << g.components() << ',' << g.disagreement_m() << ',' << g.mean_drift_m() << ','
          << g.min_separation_m() << ',' << g.spread_m() << ",\"" << list.str() << "\"\n";
-  check(graph_, "graph.csv");
+  check(graph_, dir_.graph());
   records::Record r;
   *r.mutable_graph() = g;
   write_record(r);
@@ -105,7 +105,7 @@ void RecordSinks::event(double t_s, const std::string& kind, std::uint32_t agent
                         const std::string& detail) {
   events_ << t_s << ',' << kind << ',' << agent << ',' << quoted(detail) << '\n';
   events_.flush();
-  check(events_, "events.csv");
+  check(events_, dir_.events());
   records::Record r;
   records::Event* e = r.mutable_event();
   e->set_t_s(t_s);
@@ -117,13 +117,13 @@ void RecordSinks::event(double t_s, const std::string& kind, std::uint32_t agent
 
 bool RecordSinks::flush() {
   telemetry_.flush();
-  check(telemetry_, "telemetry.csv");
+  check(telemetry_, dir_.telemetry());
   graph_.flush();
-  check(graph_, "graph.csv");
+  check(graph_, dir_.graph());
   events_.flush();
-  check(events_, "events.csv");
+  check(events_, dir_.events());
   records_.flush();
-  check(records_, "records.pb");
+  check(records_, dir_.records());
   return ok();
 }
 

@@ -4,6 +4,7 @@
 #include <string>
 
 #include "common/core/math.hpp"
+#include "common/record/run_dir.hpp"
 #include "common/transport/state_message.hpp"
 #include "proto/records.pb.h"
 
@@ -15,7 +16,7 @@ namespace qswarm {
 // record that is not complete.
 class RecordSinks {
  public:
-  explicit RecordSinks(const std::string& dir);
+  explicit RecordSinks(const RunDir& dir);
   void sample(const StateMessage& m, double age_ms);
   void graph(const records::GraphSnapshot& g);
   void event(double t_s, const std::string& kind, std::uint32_t agent, const std::string& detail);
@@ -28,12 +29,11 @@ class RecordSinks {
   }
   // The first file that failed ("" if none).
   const std::string& failed_file() const { return failed_; }
-  const std::string& dir() const { return dir_; }
 
  private:
   void write_record(const records::Record& r);
-  void check(std::ofstream& f, const char* name);
-  std::string dir_;
+  void check(std::ofstream& f, const std::filesystem::path& path);
+  RunDir dir_;
   std::ofstream telemetry_, graph_, events_, records_;
   std::string failed_;
 };

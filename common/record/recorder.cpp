@@ -20,9 +20,9 @@ std::vector<AgentId> ids_of(const RunConfig& rc) {
 
 }  // namespace
 
-Recorder::Recorder(RunConfig rc, std::string run_dir, double time_scale)
+Recorder::Recorder(RunConfig rc, RunDir dir, double time_scale)
     : rc_(std::move(rc)),
-      dir_(std::move(run_dir)),
+      dir_(std::move(dir)),
       time_scale_(time_scale),
       sinks_(dir_),
       presence_(ids_of(rc_), rc_.agent.neighbor_timeout_s),
@@ -261,13 +261,13 @@ std::string Recorder::finish(const std::string& end_reason, double wall_time_s) 
   event("end", 0, end_reason);
   const std::string json = to_json(summary_);
   {
-    std::ofstream out(dir_ + "/summary.json");
+    std::ofstream out(dir_.summary());
     out << json;
     out.flush();
-    if (!out) sinks_.fail(dir_ + "/summary.json");
+    if (!out) sinks_.fail(dir_.summary().string());
   }
   sinks_.flush();
-  std::string text = summary_text(summary_, rc_, dir_);
+  std::string text = summary_text(summary_, rc_, dir_.str());
   if (!sinks_.ok()) text += "RECORD INCOMPLETE: could not write " + sinks_.failed_file() + "\n";
   return text;
 }

@@ -9,6 +9,7 @@
 #include "common/record/convergence.hpp"
 #include "common/record/presence.hpp"
 #include "common/record/record_sinks.hpp"
+#include "common/record/run_dir.hpp"
 #include "common/record/separation.hpp"
 #include "common/record/summary.hpp"
 #include "common/scenario/run_config.hpp"
@@ -24,7 +25,7 @@ namespace qswarm {
 // arrives, so departures are judged in the same time domain as the agents judge them.
 class Recorder {
  public:
-  Recorder(RunConfig rc, std::string run_dir, double time_scale);
+  Recorder(RunConfig rc, RunDir dir, double time_scale);
 
   void on_sample(const StateMessage& m, std::int64_t recv_wall_ns);
   // Other runs heard on this run's domain (their samples were refused): each is an event once,
@@ -64,7 +65,7 @@ class Recorder {
   Vec3 offset_of(AgentId id) const;
 
   RunConfig rc_;
-  std::string dir_;
+  RunDir dir_;
   double time_scale_;
   RecordSinks sinks_;
   Presence presence_;

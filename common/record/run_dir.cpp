@@ -15,6 +15,7 @@
 namespace fs = std::filesystem;
 
 #include "common/scenario/proto_util.hpp"
+#include "common/scenario/scenario.hpp"
 
 namespace qswarm {
 
@@ -39,12 +40,12 @@ bool try_claim(const fs::path& dir, const std::string& flag) {
   if (ec) throw RunDirError(flag + " " + dir.string() + ": cannot create (" + ec.message() + ")");
   if (!fs::is_directory(dir)) throw RunDirError(flag + " " + dir.string() + ": not a directory");
   for (const auto& entry : fs::directory_iterator(dir)) {
-    if (entry.path().filename() == ".swarm-run") return false;
+    if (entry.path().filename() == RunDir::kMarker) return false;
     throw RunDirError(flag + " " + dir.string() +
                       ": expected a new or empty directory; it holds files (e.g. " +
                       entry.path().filename().string() + "): choose another --out");
   }
-  const std::string marker = (dir / ".swarm-run").string();
+  const std::string marker = (dir / RunDir::kMarker).string();
   const int fd = ::open(marker.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
   if (fd < 0) {
     if (errno == EEXIST) return false;
@@ -66,25 +67,86 @@ std::string run_timestamp() {
   return buf;
 }
 
-fs::path claim_run_dir(const std::string& out, const std::string& scenario_name,
-                       const std::string& timestamp, const fs::path& root) {
+RunDir RunDir::claim(const std::string& out, const std::string& scenario_name,
+                     const std::string& timestamp, const fs::path& root, const std::string& flag) {
   if (!out.empty()) {
-    if (!try_claim(out, "--out")) {
-      throw RunDirError("--out " + out + ": another run is writing there; choose another --out");
+    if (!try_claim(out, flag)) {
+      throw RunDirError(flag + " " + out + ": another run is writing there; choose another " +
+                        flag);
     }
-    return fs::absolute(out);
+    return RunDir(fs::absolute(out));
   }
   const fs::path base = root / (timestamp + "-" + safe_name(scenario_name));
   for (int k = 1; k < 1000; ++k) {
     const fs::path dir = k == 1 ? base : fs::path(base.string() + "-" + std::to_string(k));
     if (fs::exists(dir)) continue;
-    if (try_claim(dir, "run directory")) return fs::absolute(dir);
+    if (try_claim(dir, "run directory")) return RunDir(fs::absolute(dir));
   }
-  throw RunDirError("run directory " + base.string() + ": no free name; use --out");
+  throw RunDirError("run directory " + base.string() + ": no free name; use " + flag);
 }
 
-bool write_fallback_summary(const fs::path& dir, const RunConfig& rc, const std::string& reason,
-                            double wall_time_s) {
+fs::path RunDir::agent_log(AgentId id) const {
+  return path_ / ("agent-" + std::to_string(id) + ".log");
+}
+
+fs::path RunDir::agent_out(AgentId id, int life) const {
+  return path_ / ("agent-" + std::to_string(id) +
+                  (life ? "-restart" + std::to_string(life) : std::string()) + ".out");
+}
+
+fs::path RunDir::agent_stats(AgentId id) const {
+  return path_ / ("agent-" + std::to_string(id) + ".stats");
+}
+
+fs::path RunDir::planned_kills(AgentId id) const {
+  return path_ / ("agent-" + std::to_string(id) + ".planned-kills");
+}
+
+std::vector<RunDir::File> RunDir::files() {
+  return {
+      {kMarker, "the claim: created first, with O_EXCL; it holds the launcher's pid"},
+      {kScenario, "the scenario as run: defaults filled in, agents listed, seed and run id"},
+      {kSummary, "the run's result (written by the launcher if the supervisor died first)"},
+      {kTelemetry, "every agent sample the supervisor received and accepted"},
+      {kGraph, "the graph over time"},
+      {kEvents, "joins, departures, fault windows, the verdict, strangers, the end"},
+      {kRecords, "samples, graph snapshots and events as length-delimited Protobuf records"},
+      {kProcesses, "the pids the launcher started"},
+      {kSupervisorReady, "written by the supervisor once its reader is up"},
+      {kSupervisorLog, "the supervisor's log"},
+      {kSupervisorOut, "the supervisor's stdout, with --quiet"},
+      {kPlots, "swarm plot's figures (a directory; not written by the run)"},
+      {"agent-N.log", "an agent's log"},
+      {"agent-N.out",
+       "an agent process's stdout and stderr (agent-N-restartK.out: its K-th restart)"},
+      {"agent-N.stats", "an agent's CPU, late ticks, discovery time, RSS and counters"},
+      {"agent-N.planned-kills", "the planned kills an agent carried out"},
+  };
+}
+
+bool RunDir::write_scenario(const scenario::Scenario& resolved) const {
+  std::ofstream scen(scenario());
+  scen << "# The scenario as run (defaults filled in, agents listed).\n" << to_text(resolved);
+  return static_cast<bool>(scen.flush());
+}
+
+bool RunDir::mark_planned_kill(AgentId id, double t_s) const {
+  std::ofstream out(planned_kills(id), std::ios::app);
+  out << t_s << "\n";
+  return static_cast<bool>(out.flush());
+}
+
+int RunDir::planned_kills_marked(AgentId id) const {
+  std::ifstream in(planned_kills(id));
+  int n = 0;
+  std::string line;
+  while (std::getline(in, line))
+    if (!line.empty()) ++n;
+  return n;
+}
+
+bool RunDir::write_fallback_summary(const RunConfig& rc, const std::string& reason,
+                                    double wall_time_s) const {
   records::Summary s;
   s.set_scenario(rc.name);
   s.set_converged(false);
@@ -98,14 +160,14 @@ bool write_fallback_summary(const fs::path& dir, const RunConfig& rc, const std:
   s.set_mode(rc.agent.mode == AgentMode::kQuadcopter ? "quadcopter" : "particle");
   for (int k = 0; k < 3; ++k) s.add_initial_average(rc.initial_average()[k]);
   const std::string json = to_json(s);
-  std::ofstream f(dir / "summary.json");
+  std::ofstream f(summary());
   f << json;
   f.flush();
   return static_cast<bool>(f);
 }
 
-bool amend_summary(const fs::path& dir, const std::vector<std::string>& problems) {
-  std::ifstream in(dir / "summary.json");
+bool RunDir::amend_summary(const std::vector<std::string>& problems) const {
+  std::ifstream in(summary());
   std::stringstream text;
   text << in.rdbuf();
   records::Summary s;
@@ -114,7 +176,7 @@ bool amend_summary(const fs::path& dir, const std::vector<std::string>& problems
   std::string reason = s.end_reason();
   for (const std::string& p : problems) reason += "; " + p;
   s.set_end_reason(reason);
-  std::ofstream out(dir / "summary.json");
+  std::ofstream out(summary());
   out << to_json(s);
   out.flush();
   return static_cast<bool>(out);

@@ -25,8 +25,7 @@ LifecycleConfig lifecycle_config(const RunConfig& rc, AgentId id, const AgentLoo
     }
   }
   c.time_scale = o.time_scale;
-  c.start_timeout_s =
-      o.start_timeout_s >= 0.0 ? o.start_timeout_s : default_start_timeout_s(rc.agents.size());
+  c.start_timeout_s = o.start_timeout_s >= 0.0 ? o.start_timeout_s : rc.start_timeout_s();
   c.join_timeout_s = c.start_timeout_s + 10.0;
   // Every waiting agent announces to every other: N^2 samples per period. 5 ms keeps the start
   // skew small for a few agents; beyond 8 the period grows with N so that the barrier costs no
@@ -44,10 +43,6 @@ LifecycleConfig lifecycle_config(const RunConfig& rc, AgentId id, const AgentLoo
 }
 
 }  // namespace
-
-double default_start_timeout_s(std::size_t agents) {
-  return 30.0 + 0.5 * static_cast<double>(agents);
-}
 
 namespace {
 
@@ -75,9 +70,7 @@ AgentLoop::AgentLoop(const RunConfig& rc, AgentId id, const AgentLoopOptions& op
       transport_(transport),
       faulty_(transport, LinkFaults(rc.faults, id, rc.seed), id),
       runtime_(params_for(rc, id, opts), faulty_),
-      life_(lifecycle_config(rc, id, opts), clock.now_s()) {
-  if (opts.wall_clock_ns) runtime_.set_wall_clock(opts.wall_clock_ns);
-}
+      life_(lifecycle_config(rc, id, opts), clock.now_s()) {}
 
 std::uint64_t AgentLoop::ticks() const { return life_.pacer() ? life_.pacer()->ticks() : 0; }
 std::uint64_t AgentLoop::overruns() const { return life_.pacer() ? life_.pacer()->overruns() : 0; }
@@ -99,6 +92,7 @@ AgentLoop::Poll AgentLoop::poll() {
   const LifecycleStep s = life_.step(now, peers, transport_.matched_readers(), runtime_.time_s());
   if (!s.warning.empty()) r.notes.push_back({true, s.warning});
   if (s.swarm_time_s >= 0.0) faulty_.set_time(s.swarm_time_s);
+  runtime_.set_wall_ns(clock_.wall_ns());  // what samples published now carry
   if (s.announce) runtime_.publish(*s.announce);
   if (s.start) {
     runtime_.set_start_time(s.start_time_s);

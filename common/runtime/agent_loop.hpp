@@ -16,14 +16,13 @@ namespace qswarm {
 // How this process of the agent was started (the swarm-agent flags beyond the scenario).
 struct AgentLoopOptions {
   double time_scale = 1.0;  // simulated seconds per wall second
-  // Wall seconds at the start barrier before starting anyway (-1: default_start_timeout_s).
+  // Wall seconds at the start barrier before starting anyway (-1: RunConfig::start_timeout_s).
   double start_timeout_s = -1.0;
   double max_wall_s = -1.0;      // wall limit once running (default 2 x duration + 30 s)
   double join_at_s = -1.0;       // join on the swarm's clock at this time (-1: the plan's)
   bool restarted = false;        // recover the flows this agent owned from its neighbours
   bool wait_supervisor = false;  // the barrier also waits for the supervisor's reader
   std::int64_t incarnation = 0;  // this life's identity (the process uses its start time)
-  std::function<std::int64_t()> wall_clock_ns;  // stamps samples for age measurement (optional)
 };
 
 // One agent as the product runs it: its lifecycle (join wait, barrier, paced ticks, planned kills)
@@ -71,9 +70,5 @@ class AgentLoop {
   AgentLifecycle life_;
   std::uint64_t physics_steps_ = 0;
 };
-
-// The start barrier's default patience: discovery grows with the swarm (100 agents on 2 cores
-// took 25 s), so 30 s plus half a second per agent.
-double default_start_timeout_s(std::size_t agents);
 
 }  // namespace qswarm

@@ -52,7 +52,7 @@ void AgentRuntime::publish(Phase phase) {
   m.rotors_radps = rotors_;
   for (const auto& [peer, w] : law_->links()) m.links.emplace_back(peer, w);
   m.initial_links = initial_links_;
-  m.wall_ns = wall_clock_ ? wall_clock_() : 0;
+  m.wall_ns = wall_ns_;
   m.incarnation = p_.start.incarnation;
   m.run_id = p_.start.run_id;
   m.received = received_;

@@ -76,8 +76,8 @@ class AgentRuntime {
   std::uint64_t published() const { return seq_; }
   int steps_per_tick() const { return steps_per_tick_; }
 
-  // Stamps for publication: the process injects wall time and its counters.
-  void set_wall_clock(std::function<std::int64_t()> f) { wall_clock_ = std::move(f); }
+  // Stamps for publication: the loop injects the wall time and its counters.
+  void set_wall_ns(std::int64_t wall_ns) { wall_ns_ = wall_ns; }
   void set_fault_counters(const FaultCounters& c) { faults_ = c; }
   int recovered_flows() const { return law_->recovered_count(); }
   // Simulated time of the law's first tick (-1 before): the start barrier's first tick, or up to
@@ -119,7 +119,7 @@ class AgentRuntime {
   std::map<AgentId, Peer> peers_;
   std::set<AgentId> live_;
   std::vector<std::pair<AgentId, double>> initial_links_;  // links at the law's first tick
-  std::function<std::int64_t()> wall_clock_;
+  std::int64_t wall_ns_ = 0;
   std::uint64_t received_ = 0, dropped_ = 0, overruns_ = 0;
   FaultCounters faults_;
 };

@@ -104,22 +104,4 @@ std::vector<FaultPlan::Event> FaultPlan::timeline() const {
   return ev;
 }
 
-std::string planned_kills_file(const std::string& run_dir, AgentId id) {
-  return run_dir + "/agent-" + std::to_string(id) + ".planned-kills";
-}
-
-bool mark_planned_kill(const std::string& run_dir, AgentId id, double t_s) {
-  std::ofstream out(planned_kills_file(run_dir, id), std::ios::app);
-  out << "planned kill at t=" << t_s << " s\n";
-  out.flush();
-  return static_cast<bool>(out);
-}
-
-int planned_kills_marked(const std::string& run_dir, AgentId id) {
-  std::ifstream in(planned_kills_file(run_dir, id));
-  int n = 0;
-  for (std::string line; std::getline(in, line);) ++n;
-  return n;
-}
-
 }  // namespace qswarm

@@ -89,12 +89,4 @@ struct FaultPlan {
 // from the run's seed: independent, reproducible streams.
 std::uint64_t link_seed(std::uint64_t seed, AgentId from, AgentId to);
 
-// An agent about to carry out a planned kill appends a line to this file of its run directory
-// first, so that the launcher tells the plan's SIGKILL from one sent from outside.
-std::string planned_kills_file(const std::string& run_dir, AgentId id);
-// Appends that line (false if it could not be written: the launcher will report the kill).
-bool mark_planned_kill(const std::string& run_dir, AgentId id, double t_s);
-// How many planned kills the agent marked.
-int planned_kills_marked(const std::string& run_dir, AgentId id);
-
 }  // namespace qswarm

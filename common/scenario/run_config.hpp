@@ -85,6 +85,10 @@ struct RunConfig {
   // first tick): its listed neighbours on a FIXED graph, every other agent otherwise, and never an
   // agent that the fault plan has joining late.
   std::set<AgentId> start_peers(AgentId id) const;
+  // Wall seconds an agent waits at the start barrier before it starts anyway, and the supervisor
+  // for the first running agent: discovery grows with the swarm (100 agents on 2 cores took 25 s),
+  // so 30 s plus half a second per agent.
+  double start_timeout_s() const { return 30.0 + 0.5 * static_cast<double>(agents.size()); }
 };
 
 // The slots of a generated formation for n agents (scenario Formation.Shape as an int), centred on

@@ -6,23 +6,31 @@
 
 namespace qswarm {
 
-InProcessSwarm::InProcessSwarm(RunConfig rc, double time_scale)
-    : rc_(std::move(rc)), time_scale_(time_scale) {
-  for (const AgentSpec& a : rc_.agents) spawn(a.id, slots_[a.id]);
+InProcessSwarm::InProcessSwarm(RunConfig rc, double time_scale, RunDir record_in)
+    : rc_(std::move(rc)), time_scale_(time_scale), restarts_(rc_.faults) {
+  if (!record_in.empty()) {
+    supervisor_bus_ = std::make_unique<InMemoryBus>(net_);
+    SupervisorOptions o;
+    o.time_scale = time_scale_;
+    supervisor_ =
+        std::make_unique<SupervisorLoop>(rc_, std::move(record_in), o, *supervisor_bus_, clock_);
+  }
+  for (const AgentSpec& a : rc_.agents) spawn(a.id, slots_[a.id], std::nullopt);
 }
 
 InProcessSwarm::~InProcessSwarm() {
   // Each loop unregisters from its endpoint before the endpoint goes.
   for (auto& [id, s] : slots_) s.loop.reset();
+  supervisor_.reset();
 }
 
-void InProcessSwarm::spawn(AgentId id, Slot& slot) {
+void InProcessSwarm::spawn(AgentId id, Slot& slot, std::optional<double> join_at_s) {
   AgentLoopOptions o;
   o.time_scale = time_scale_;
   o.incarnation = slot.life + 1;  // a respawn is a newer life
-  if (slot.life > 0) {
-    // Like the launcher: the n-th respawn joins at the n-th planned restart and recovers flows.
-    o.join_at_s = rc_.faults.restarts_of(id).at(static_cast<std::size_t>(slot.life - 1));
+  if (join_at_s) {
+    // Like the launcher: a new life joins at its planned restart and recovers its flows.
+    o.join_at_s = *join_at_s;
     o.restarted = true;
   }
   slot.loop.reset();
@@ -46,11 +54,10 @@ void InProcessSwarm::step() {
     if (p.kill) {
       note(id, "planned kill");
       ++s.life;
-      const bool restarts = s.life <= static_cast<int>(rc_.faults.restarts_of(id).size());
       s.loop.reset();  // dies silently, like SIGKILL
       s.bus.reset();
-      if (restarts) {
-        spawn(id, s);
+      if (const std::optional<double> at = restarts_.after_planned_kill(id)) {
+        spawn(id, s, at);
         note(id, "respawned");
       }
       continue;
@@ -63,10 +70,40 @@ void InProcessSwarm::step() {
     s.wake_at_s = p.wake_at_s;
   }
   net_.deliver();
+  if (supervisor_ && !end_reason_ && supervisor_wake_s_ <= now) {
+    const SupervisorLoop::Poll p = supervisor_->poll(false);
+    if (p.end_reason) end_reason_ = p.end_reason;
+    supervisor_wake_s_ = p.wake_at_s;
+  }
   double next = std::numeric_limits<double>::infinity();
   for (const auto& [id, s] : slots_)
     if (s.loop && !s.finished) next = std::min(next, s.wake_at_s);
+  if (supervisor_ && !end_reason_) next = std::min(next, supervisor_wake_s_);
   if (next < std::numeric_limits<double>::infinity()) clock_.set(next);
+}
+
+void InProcessSwarm::crash(AgentId id) {
+  Slot& s = slots_.at(id);
+  note(id, "crashed");
+  s.loop.reset();
+  s.bus.reset();
+}
+
+std::string InProcessSwarm::run_recorded(double max_wall_s) {
+  if (!supervisor_) throw std::logic_error("run_recorded: this swarm has no run directory");
+  run_until([this] { return end_reason_.has_value(); }, max_wall_s);
+  const std::string reason = end_reason_.value_or("interrupted");
+  // Like the launcher: the supervisor first, so it keeps the agents' last states; then the agents
+  // say they stop.
+  const std::string text = supervisor_->finish(reason);
+  note(0, "supervisor: " + reason);
+  for (auto& [id, s] : slots_)
+    if (s.loop && !s.finished) {
+      s.loop->stop();
+      s.finished = true;
+    }
+  net_.deliver();
+  return reason;
 }
 
 void InProcessSwarm::run_until_wall(double wall_s) {

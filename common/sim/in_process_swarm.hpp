@@ -4,12 +4,15 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "common/clock/clock.hpp"
 #include "common/core/graph.hpp"
+#include "common/record/supervisor_loop.hpp"
 #include "common/runtime/agent_loop.hpp"
+#include "common/runtime/restart_policy.hpp"
 #include "common/scenario/run_config.hpp"
 #include "common/transport/in_memory_bus.hpp"
 
@@ -18,11 +21,13 @@ namespace qswarm {
 // A whole run in one process: one AgentLoop per agent of the RunConfig (the object swarm-agent
 // runs), each on its own endpoint of an InMemoryNetwork, all on one ManualClock. Like `swarm run`
 // it starts every agent at once (late joiners wait silently), and respawns an agent killed by the
-// plan so that it rejoins at its restart time. Deterministic: agents are polled in id order and a
-// round's messages are delivered after the round.
+// plan under the same RestartPolicy. Given a run directory, it also records the run with the
+// supervisor's own loop on another endpoint (which only listens), so the run ends with the real
+// convergence judgement and summary. Deterministic: agents are polled in id order and a round's
+// messages are delivered after the round.
 class InProcessSwarm {
  public:
-  explicit InProcessSwarm(RunConfig rc, double time_scale = 1.0);
+  explicit InProcessSwarm(RunConfig rc, double time_scale = 1.0, RunDir record_in = {});
   ~InProcessSwarm();
 
   // One round: poll every agent that is due, deliver, move the clock to the next wake-up.
@@ -31,6 +36,14 @@ class InProcessSwarm {
   void run_until_wall(double wall_s);
   // Steps until pred() holds or the wall clock passes max_wall_s; returns whether pred held.
   bool run_until(const std::function<bool()>& pred, double max_wall_s);
+  // With a run directory: steps until the supervisor ends the run (or the wall clock passes
+  // max_wall_s: "interrupted"), stops every agent and writes the record. Returns the end reason;
+  // supervisor()->exit_code() is what swarm-supervisor would exit with.
+  std::string run_recorded(double max_wall_s);
+  const SupervisorLoop* supervisor() const { return supervisor_.get(); }
+  // The agent's process dies unplanned (a crash, a SIGKILL from outside): silently, and the
+  // restart policy does not bring it back.
+  void crash(AgentId id);
 
   double wall_s() const { return clock_.now_s(); }
   const RunConfig& config() const { return rc_; }
@@ -53,15 +66,21 @@ class InProcessSwarm {
     int life = 0;
     bool finished = false;
   };
-  void spawn(AgentId id, Slot& slot);
+  void spawn(AgentId id, Slot& slot, std::optional<double> join_at_s);
   void note(AgentId id, const std::string& text);
 
   RunConfig rc_;
   double time_scale_;
   ManualClock clock_;
   InMemoryNetwork net_;
+  RestartPolicy restarts_;
   std::map<AgentId, Slot> slots_;
   std::vector<std::string> log_;
+  // The recorder's endpoint and loop (with a run directory).
+  std::unique_ptr<InMemoryBus> supervisor_bus_;
+  std::unique_ptr<SupervisorLoop> supervisor_;
+  double supervisor_wake_s_ = 0.0;
+  std::optional<std::string> end_reason_;
 };
 
 }  // namespace qswarm

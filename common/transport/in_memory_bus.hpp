@@ -41,6 +41,7 @@ class InMemoryBus final : public NeighborBus {
   // A sample arriving from the network (or a test acting as a stranger on it).
   void receive(const StateMessage& m);
   BusCounters counters() const override { return gate_.counters(); }
+  std::set<std::uint64_t> foreign_runs() const override { return gate_.foreign_runs(); }
 
  private:
   InMemoryNetwork& net_;

@@ -2,6 +2,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <set>
 #include <vector>
 
 #include "common/transport/state_message.hpp"
@@ -35,6 +36,11 @@ class NeighborBus {
   virtual BusCounters counters() const = 0;
   // Readers matched to our writer (DDS discovery: the start barrier waits for the supervisor's).
   virtual int matched_readers() const { return 0; }
+  // Other runs heard on this transport (their run ids; their samples were refused as foreign).
+  virtual std::set<std::uint64_t> foreign_runs() const { return {}; }
+  // Ids outside the run whose samples the transport dropped before the gate saw them (the DDS
+  // roster filter), so that the record can still name each stranger once.
+  virtual std::set<AgentId> strangers() const { return {}; }
 };
 
 }  // namespace qswarm

@@ -120,7 +120,7 @@ TEST(RunIsolation, AStrangerFloodingKeysOnTheRunsPartitionCannotBlindAReader) {
 
 TEST(SampleGate, AnIncarnationFromTheFutureCannotLockTheRealAgentOut) {
   SampleGate gate;
-  const std::int64_t now = wall_now_ns();
+  const std::int64_t now = system_clock().wall_ns();
   StateMessage forged;
   forged.view.id = 2;
   forged.seq = 1u << 30;

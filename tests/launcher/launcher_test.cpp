@@ -77,13 +77,11 @@ LaunchSpec spec_for(const std::string& extra) {
   spec.rc = resolve_scenario(parse_scenario_text(
       "agents { id: 1 }\nagents { id: 2 }\nagents { id: 3 }\nduration_s: 30\n" + extra, "s"));
   // One directory per test and process: ctest runs the tests of this file at once.
-  spec.run_dir = (std::filesystem::temp_directory_path() /
-                  ("qswarm-launcher-test-" +
-                   std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) +
-                   "-" + std::to_string(::getpid())))
-                     .string();
-  std::filesystem::create_directories(spec.run_dir);
-  spec.scenario_path = spec.run_dir + "/scenario.txtpb";
+  spec.dir = RunDir(std::filesystem::temp_directory_path() /
+                    ("qswarm-launcher-test-" +
+                     std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) +
+                     "-" + std::to_string(::getpid())));
+  std::filesystem::create_directories(spec.dir.path());
   spec.bin_dir = "/bin-dir";
   spec.time_scale = 2.0;
   return spec;
@@ -110,7 +108,7 @@ TEST(Launcher, AnUnmarkedSigkillIsNotThePlansEvenWithKillsPlanned) {
   l.start();
   ASSERT_EQ(procs.children().size(), 4u);  // supervisor + 3 agents
   EXPECT_TRUE(has(procs.argv_[2], "--wait-supervisor"));
-  std::filesystem::remove(planned_kills_file(spec_for("").run_dir, 2));
+  std::filesystem::remove(spec_for("").dir.planned_kills(2));
   // A SIGKILL from outside before the planned one (the agent marked nothing): not the plan's.
   procs.exit_child("agent", 2, signalled(SIGKILL));
   EXPECT_FALSE(l.poll(false));
@@ -123,10 +121,10 @@ TEST(Launcher, RespawnsAMarkedPlannedKillAtItsRestartTime) {
   FakeProcesses procs;
   ManualClock clock;
   const LaunchSpec spec = spec_for("faults { kill { agent: 2 at_s: 3 restart_at_s: 6 } }");
-  std::filesystem::remove(planned_kills_file(spec.run_dir, 2));
+  std::filesystem::remove(spec.dir.planned_kills(2));
   Launcher l(spec, procs, clock, [] { return true; });
   l.start();
-  ASSERT_TRUE(mark_planned_kill(spec.run_dir, 2, 3.0));  // what the agent does before dying
+  ASSERT_TRUE(spec.dir.mark_planned_kill(2, 3.0));  // what the agent does before dying
   procs.exit_child("agent", 2, signalled(SIGKILL));
   EXPECT_FALSE(l.poll(false));
   ASSERT_EQ(procs.spawned("agent", 2), 2);

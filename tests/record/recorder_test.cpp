@@ -201,7 +201,7 @@ TEST(Recorder, FedWithMessagesWritesTheRunRecordAndASummary) {
   std::filesystem::create_directories(dir);
   std::string text;
   {
-    Recorder rec(rc, dir.string(), 1.0);
+    Recorder rec(rc, RunDir(dir), 1.0);
     std::int64_t wall = 1'000'000'000;
     for (int k = 0; k <= 50; ++k) {
       const double t = 0.02 * k;

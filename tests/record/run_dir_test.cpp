@@ -18,7 +18,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-class RunDir : public ::testing::Test {
+class RunDirs : public ::testing::Test {
  protected:
   void SetUp() override {
     root_ = fs::temp_directory_path() / ("qswarm-run-dir-" + std::to_string(::getpid()));
@@ -34,28 +34,28 @@ class RunDir : public ::testing::Test {
   fs::path root_, old_;
 };
 
-TEST_F(RunDir, NamesCannotLeaveRunsOrHideAsDotFiles) {
+TEST_F(RunDirs, NamesCannotLeaveRunsOrHideAsDotFiles) {
   EXPECT_EQ(safe_name("../../etc/passwd").find('/'), std::string::npos);
   EXPECT_NE(safe_name("../x").front(), '.');
   EXPECT_EQ(safe_name(""), "unnamed");
   EXPECT_EQ(safe_name("paper_time-varying.v2"), "paper_time-varying.v2");
   EXPECT_EQ(safe_name(std::string(300, 'a')).size(), 64u);
-  const fs::path dir = claim_run_dir("", "../../escape", "20260101-000000");
+  const fs::path dir = RunDir::claim("", "../../escape", "20260101-000000").path();
   EXPECT_EQ(fs::canonical(dir.parent_path()), fs::canonical(root_ / "runs")) << dir;
 }
 
-TEST_F(RunDir, TwoDefaultRunsInTheSameSecondGetTwoDirectories) {
-  const fs::path a = claim_run_dir("", "demo", "20260101-000000");
-  const fs::path b = claim_run_dir("", "demo", "20260101-000000");
+TEST_F(RunDirs, TwoDefaultRunsInTheSameSecondGetTwoDirectories) {
+  const fs::path a = RunDir::claim("", "demo", "20260101-000000").path();
+  const fs::path b = RunDir::claim("", "demo", "20260101-000000").path();
   EXPECT_NE(a, b);
   EXPECT_TRUE(fs::exists(b / ".swarm-run"));
 }
 
-TEST_F(RunDir, AnOutWithFilesIsRefusedAndOneOutIsClaimedOnce) {
+TEST_F(RunDirs, AnOutWithFilesIsRefusedAndOneOutIsClaimedOnce) {
   fs::create_directories("mine");
   std::ofstream("mine/thesis.tex") << "precious";
   try {
-    claim_run_dir("mine", "demo", "t");
+    RunDir::claim("mine", "demo", "t").path();
     ADD_FAILURE() << "a directory with files was claimed";
   } catch (const RunDirError& e) {
     EXPECT_NE(std::string(e.what()).find("--out mine"), std::string::npos) << e.what();
@@ -63,26 +63,26 @@ TEST_F(RunDir, AnOutWithFilesIsRefusedAndOneOutIsClaimedOnce) {
   }
   EXPECT_EQ(fs::file_size("mine/thesis.tex"), 8u);  // untouched
   fs::create_directories("empty");
-  EXPECT_NO_THROW(claim_run_dir("empty", "demo", "t"));  // an empty directory is fine
+  EXPECT_NO_THROW(RunDir::claim("empty", "demo", "t").path());  // an empty directory is fine
   try {
-    claim_run_dir("empty", "demo", "t");  // a second run on the same --out
+    RunDir::claim("empty", "demo", "t").path();  // a second run on the same --out
     ADD_FAILURE() << "the same --out was claimed twice";
   } catch (const RunDirError& e) {
     EXPECT_NE(std::string(e.what()).find("another run"), std::string::npos) << e.what();
   }
 }
 
-TEST_F(RunDir, ACrashTheSupervisorCouldNotSeeUnmakesConvergedInTheSummary) {
+TEST_F(RunDirs, ACrashTheSupervisorCouldNotSeeUnmakesConvergedInTheSummary) {
   RunConfig rc;
   rc.name = "x";
   rc.agents.push_back({1, Vec3::Zero(), 0.0});
-  ASSERT_TRUE(write_fallback_summary(root_, rc, "converged", 1.0));
+  ASSERT_TRUE(RunDir(root_).write_fallback_summary(rc, "converged", 1.0));
   // (write_fallback_summary writes converged: false; make it a converged record first)
   records::Summary s;
   s.set_converged(true);
   s.set_end_reason("converged");
   std::ofstream(root_ / "summary.json") << to_json(s);
-  ASSERT_TRUE(amend_summary(root_, {"agent 3 killed by signal Aborted at teardown"}));
+  ASSERT_TRUE(RunDir(root_).amend_summary({"agent 3 killed by signal Aborted at teardown"}));
   std::ifstream in(root_ / "summary.json");
   std::stringstream text;
   text << in.rdbuf();

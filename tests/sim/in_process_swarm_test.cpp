@@ -2,7 +2,14 @@
 // manual clock over the in-memory network: deterministic, and seconds of swarm in milliseconds.
 #include <gtest/gtest.h>
 
+#include <google/protobuf/util/json_util.h>
+#include <unistd.h>
+
+#include <algorithm>
 #include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
 
 #include "common/scenario/scenario.hpp"
 #include "common/sim/in_process_swarm.hpp"
@@ -143,6 +150,120 @@ TEST(InProcessSwarm, ARunReplaysExactly) {
   const Positions a = final_states(), b = final_states();
   ASSERT_EQ(a.size(), b.size());
   for (size_t i = 0; i < a.size(); ++i) EXPECT_EQ(a[i], b[i]);
+}
+
+// A fresh run directory per test and process (ctest runs tests at once).
+RunDir fresh_run_dir() {
+  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() /
+      ("qswarm-in-process-" + std::string(info->name()) + "-" + std::to_string(::getpid()));
+  std::filesystem::remove_all(dir);
+  return RunDir::claim(dir.string(), "six", "t");
+}
+
+records::Summary summary_of(const RunDir& dir) {
+  std::ifstream in(dir.summary());
+  std::stringstream text;
+  text << in.rdbuf();
+  records::Summary s;
+  EXPECT_TRUE(google::protobuf::util::JsonStringToMessage(text.str(), &s).ok()) << text.str();
+  return s;
+}
+
+std::vector<std::string> event_kinds(const RunDir& dir) {
+  std::ifstream in(dir.events());
+  std::vector<std::string> kinds;
+  std::string line;
+  std::getline(in, line);  // header
+  while (std::getline(in, line)) {
+    const auto a = line.find(','), b = line.find(',', a + 1);
+    kinds.push_back(line.substr(a + 1, b - a - 1));
+  }
+  return kinds;
+}
+
+TEST(RecordedRun, TheSupervisorsOwnRecorderJudgesAnInProcessRunConverged) {
+  // Given six agents and the supervisor's loop on one manual clock
+  const RunDir dir = fresh_run_dir();
+  InProcessSwarm swarm(six(), 1.0, dir);
+  // When the run goes until the supervisor ends it
+  EXPECT_EQ(swarm.run_recorded(60.0), "converged");
+  // Then the verdict, the exit code and the record are the real ones
+  EXPECT_EQ(swarm.supervisor()->exit_code(), 0);
+  const records::Summary s = summary_of(dir);
+  EXPECT_TRUE(s.converged());
+  EXPECT_EQ(s.end_reason(), "converged");
+  EXPECT_EQ(s.agents_size(), 6);
+  EXPECT_EQ(s.joins(), 6u);
+  EXPECT_LT(s.average_relative_error(), 1e-9);  // edge-flow: the exact average
+  EXPECT_LT(s.final_disagreement_m(), 1e-8);
+  EXPECT_GT(s.convergence_time_s(), 0.0);
+  const std::vector<std::string> kinds = event_kinds(dir);
+  EXPECT_EQ(std::count(kinds.begin(), kinds.end(), "join"), 6);
+  EXPECT_EQ(std::count(kinds.begin(), kinds.end(), "converged"), 1);
+  EXPECT_EQ(kinds.back(), "end");
+  EXPECT_TRUE(std::filesystem::exists(dir.telemetry()));
+  EXPECT_TRUE(std::filesystem::exists(dir.records()));
+}
+
+TEST(RecordedRun, AnAgentThatCrashedIsMissingSoTheRunDoesNotConverge) {
+  // Given six agents, one of which crashes once everyone runs (no plan expects it gone)
+  const RunDir dir = fresh_run_dir();
+  InProcessSwarm swarm(six(), 1.0, dir);
+  ASSERT_TRUE(swarm.run_until([&] { return all_running(swarm) && swarm.wall_s() > 0.5; }, 5.0));
+  swarm.crash(4);
+  // When the others agree without it
+  const std::string reason = swarm.run_recorded(60.0);
+  // Then the run says so and is not converged
+  EXPECT_EQ(reason, "agreed without agent 4");
+  EXPECT_EQ(swarm.supervisor()->exit_code(), 1);
+  const records::Summary s = summary_of(dir);
+  EXPECT_FALSE(s.converged());
+  ASSERT_EQ(s.missing_agents_size(), 1);
+  EXPECT_EQ(s.missing_agents(0), 4u);
+  EXPECT_EQ(s.departures(), 1u);
+  const std::vector<std::string> kinds = event_kinds(dir);
+  EXPECT_EQ(std::count(kinds.begin(), kinds.end(), "agreed_without"), 1);
+  EXPECT_EQ(std::count(kinds.begin(), kinds.end(), "converged"), 0);
+}
+
+TEST(RecordedRun, AKillAndRestartUnderTheRestartPolicyEndsConvergedAtTheExactAverage) {
+  // Given agent 3 killed at 1.5 s and restarted at 3 s by the plan
+  const RunDir dir = fresh_run_dir();
+  InProcessSwarm swarm(six("faults { kill { agent: 3 at_s: 1.5 restart_at_s: 3 } }"), 1.0, dir);
+  // When the run goes until the supervisor ends it
+  EXPECT_EQ(swarm.run_recorded(60.0), "converged");
+  // Then the policy respawned it once, it recovered its flows, and the record counts both
+  int respawns = 0;
+  for (const std::string& line : swarm.log())
+    respawns += line.find(" 3 respawned") != std::string::npos;
+  EXPECT_EQ(respawns, 1);
+  EXPECT_EQ(swarm.agent(3)->runtime().recovered_flows(), 3);
+  const records::Summary s = summary_of(dir);
+  EXPECT_TRUE(s.converged());
+  EXPECT_EQ(s.faults().kills(), 1u);
+  EXPECT_EQ(s.faults().restarts(), 1u);
+  EXPECT_GE(s.detect_s(), 0.0);
+  EXPECT_LT(s.average_relative_error(), 1e-9);
+  const std::vector<std::string> kinds = event_kinds(dir);
+  EXPECT_EQ(std::count(kinds.begin(), kinds.end(), "depart"), 1);
+  EXPECT_EQ(std::count(kinds.begin(), kinds.end(), "rejoin"), 1);
+}
+
+TEST(RestartPolicy, OnlyAMarkedPlannedKillRestartsAndOnlyAsOftenAsThePlanSays) {
+  const RunConfig rc =
+      six("faults { kill { agent: 3 at_s: 1 restart_at_s: 2 } kill { agent: 3 at_s: 4 } }");
+  RestartPolicy policy(rc.faults);
+  EXPECT_FALSE(policy.is_planned_kill(3, 0));  // nothing marked: a SIGKILL from outside
+  EXPECT_FALSE(policy.is_planned_kill(5, 1));  // no kill planned for agent 5
+  ASSERT_TRUE(policy.is_planned_kill(3, 1));
+  EXPECT_EQ(policy.after_planned_kill(3), std::optional<double>(2.0));
+  EXPECT_FALSE(policy.is_planned_kill(3, 1));  // that mark is used up
+  ASSERT_TRUE(policy.is_planned_kill(3, 2));
+  EXPECT_EQ(policy.after_planned_kill(3), std::nullopt);  // the second kill is final
+  EXPECT_FALSE(policy.is_planned_kill(3, 3));             // the plan has no third
+  EXPECT_EQ(policy.restarts(3), 1);
 }
 
 }  // namespace

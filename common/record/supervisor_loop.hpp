@@ -1,0 +1,77 @@
+#pragma once
+
+#include <cstdint>
+#include <mutex>
+#include <optional>
+#include <string>
+
+#include "common/clock/clock.hpp"
+#include "common/record/recorder.hpp"
+#include "common/record/run_dir.hpp"
+#include "common/scenario/run_config.hpp"
+#include "common/transport/neighbor_bus.hpp"
+
+namespace qswarm {
+
+struct SupervisorOptions {
+  double time_scale = 1.0;  // simulated seconds per wall second
+  // Wall seconds to wait for the first running agent, beyond the duration (-1: the agents' own
+  // start timeout, RunConfig::start_timeout_s).
+  double start_timeout_s = -1.0;
+  bool progress = false;        // a live line once a second and whenever the graph changes
+  double poll_period_s = 0.02;  // how often the recorder does its periodic work
+  double progress_period_s = 1.0;
+};
+
+// The supervisor as a unit: it listens on a transport it only reads (a DDS participant without a
+// writer, or an in-memory endpoint that never publishes), feeds every accepted sample to the
+// recorder, does the recorder's periodic work on the injected clock, says when the run is over and
+// why, and writes the record at the end. swarm-supervisor polls it on a SteadyClock over DDS; the
+// in-process swarm polls it on the swarm's ManualClock, so in-process tests end with the real
+// convergence judgement and summary.
+class SupervisorLoop {
+ public:
+  SupervisorLoop(const RunConfig& rc, RunDir dir, SupervisorOptions opts, NeighborBus& bus,
+                 Clock& clock);
+  ~SupervisorLoop();
+  SupervisorLoop(const SupervisorLoop&) = delete;
+  SupervisorLoop& operator=(const SupervisorLoop&) = delete;
+
+  // Says that the reader is up (supervisor.ready, which the launcher waits for). False if that
+  // file could not be written.
+  bool announce_ready();
+
+  struct Poll {
+    std::optional<std::string> progress;    // a live line to print
+    std::optional<std::string> end_reason;  // the run is over: why
+    double wake_at_s = 0.0;
+  };
+  // One pass: the recorder's periodic work, what the transport refused, the live line, the end
+  // conditions (the recorder's verdict, `interrupted`, no agent after the start timeout).
+  Poll poll(bool interrupted);
+  // Stops listening and writes the end of the record and summary.json; returns the summary for
+  // people. Call once, after poll() returned an end reason (or at any time, to stop early).
+  std::string finish(const std::string& reason);
+
+  // 0 converged with a complete record, 1 not converged, 3 the record is incomplete.
+  int exit_code() const;
+  bool complete() const { return recorder_.complete(); }
+  const std::string& failed_file() const { return recorder_.failed_file(); }
+  const Recorder& recorder() const { return recorder_; }
+  const RunDir& dir() const { return dir_; }
+
+ private:
+  RunConfig rc_;
+  RunDir dir_;
+  SupervisorOptions opts_;
+  NeighborBus& bus_;
+  Clock& clock_;
+  double start_s_;
+  double next_progress_s_ = 0.0;
+  int last_edges_ = -1;
+  mutable std::mutex mu_;  // the recorder: samples arrive on transport threads
+  Recorder recorder_;
+  bool finished_ = false;
+};
+
+}  // namespace qswarm
