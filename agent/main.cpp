@@ -42,6 +42,9 @@ int main(int argc, char** argv) {
   }
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, f.ignore_sigterm ? SIG_IGN : on_signal);
+  // A hangup (the terminal gone, or the launcher gone while this process was stopped) stops it
+  // cleanly too, with its stats written.
+  std::signal(SIGHUP, on_signal);
   auto log = make_process_logger("agent", "");
   try {
     SteadyClock clock;

@@ -96,6 +96,9 @@ RunConfig resolve_run(const RunOptions& opt) {
                     first.judge.duration_s, first.seed);
   }
   RunConfig rc = resolve_scenario(s, o);
+  // Checked here, before anything flies: an address not on this machine leaves every agent alone.
+  if (const std::string problem = interface_problem(rc.transport.interface); !problem.empty())
+    throw ScenarioError("scenario field 'transport.interface': " + problem);
   {
     // A fresh id for every run, even when the scenario is a previous run's scenario.txtpb (which
     // holds that run's id): two runs on one domain never hear each other.

@@ -24,11 +24,17 @@ pid_t ProcessGroup::spawn(const std::string& role, unsigned id,
   const pid_t pid = fork();
   if (pid < 0) throw std::runtime_error(std::string("fork: ") + std::strerror(errno));
   if (pid == 0) {
+    // A process group of its own: once the launcher is gone, the group is orphaned, and the kernel
+    // sends a stopped member SIGHUP and SIGCONT (POSIX), so a child stopped (SIGSTOP, Ctrl-Z of its
+    // own) when the launcher died wakes up to the SIGTERM below instead of staying stopped for
+    // good. It also keeps a terminal's Ctrl-C to the launcher, which tears the run down in order.
+    setpgid(0, 0);
     prctl(PR_SET_PDEATHSIG, SIGTERM);
     if (getppid() != parent) _exit(127);  // the launcher died before prctl took effect
     // Restore default dispositions the launcher may have changed.
     signal(SIGINT, SIG_DFL);
     signal(SIGTERM, SIG_DFL);
+    signal(SIGHUP, SIG_DFL);
     if (!log_path.empty()) {
       const int fd = open(log_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
       if (fd >= 0) {
@@ -44,6 +50,7 @@ pid_t ProcessGroup::spawn(const std::string& role, unsigned id,
     std::fprintf(stderr, "exec %s: %s\n", args[0], std::strerror(errno));
     _exit(127);
   }
+  setpgid(pid, pid);  // also from here, so the group exists whichever of the two runs first
   children_.push_back({role, id, pid, true, 0});
   return pid;
 }

@@ -69,6 +69,7 @@ int main(int argc, char** argv) {
   spdlog::set_default_logger(logger);
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
+  std::signal(SIGHUP, on_signal);  // a hangup ends the run "interrupted", with the record written
 
   try {
     SteadyClock clock;

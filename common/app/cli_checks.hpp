@@ -1,8 +1,12 @@
 #pragma once
 
+#include <arpa/inet.h>
+#include <ifaddrs.h>
+#include <netinet/in.h>
 #include <CLI/CLI.hpp>
 
 #include <cmath>
+#include <set>
 #include <sstream>
 #include <string>
 
@@ -28,6 +32,34 @@ inline CLI::Validator finite_range(double lo, double hi) {
         return "";
       },
       desc.str());
+}
+
+// Why DDS cannot bind to `address` on this machine ("" when it can): "any", or an IPv4 address one
+// of the machine's interfaces holds. An address that is not here would leave the participant with
+// no interface to send or hear on: the agent would wait out its start timeout and fly alone.
+inline std::string interface_problem(const std::string& address) {
+  if (address == "any") return "";
+  in_addr want{};
+  if (inet_pton(AF_INET, address.c_str(), &want) != 1)
+    return "expected \"any\" or an IPv4 address such as 127.0.0.1, got \"" + address + "\"";
+  ifaddrs* list = nullptr;
+  if (getifaddrs(&list) != 0) return "";  // cannot tell: let DDS try
+  std::set<std::string> here;
+  bool found = false;
+  for (const ifaddrs* i = list; i != nullptr; i = i->ifa_next) {
+    if (i->ifa_addr == nullptr || i->ifa_addr->sa_family != AF_INET) continue;
+    const in_addr a = reinterpret_cast<const sockaddr_in*>(i->ifa_addr)->sin_addr;
+    char text[INET_ADDRSTRLEN] = {};
+    inet_ntop(AF_INET, &a, text, sizeof text);
+    here.insert(text);
+    found |= a.s_addr == want.s_addr;
+  }
+  freeifaddrs(list);
+  if (found) return "";
+  std::string names;
+  for (const std::string& h : here) names += (names.empty() ? "" : ", ") + h;
+  return "expected \"any\" or an IPv4 address of this machine (" + names + "), got \"" + address +
+         "\"";
 }
 
 }  // namespace qswarm

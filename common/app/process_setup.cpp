@@ -49,6 +49,14 @@ std::optional<RunConfig> load_for_process(const char* prog, const ProcessOptions
     // Checked (and resolved, with retries while a container network's DNS catches up) before
     // anything is created, so that a bad address is bad input: exit 2.
     if (!opts.discovery_server.empty()) resolve_discovery_server(opts.discovery_server);
+    const std::string problem =
+        interface_problem(opts.interface.empty() ? rc.transport.interface : opts.interface);
+    if (!problem.empty()) {
+      std::fprintf(stderr, "%s: %s: %s\n", prog,
+                   opts.interface.empty() ? "scenario field 'transport.interface'" : "--interface",
+                   problem.c_str());
+      return std::nullopt;
+    }
     return rc;
   } catch (const ScenarioError& e) {
     std::fprintf(stderr, "%s: %s\n", prog, e.what());

@@ -398,6 +398,25 @@ TEST(SwarmRun, MalformedScenariosExit2NamingTheProblem) {
   EXPECT_EQ(bad_cut.code, 2);
   EXPECT_NE(bad_cut.output.find("--cut '1to2@5:15': expected A-B@START:END"), std::string::npos)
       << bad_cut.output;
+  // An interface address this machine does not hold (TEST-NET-3) is refused before anything flies:
+  // a participant bound to it hears nobody, and the agent would fly alone after its start timeout.
+  for (const std::string prog : {"swarm-agent", "swarm-supervisor"}) {
+    std::vector<std::string> argv = {bin(prog),    "--scenario",  scenario("demo"), "--run-dir",
+                                     dir.string(), "--interface", "203.0.113.77"};
+    if (prog == "swarm-agent") argv.insert(argv.end(), {"--id", "1"});
+    const Result away = run(argv);
+    EXPECT_EQ(away.code, 2) << prog << ": " << away.output;
+    EXPECT_NE(away.output.find("--interface: expected \"any\" or an IPv4 address of this machine"),
+              std::string::npos)
+        << away.output;
+  }
+  const auto away_file = dir / "away.txtpb";
+  std::ofstream(away_file) << agents << "transport { interface: \"203.0.113.77\" }\n";
+  const Result away_run =
+      run({bin("swarm"), "run", away_file.string(), "--out", (dir / "away").string(), "--quiet"});
+  EXPECT_EQ(away_run.code, 2) << away_run.output;
+  EXPECT_NE(away_run.output.find("transport.interface"), std::string::npos) << away_run.output;
+  EXPECT_FALSE(std::filesystem::exists(dir / "away"));
   EXPECT_EQ(run({bin("swarm"), "run", scenario("demo"), "--loss", "2"}).code, 2);
   EXPECT_EQ(run({bin("swarm"), "run", scenario("demo"), "--law", "gossip"}).code, 2);
   const Result wrong_id = run({bin("swarm-agent"), "--scenario", scenario("demo"), "--id", "77"});
@@ -470,7 +489,7 @@ TEST(SwarmRun, BadSamplesFromATestParticipantAreDroppedByEveryAgentAndChangeNoth
   EXPECT_LT(s.average_drift_m(), 1e-3);
 }
 
-TEST(SwarmRun, CtrlCLeavesNoOrphansAndACompleteRunRecord) {
+TEST(SwarmRun, CtrlCLeavesNoOrphansAndARecordThatSaysWhatIsMissing) {
   const auto dir = fresh_dir("ctrl-c");
   // Agent 2 ignores SIGTERM, so the launcher's escalation to SIGKILL is exercised too.
   Child launcher(
@@ -506,6 +525,49 @@ TEST(SwarmRun, CtrlCLeavesNoOrphansAndACompleteRunRecord) {
   for (const auto& row : read_csv(dir / "events.csv")) ended |= row.at("kind") == "end";
   EXPECT_TRUE(ended);
   EXPECT_GT(read_csv(dir / "telemetry.csv").size(), 10u);
+}
+
+// The launcher SIGKILLed while an agent is stopped (SIGSTOP): the agent's SIGTERM stays pending
+// while it is stopped, so without the kernel's orphaned-group SIGCONT it would stay stopped for
+// good.
+TEST(SwarmRun, AnAgentStoppedWhenTheLauncherIsKilledStillStopsCleanlyAndLeavesNoOrphan) {
+  const auto dir = fresh_dir("stopped-agent");
+  Child launcher({bin("swarm"), "run", scenario("faults_six"), "--out", dir.string(), "--domain",
+                  test_domain().str(), "--duration", "600", "--quiet"},
+                 dir.parent_path() / "stopped-agent.log");
+  // Once every agent flies (so each has its signal handlers and a stats file to write).
+  ASSERT_TRUE(wait_for(
+      [&] {
+        for (const auto& row : read_csv(dir / "graph.csv"))
+          if (std::stoi(row.at("agents")) == 6) return true;
+        return false;
+      },
+      60.0));
+  std::vector<pid_t> pids = {pid_of(dir, "supervisor", 0)};
+  for (unsigned id = 1; id <= 6; ++id) pids.push_back(pid_of(dir, "agent", id));
+  const pid_t stopped = pid_of(dir, "agent", 2);
+  ASSERT_EQ(::kill(stopped, SIGSTOP), 0);
+  ASSERT_TRUE(wait_for(
+      [&] {
+        return read_file("/proc/" + std::to_string(stopped) + "/stat").find(") T ") !=
+               std::string::npos;
+      },
+      10.0));
+  launcher.signal(SIGKILL);
+  launcher.wait(10.0);
+  // Every child, the stopped one included, is gone, and the stopped agent stopped cleanly.
+  EXPECT_TRUE(wait_for(
+      [&] {
+        for (const pid_t p : pids)
+          if (process_alive(p)) return false;
+        return true;
+      },
+      30.0));
+  for (const pid_t p : pids) {
+    EXPECT_FALSE(process_alive(p)) << "orphan pid " << p;
+    if (process_alive(p)) ::kill(p, SIGKILL);
+  }
+  EXPECT_TRUE(std::filesystem::exists(dir / "agent-2.stats"));
 }
 
 TEST(Smoke, EveryBinaryRunsWithATinyDuration) {
@@ -569,6 +631,37 @@ TEST(Record, ASecondRunOnTheSameOutIsRefusedAndADeadSupervisorStillLeavesASummar
   EXPECT_FALSE(s.converged());
   EXPECT_NE(s.end_reason().find("supervisor killed by signal"), std::string::npos)
       << s.end_reason();
+}
+
+// `--grace 0` kills every agent still running at teardown at once: an agent killed before it wrote
+// its stats leaves the record incomplete. Exit 0 and "converged" only with every agent's stats
+// there; otherwise exit 3, each missing file named, and a summary that is not "converged".
+TEST(Record, GraceZeroNeverEndsConvergedWithAnAgentsStatsMissing) {
+  for (const bool deaf : {false, true}) {
+    const auto dir = fresh_dir(deaf ? "grace0-deaf" : "grace0");
+    // With `deaf`, agent 3 ignores SIGTERM, so at least its stats are certainly missing.
+    std::vector<std::string> extra = {"--grace", "0"};
+    if (deaf) extra.insert(extra.end(), {"--test-ignore-sigterm", "3"});
+    const Result r = swarm_run(scenario("faults_six"), dir, 4.0, extra);
+    const records::Summary s = read_summary(dir);
+    std::vector<unsigned> missing;
+    for (unsigned id = 1; id <= 6; ++id)
+      if (!std::filesystem::exists(dir / ("agent-" + std::to_string(id) + ".stats")))
+        missing.push_back(id);
+    if (deaf) EXPECT_NE(std::find(missing.begin(), missing.end(), 3u), missing.end());
+    if (missing.empty()) {
+      EXPECT_EQ(r.code, 0) << r.output;
+      EXPECT_TRUE(s.converged()) << s.end_reason();
+      continue;
+    }
+    EXPECT_EQ(r.code, 3) << r.output;
+    EXPECT_FALSE(s.converged()) << s.end_reason();
+    for (const unsigned id : missing) {
+      const std::string named = "agent-" + std::to_string(id) + ".stats";
+      EXPECT_NE(r.output.find(named), std::string::npos) << named << "\n" << r.output;
+      EXPECT_NE(s.end_reason().find(named), std::string::npos) << s.end_reason();
+    }
+  }
 }
 
 TEST(Record, TwoRunsOnOneDomainKeepTheirOwnResultsAndEachSaysTheOtherWasThere) {
