@@ -50,11 +50,12 @@ int main(int argc, char** argv) {
     SteadyClock clock;
     DdsOptions dopt = dds_options(*rc, "swarm-agent", f.process);
     dopt.id_claims = claiming;
-    DdsBus bus(dopt);
+    DdsBus bus(dopt, clock);
     std::optional<IdClaimRunner> claim;
     if (claiming) {
       const std::set<AgentId> ids = rc->ids();
-      claim.emplace(bus, std::vector<AgentId>(ids.begin(), ids.end()), rc->transport.run_id, id,
+      claim.emplace(bus.claim_bus(), std::vector<AgentId>(ids.begin(), ids.end()),
+                    rc->transport.run_id, id,
                     IdClaimer::Config::for_swarm(rc->agents.size(), f.claim_timeout_s),
                     random_nonce(), clock);
       std::string why;

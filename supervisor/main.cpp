@@ -74,9 +74,9 @@ int main(int argc, char** argv) {
   try {
     SteadyClock clock;
     DdsOptions dopt = dds_options(rc, "swarm-supervisor", opts);
-    dopt.publish = false;  // a read-only participant: it publishes nothing an agent acts on
-    dopt.test_drop_data_percent = 0;
-    dopt.hear_all_runs = true;  // so that another run on this domain is seen, and said
+    dopt.state.publish = false;  // a read-only participant: it publishes nothing an agent acts on
+    dopt.participant.test_drop_data_percent = 0;
+    dopt.state.hear_all_runs = true;  // so that another run on this domain is seen, and said
     DdsBus bus(dopt, clock);
     SupervisorOptions so;
     so.time_scale = opts.time_scale;

@@ -107,16 +107,18 @@ void exit_cleanly_on_uncaught_exceptions(const char* prog) {
 DdsOptions dds_options(const RunConfig& rc, const std::string& participant_name,
                        const ProcessOptions& o) {
   DdsOptions d;
-  d.domain_id = rc.transport.domain_id;
-  d.participant_name = participant_name;
-  d.interface = o.interface.empty() ? rc.transport.interface : o.interface;
-  if (d.interface == "any") d.interface.clear();
-  d.discovery_server = o.discovery_server;
-  d.shared_memory = rc.transport.shared_memory;
-  d.max_agents = static_cast<int>(std::max<std::size_t>(rc.agents.size(), 16));
-  d.test_drop_data_percent = static_cast<std::uint8_t>(rc.faults.transport_drop_percent);
-  d.run_id = rc.transport.run_id;
-  for (const auto& a : rc.agents) d.roster.push_back(a.id);
+  ParticipantOptions& p = d.participant;
+  p.domain_id = rc.transport.domain_id;
+  p.name = participant_name;
+  p.interface = o.interface.empty() ? rc.transport.interface : o.interface;
+  if (p.interface == "any") p.interface.clear();
+  p.discovery_server = o.discovery_server;
+  p.shared_memory = rc.transport.shared_memory;
+  p.test_drop_data_percent = static_cast<std::uint8_t>(rc.faults.transport_drop_percent);
+  StateBusOptions& s = d.state;
+  s.max_agents = static_cast<int>(std::max<std::size_t>(rc.agents.size(), 16));
+  s.run_id = rc.transport.run_id;
+  for (const auto& a : rc.agents) s.roster.push_back(a.id);
   return d;
 }
 

@@ -10,7 +10,7 @@
 #include <atomic>
 #include <stdexcept>
 
-#include "common/dds/dds_bus.hpp"
+#include "common/dds/participant.hpp"
 
 namespace qswarm {
 
@@ -40,7 +40,7 @@ DiscoveryServer::DiscoveryServer(std::uint32_t domain_id, const std::string& lis
   auto& disc = pqos.wire_protocol().builtin.discovery_config;
   disc.discoveryProtocol = eprosima::fastrtps::rtps::DiscoveryProtocol_t::SERVER;
   // An infinite lease, as every DdsBus participant announces: no client runs a lease check on the
-  // server, the check that races the server's removal when it leaves (dds_bus.cpp says more).
+  // server, the check that races the server's removal when it leaves (participant.cpp says more).
   disc.leaseDuration = eprosima::fastrtps::c_TimeInfinite;
   rtps::get_server_client_default_guidPrefix(0, pqos.wire_protocol().prefix);
   eprosima::fastrtps::rtps::Locator_t loc;

@@ -13,10 +13,10 @@ namespace {
 
 DdsOptions options(const char* name) {
   DdsOptions o;
-  o.domain_id = static_cast<std::uint32_t>(test::test_domain().domain());
-  o.participant_name = name;
-  o.max_agents = 4;  // keeps 2 * 4 + 16 = 24 claims
-  o.run_id = 0xC1;
+  o.participant.domain_id = static_cast<std::uint32_t>(test::test_domain().domain());
+  o.participant.name = name;
+  o.state.max_agents = 4;  // keeps 2 * 4 + 16 = 24 claims
+  o.state.run_id = 0xC1;
   o.id_claims = true;
   return o;
 }
@@ -30,8 +30,8 @@ IdClaim claim(std::uint64_t nonce, std::uint64_t seq) {
   return c;
 }
 
-bool holds(const DdsBus& bus, std::uint64_t nonce) {
-  const auto all = bus.claims();
+bool holds(DdsBus& bus, std::uint64_t nonce) {
+  const auto all = bus.claim_bus().claims();
   return std::any_of(all.begin(), all.end(), [&](const IdClaim& c) { return c.nonce == nonce; });
 }
 
@@ -44,11 +44,12 @@ TEST(IdClaims, AFloodOfNoncesStaysBoundedAndDoesNotHideALaterReplica) {
     ASSERT_TRUE(test::wait_for(
         [&] {
           ++seq;
-          for (std::uint64_t n = 1000; n < 1200; ++n) stranger.publish_claim(claim(n, seq));
+          for (std::uint64_t n = 1000; n < 1200; ++n)
+            stranger.claim_bus().publish_claim(claim(n, seq));
           return holds(replica, 1199);
         },
         30.0));
-    EXPECT_EQ(replica.claims().size(), 24u);
+    EXPECT_EQ(replica.claim_bus().claims().size(), 24u);
   }
   // A replica arriving after it is heard: the flood's nonces are the ones evicted (before: the
   // map, and the keyed reader's instances, stayed full of them and refused every new replica).
@@ -56,11 +57,11 @@ TEST(IdClaims, AFloodOfNoncesStaysBoundedAndDoesNotHideALaterReplica) {
   std::uint64_t own = 0;
   ASSERT_TRUE(test::wait_for(
       [&] {
-        late.publish_claim(claim(7, ++own));
+        late.claim_bus().publish_claim(claim(7, ++own));
         return holds(replica, 7);
       },
       30.0));
-  EXPECT_EQ(replica.claims().size(), 24u);
+  EXPECT_EQ(replica.claim_bus().claims().size(), 24u);
 }
 
 }  // namespace

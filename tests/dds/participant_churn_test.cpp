@@ -32,10 +32,10 @@ namespace dds = eprosima::fastdds::dds;
 
 DdsOptions churn_options(const char* name) {
   DdsOptions o;
-  o.domain_id = static_cast<std::uint32_t>(test::test_domain().domain());
-  o.max_agents = 64;
-  o.run_id = 0xC4;
-  o.participant_name = name;
+  o.participant.domain_id = static_cast<std::uint32_t>(test::test_domain().domain());
+  o.state.max_agents = 64;
+  o.state.run_id = 0xC4;
+  o.participant.name = name;
   return o;
 }
 

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "common/dds/dds_bus.hpp"
+#include "common/dds/roster_filter.hpp"
 #include "common/transport/sample_gate.hpp"
 #include "tests/swarm/domain_lease.hpp"
 #include "tests/swarm/harness.hpp"
@@ -15,11 +16,11 @@ namespace {
 
 DdsOptions options(std::uint64_t run, const char* name, bool all = false) {
   DdsOptions o;
-  o.domain_id = static_cast<std::uint32_t>(test::test_domain().domain());
-  o.participant_name = name;
-  o.max_agents = 16;
-  o.run_id = run;
-  o.hear_all_runs = all;
+  o.participant.domain_id = static_cast<std::uint32_t>(test::test_domain().domain());
+  o.participant.name = name;
+  o.state.max_agents = 16;
+  o.state.run_id = run;
+  o.state.hear_all_runs = all;
   return o;
 }
 
@@ -88,7 +89,7 @@ TEST(RunIsolation, AStrangerFloodingKeysOnTheRunsPartitionCannotBlindAReader) {
   // instances) would fill a reader sized for 16 agents + 16; with the roster filter they never
   // take a slot, and the run's own agents are still heard.
   DdsOptions o = options(0xE, "receiver");
-  o.roster = {1, 2, 3, 4};
+  o.state.roster = {1, 2, 3, 4};
   DdsBus receiver(o);
   std::vector<std::unique_ptr<DdsBus>> strangers;
   strangers.reserve(6);

@@ -434,9 +434,9 @@ TEST(SwarmRun, BadSamplesFromATestParticipantAreDroppedByEveryAgentAndChangeNoth
   const std::uint64_t run_id = load_scenario((dir / "scenario.txtpb").string()).transport.run_id;
   ASSERT_NE(run_id, 0u);
   DdsOptions opt;
-  opt.domain_id = static_cast<std::uint32_t>(test_domain().domain());
-  opt.participant_name = "test-saboteur";
-  opt.run_id = run_id;
+  opt.participant.domain_id = static_cast<std::uint32_t>(test_domain().domain());
+  opt.participant.name = "test-saboteur";
+  opt.state.run_id = run_id;
   DdsBus saboteur(opt);
   std::uint64_t seq = 1u << 30;
   std::int64_t life =

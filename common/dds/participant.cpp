@@ -1,0 +1,108 @@
+#include "common/dds/participant.hpp"
+
+#include <arpa/inet.h>
+#include <fastdds/rtps/attributes/ServerAttributes.h>
+#include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
+#include <fastdds/rtps/transport/shared_mem/SharedMemTransportDescriptor.h>
+#include <fastdds/rtps/transport/test_UDPv4TransportDescriptor.h>
+#include <fastrtps/utils/IPLocator.h>
+#include <netdb.h>
+#include <sys/socket.h>
+#include <fastdds/dds/domain/DomainParticipant.hpp>
+#include <fastdds/dds/domain/DomainParticipantFactory.hpp>
+
+#include <chrono>
+#include <cstdlib>
+#include <stdexcept>
+#include <thread>
+
+namespace qswarm {
+
+namespace dds = eprosima::fastdds::dds;
+namespace rtps = eprosima::fastdds::rtps;
+
+DdsParticipant::DdsParticipant(const ParticipantOptions& opts) : opts_(opts) {
+  dds::DomainParticipantQos pqos;
+  pqos.name(opts.name);
+  pqos.transport().use_builtin_transports = false;
+  if (opts.test_drop_data_percent > 0) {
+    auto t = std::make_shared<rtps::test_UDPv4TransportDescriptor>();
+    if (!opts.interface.empty()) t->interfaceWhiteList.push_back(opts.interface);
+    t->dropDataMessagesPercentage = opts.test_drop_data_percent;
+    pqos.transport().user_transports.push_back(t);
+  } else {
+    auto udp = std::make_shared<rtps::UDPv4TransportDescriptor>();
+    if (!opts.interface.empty()) udp->interfaceWhiteList.push_back(opts.interface);
+    pqos.transport().user_transports.push_back(udp);
+  }
+  if (opts.shared_memory) {
+    pqos.transport().user_transports.push_back(
+        std::make_shared<rtps::SharedMemTransportDescriptor>());
+  }
+  // Many participants on one host: allow more port retries than the default 100.
+  pqos.wire_protocol().builtin.mutation_tries = 400;
+  // Participants announce an infinite lease, so no peer ever runs a lease check on them: Fast DDS
+  // 2.9.1 races a peer's lease check (timer thread) against that peer's removal when it leaves
+  // (receive thread), and the check then asserts on a cleared proxy (docs/architecture.md, "No
+  // participant lease is checked"). The agents judge liveness themselves (the neighbour timeout);
+  // a participant that leaves is still removed at once by its DISPOSE. Announcements every second,
+  // not every 3 s: one lost while many processes start is repeated a second later.
+  auto& discovery = pqos.wire_protocol().builtin.discovery_config;
+  discovery.leaseDuration = eprosima::fastrtps::c_TimeInfinite;
+  discovery.leaseDuration_announcementperiod = eprosima::fastrtps::Duration_t(1, 0);
+  if (!opts.discovery_server.empty()) {
+    const auto [ip, port] = resolve_discovery_server(opts.discovery_server);
+    discovery.discoveryProtocol = eprosima::fastrtps::rtps::DiscoveryProtocol_t::CLIENT;
+    rtps::RemoteServerAttributes server;
+    rtps::get_server_client_default_guidPrefix(0, server.guidPrefix);
+    eprosima::fastrtps::rtps::Locator_t loc;
+    eprosima::fastrtps::rtps::IPLocator::setIPv4(loc, ip);
+    loc.port = port;
+    server.metatrafficUnicastLocatorList.push_back(loc);
+    discovery.m_DiscoveryServers.push_back(server);
+  }
+  participant_ =
+      dds::DomainParticipantFactory::get_instance()->create_participant(opts.domain_id, pqos);
+  if (!participant_)
+    throw std::runtime_error("dds: cannot create a participant on domain " +
+                             std::to_string(opts.domain_id));
+}
+
+DdsParticipant::~DdsParticipant() {
+  if (!participant_) return;
+  participant_->delete_contained_entities();
+  dds::DomainParticipantFactory::get_instance()->delete_participant(participant_);
+}
+
+std::pair<std::string, std::uint16_t> resolve_discovery_server(const std::string& host_port) {
+  const auto colon = host_port.rfind(':');
+  if (colon == std::string::npos || colon == 0 || colon + 1 == host_port.size())
+    throw std::invalid_argument("discovery server \"" + host_port + "\": expected HOST:PORT");
+  const std::string host = host_port.substr(0, colon);
+  const std::string port_text = host_port.substr(colon + 1);
+  char* end = nullptr;
+  const long port = std::strtol(port_text.c_str(), &end, 10);
+  if (*end != '\0' || port < 1 || port > 65535)
+    throw std::invalid_argument("discovery server \"" + host_port + "\": port must be 1..65535");
+  addrinfo hints{};
+  hints.ai_family = AF_INET;
+  hints.ai_socktype = SOCK_DGRAM;
+  addrinfo* res = nullptr;
+  // A container's name may take a moment to appear in the network's DNS (unknown name, no data,
+  // a server failure): retry for ~15 s. A numeric address resolves at once.
+  int rc = 0;
+  for (int attempt = 0; attempt < 30; ++attempt) {
+    rc = getaddrinfo(host.c_str(), nullptr, &hints, &res);
+    if (rc != EAI_AGAIN && rc != EAI_NONAME && rc != EAI_FAIL && rc != EAI_NODATA) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  }
+  if (rc != 0 || !res)
+    throw std::invalid_argument("discovery server \"" + host_port + "\": cannot resolve " + host +
+                                " (" + gai_strerror(rc) + ")");
+  char buf[INET_ADDRSTRLEN] = {};
+  inet_ntop(AF_INET, &reinterpret_cast<sockaddr_in*>(res->ai_addr)->sin_addr, buf, sizeof buf);
+  freeaddrinfo(res);
+  return {buf, static_cast<std::uint16_t>(port)};
+}
+
+}  // namespace qswarm

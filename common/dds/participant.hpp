@@ -1,0 +1,54 @@
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <utility>
+
+namespace eprosima::fastdds::dds {
+class DomainParticipant;
+}
+
+namespace qswarm {
+
+// How a process's one DDS participant is made: where its traffic may go, how it discovers.
+struct ParticipantOptions {
+  std::uint32_t domain_id = 0;
+  std::string name = "qswarm";
+  // DDS traffic stays on this interface (loopback by default: nothing leaves the host). Empty:
+  // every interface (inside a container).
+  std::string interface = "127.0.0.1";
+  bool shared_memory = false;  // off by default: faults below the application must bite
+  // Fast DDS's test transport instead of plain UDPv4: drop this percentage of data messages on
+  // the sending side (0 = plain UDPv4).
+  std::uint8_t test_drop_data_percent = 0;
+  // Fast DDS Discovery Server "HOST:PORT" (HOST a name or an IPv4 address): discover through it as
+  // a client instead of by multicast (container networks). Empty: the standard simple discovery.
+  std::string discovery_server;
+};
+
+// One DomainParticipant with the project's settings: transports (one UDPv4 on the allowed
+// interface, or the test transport; shared memory on request), discovery (simple, or a Discovery
+// Server's client), an infinite lease announced every second, and room for many participants on
+// one host. The endpoints (the state bus, the claim bus) are made on it and must be deleted before
+// it. This is where participant-wide settings (a port plan, security) belong.
+class DdsParticipant {
+ public:
+  explicit DdsParticipant(const ParticipantOptions& opts);
+  ~DdsParticipant();
+  DdsParticipant(const DdsParticipant&) = delete;
+  DdsParticipant& operator=(const DdsParticipant&) = delete;
+
+  eprosima::fastdds::dds::DomainParticipant* get() const { return participant_; }
+  const ParticipantOptions& options() const { return opts_; }
+
+ private:
+  ParticipantOptions opts_;
+  eprosima::fastdds::dds::DomainParticipant* participant_ = nullptr;
+};
+
+// The Discovery Server's address as Fast DDS wants it: "HOST:PORT" with HOST resolved to IPv4
+// (with retries for ~15 s while a container network's DNS catches up). Throws
+// std::invalid_argument naming what is wrong.
+std::pair<std::string, std::uint16_t> resolve_discovery_server(const std::string& host_port);
+
+}  // namespace qswarm

@@ -1,0 +1,49 @@
+#pragma once
+
+#include <cstdint>
+#include <mutex>
+#include <optional>
+#include <set>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <fastdds/dds/topic/IContentFilterFactory.hpp>
+
+#include "common/core/agent.hpp"
+
+namespace qswarm {
+
+// The roster filter's expression: the run's ids as ranges of consecutive ids ("1-8,10" for 1..8
+// and 10; empty for an empty roster), and back (nullopt for anything else).
+std::string roster_filter(std::vector<AgentId> roster);
+std::optional<std::vector<std::pair<AgentId, AgentId>>> parse_roster_filter(
+    const std::string& expr);
+
+// What a reader's roster filter turned away: the first ids, and every sample.
+struct StrangerTally {
+  static constexpr std::size_t kMaxIds = 64;
+  mutable std::mutex mu;
+  std::set<AgentId> ids;
+  std::uint64_t samples = 0;
+};
+
+// The factory of the content filter class kRosterFilterClass, registered on the participant whose
+// state reader reads through it: the filter reads the key, the agent id, straight from the
+// serialized sample (CDR: a 4-byte encapsulation header, then the id) and admits only the run's
+// ids, so a stranger publishing many keys cannot fill the reader's instances. Fast DDS's SQL
+// filter was not used: it needs the type's description and decodes every sample in full (a
+// 32-agent swarm fell behind real time with it). Counts into its tally.
+class RosterFilterFactory final : public eprosima::fastdds::dds::IContentFilterFactory {
+ public:
+  static constexpr const char* kRosterFilterClass = "QSWARM_ROSTER";
+  StrangerTally tally;
+  ReturnCode_t create_content_filter(const char* filter_class_name, const char* type_name,
+                                     const eprosima::fastdds::dds::TopicDataType* data_type,
+                                     const char* expression, const ParameterSeq& params,
+                                     eprosima::fastdds::dds::IContentFilter*& filter) override;
+  ReturnCode_t delete_content_filter(const char* filter_class_name,
+                                     eprosima::fastdds::dds::IContentFilter* filter) override;
+};
+
+}  // namespace qswarm

@@ -1,0 +1,222 @@
+#include "common/dds/state_bus.hpp"
+
+#include <spdlog/spdlog.h>
+#include <fastdds/dds/domain/DomainParticipant.hpp>
+#include <fastdds/dds/publisher/DataWriter.hpp>
+#include <fastdds/dds/publisher/DataWriterListener.hpp>
+#include <fastdds/dds/publisher/Publisher.hpp>
+#include <fastdds/dds/subscriber/DataReader.hpp>
+#include <fastdds/dds/subscriber/DataReaderListener.hpp>
+#include <fastdds/dds/subscriber/SampleInfo.hpp>
+#include <fastdds/dds/subscriber/Subscriber.hpp>
+#include <fastdds/dds/topic/ContentFilteredTopic.hpp>
+#include <fastdds/dds/topic/TypeSupport.hpp>
+
+#include <atomic>
+#include <cstdio>
+#include <mutex>
+#include <stdexcept>
+
+#include "common/dds/idl_convert.hpp"
+#include "common/dds/qos.hpp"
+#include "common/dds/roster_filter.hpp"
+#include "common/transport/sample_gate.hpp"
+
+#include "swarm_statePubSubTypes.h"
+
+namespace qswarm {
+
+namespace dds = eprosima::fastdds::dds;
+
+std::string run_partition(std::uint64_t run_id) {
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "qswarm-run-%016llx", static_cast<unsigned long long>(run_id));
+  return buf;
+}
+
+struct DdsStateBus::Impl : public dds::DataReaderListener {
+  StateBusOptions opts;
+  const Clock* clock = nullptr;  // the receiver's wall time, for the gate
+  dds::DomainParticipant* participant = nullptr;
+  dds::TypeSupport type{new qswarm_msgs::AgentStatePubSubType()};
+  dds::Topic* topic = nullptr;
+  RosterFilterFactory roster_factory;                 // outlives the filtered topic
+  dds::ContentFilteredTopic* roster_topic = nullptr;  // StateBusOptions::roster
+  dds::Publisher* publisher = nullptr;
+  dds::Subscriber* subscriber = nullptr;
+  dds::DataWriter* writer = nullptr;
+  dds::DataReader* reader = nullptr;
+
+  mutable std::mutex mu;  // the gate
+  SampleGate gate;
+  // Held while the listener runs and while it is replaced: once set_listener returns, the old
+  // listener is neither running nor called again (the agent's decorator unregisters this way
+  // before it is destroyed, while DDS threads still deliver).
+  std::mutex listener_mu;
+  Listener listener;
+  struct WriterListener : public dds::DataWriterListener {
+    std::atomic<int> matched{0};
+    void on_publication_matched(dds::DataWriter*,
+                                const dds::PublicationMatchedStatus& st) override {
+      matched = st.current_count;
+    }
+  } writer_listener;
+  qswarm_msgs::AgentState out_sample;  // reused: publishing allocates nothing in steady state
+
+  void on_data_available(dds::DataReader* r) override {
+    try {
+      qswarm_msgs::AgentState s;
+      dds::SampleInfo info;
+      while (r->take_next_sample(&s, &info) == ReturnCode_t::RETCODE_OK) {
+        if (!info.valid_data) continue;
+        accept(from_idl(s));
+      }
+    } catch (const std::exception& e) {
+      spdlog::error("dds: listener caught: {}", e.what());
+    } catch (...) {
+      spdlog::error("dds: listener caught an unknown exception");
+    }
+  }
+
+  void accept(const StateMessage& m) {
+    const std::string why = check_message(m);  // pure: outside the lock the agent's tick takes
+    SampleGate::Result r;
+    {
+      std::lock_guard<std::mutex> lock(mu);
+      r = gate.admit(m, why, clock->wall_ns());
+    }
+    if (r.verdict == SampleGate::Verdict::kForeign && r.first_from) {
+      spdlog::warn("samples of another run (run id {:x}) on this domain: dropped and counted",
+                   m.run_id);
+    }
+    if (r.verdict == SampleGate::Verdict::kInvalid && r.first_from) {
+      spdlog::warn(
+          "dropped a sample from agent {}: {} (further drops from it are counted, not logged)",
+          m.view.id, r.why);
+    }
+    if (r.verdict != SampleGate::Verdict::kAccepted) return;
+    std::lock_guard<std::mutex> lock(listener_mu);
+    if (listener) listener(m);
+  }
+};
+
+DdsStateBus::DdsStateBus(DdsParticipant& participant, const StateBusOptions& opts,
+                         const Clock& clock)
+    : impl_(std::make_unique<Impl>()) {
+  Impl& d = *impl_;
+  d.opts = opts;
+  d.clock = &clock;
+  d.gate = SampleGate(opts.run_id);
+  d.participant = participant.get();
+  d.type.register_type(d.participant);
+  d.topic = d.participant->create_topic("qswarm/agent_state", d.type.get_type_name(),
+                                        dds::TOPIC_QOS_DEFAULT);
+  if (!d.topic) throw std::runtime_error("dds: cannot create the state topic");
+
+  if (opts.publish) {
+    dds::PublisherQos pub_qos = dds::PUBLISHER_QOS_DEFAULT;
+    pub_qos.partition().push_back(run_partition(opts.run_id).c_str());
+    d.publisher = d.participant->create_publisher(pub_qos);
+    dds::DataWriterQos wq = best_effort_writer_qos();
+    // No filtering on the writer's side: it would evaluate each sample for every filtering reader
+    // and send per reader (64 agents on 2 cores fell behind with it); the readers filter.
+    wq.writer_resource_limits().reader_filters_allocation =
+        eprosima::fastrtps::ResourceLimitedContainerConfig(0, 0, 0);
+    wq.endpoint().history_memory_policy =
+        eprosima::fastrtps::rtps::PREALLOCATED_WITH_REALLOC_MEMORY_MODE;
+    d.writer =
+        d.publisher ? d.publisher->create_datawriter(d.topic, wq, &d.writer_listener) : nullptr;
+    if (!d.writer) throw std::runtime_error("dds: cannot create the state writer");
+  }
+
+  dds::SubscriberQos sub_qos = dds::SUBSCRIBER_QOS_DEFAULT;
+  sub_qos.partition().push_back(opts.hear_all_runs ? "qswarm-run-*"
+                                                   : run_partition(opts.run_id).c_str());
+  d.subscriber = d.participant->create_subscriber(sub_qos);
+  if (!d.subscriber) throw std::runtime_error("dds: cannot create the state subscriber");
+  dds::DataReaderQos rq = best_effort_reader_qos();
+  rq.resource_limits().max_instances = opts.max_agents + 16;
+  rq.resource_limits().max_samples_per_instance = 1;
+  rq.resource_limits().max_samples = opts.max_agents + 16;
+  rq.resource_limits().allocated_samples = 32;
+  rq.endpoint().history_memory_policy =
+      eprosima::fastrtps::rtps::PREALLOCATED_WITH_REALLOC_MEMORY_MODE;
+  dds::TopicDescription* read_from = d.topic;
+  if (!opts.roster.empty()) {
+    d.participant->register_content_filter_factory(RosterFilterFactory::kRosterFilterClass,
+                                                   &d.roster_factory);
+    d.roster_topic = d.participant->create_contentfilteredtopic(
+        "qswarm/agent_state/roster", d.topic, roster_filter(opts.roster), {},
+        RosterFilterFactory::kRosterFilterClass);
+    if (!d.roster_topic) throw std::runtime_error("dds: cannot create the roster filter");
+    read_from = d.roster_topic;
+  }
+  d.reader = d.subscriber->create_datareader(read_from, rq, &d);
+  if (!d.reader) throw std::runtime_error("dds: cannot create the state reader");
+}
+
+DdsStateBus::~DdsStateBus() {
+  Impl& d = *impl_;
+  set_listener(nullptr);
+  // Deleted here, not left to the participant: the reader's listener is this object, and the
+  // filter's factory lives in it.
+  if (d.reader) {
+    d.reader->set_listener(nullptr);
+    d.subscriber->delete_datareader(d.reader);
+  }
+  if (d.subscriber) d.participant->delete_subscriber(d.subscriber);
+  if (d.writer) d.publisher->delete_datawriter(d.writer);
+  if (d.publisher) d.participant->delete_publisher(d.publisher);
+  if (d.roster_topic) {
+    d.participant->delete_contentfilteredtopic(d.roster_topic);
+    d.participant->unregister_content_filter_factory(RosterFilterFactory::kRosterFilterClass);
+  }
+  if (d.topic) d.participant->delete_topic(d.topic);
+}
+
+void DdsStateBus::publish(const StateMessage& msg) {
+  Impl& d = *impl_;
+  if (!d.writer) return;
+  to_idl(msg, d.out_sample);
+  if (d.writer->write(&d.out_sample)) {
+    std::lock_guard<std::mutex> lock(d.mu);
+    ++d.gate.counters().published;
+  }
+}
+
+std::vector<StateMessage> DdsStateBus::latest(AgentId self) {
+  std::lock_guard<std::mutex> lock(impl_->mu);
+  return impl_->gate.latest(self);
+}
+
+void DdsStateBus::set_listener(Listener listener) {
+  std::lock_guard<std::mutex> lock(impl_->listener_mu);
+  impl_->listener = std::move(listener);
+}
+
+BusCounters DdsStateBus::counters() const {
+  BusCounters c;
+  {
+    std::lock_guard<std::mutex> lock(impl_->mu);
+    c = impl_->gate.counters();
+  }
+  const StrangerTally& t = impl_->roster_factory.tally;
+  std::lock_guard<std::mutex> lock(t.mu);
+  c.dropped += t.samples;
+  return c;
+}
+
+std::set<AgentId> DdsStateBus::strangers() const {
+  const StrangerTally& t = impl_->roster_factory.tally;
+  std::lock_guard<std::mutex> lock(t.mu);
+  return t.ids;
+}
+
+std::set<std::uint64_t> DdsStateBus::foreign_runs() const {
+  std::lock_guard<std::mutex> lock(impl_->mu);
+  return impl_->gate.foreign_runs();
+}
+
+int DdsStateBus::matched_readers() const { return impl_->writer_listener.matched; }
+
+}  // namespace qswarm

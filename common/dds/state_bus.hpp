@@ -1,0 +1,66 @@
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "common/clock/clock.hpp"
+#include "common/dds/participant.hpp"
+#include "common/transport/neighbor_bus.hpp"
+
+namespace qswarm {
+
+// The state topic's endpoints on a participant.
+struct StateBusOptions {
+  int max_agents = 512;  // sizes the keyed reader (Fast DDS defaults cap it at 10 instances)
+  bool publish = true;   // false: a reader only (the supervisor publishes nothing)
+  // The run: endpoints use the DDS partition qswarm-run-<hex id> and the gate refuses samples of
+  // other runs (0: the partition qswarm-run-0, no check).
+  std::uint64_t run_id = 0;
+  // A reader on every run's partition (the supervisor): other runs' samples arrive, are refused
+  // as foreign and counted, so that a run can say another one shares its domain.
+  bool hear_all_runs = false;
+  // The run's agent ids: the reader takes no other key (the roster filter, applied before a
+  // sample takes a slot in the reader), so a stranger publishing many keys on the run's partition
+  // cannot fill the reader and blind it. Empty: any id.
+  std::vector<AgentId> roster;
+};
+
+std::string run_partition(std::uint64_t run_id);
+
+// The product's NeighborBus: the keyed best-effort topic "qswarm/agent_state" on a participant, a
+// keep-last-1 writer and reader. Incoming samples are checked in the listener through the
+// SampleGate: bad ones are dropped, counted and logged once per peer; nothing throws out of it.
+class DdsStateBus final : public NeighborBus {
+ public:
+  // `clock`'s wall time judges incarnations from the future (read on DDS threads). The participant
+  // must outlive the bus.
+  DdsStateBus(DdsParticipant& participant, const StateBusOptions& opts,
+              const Clock& clock = system_clock());
+  ~DdsStateBus() override;
+  DdsStateBus(const DdsStateBus&) = delete;
+  DdsStateBus& operator=(const DdsStateBus&) = delete;
+
+  void publish(const StateMessage& msg) override;
+  std::vector<StateMessage> latest(AgentId self) override;
+  // Called for every accepted sample, on a DDS thread. set_listener(nullptr) waits for a call in
+  // progress to finish.
+  void set_listener(Listener listener) override;
+  BusCounters counters() const override;
+  // Readers matched to our writer (DDS discovery; the start barrier waits on it).
+  int matched_readers() const override;
+  // Run ids of other runs heard on this domain (only a hear_all_runs bus hears them).
+  std::set<std::uint64_t> foreign_runs() const override;
+  // Ids outside the roster whose samples the roster filter dropped (the first 64 of them; their
+  // samples are counted in counters().dropped too).
+  std::set<AgentId> strangers() const override;
+
+  struct Impl;
+
+ private:
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace qswarm
