@@ -19,9 +19,10 @@ IdClaimer::Config IdClaimer::Config::for_swarm(std::size_t n, double timeout_s) 
   const double size = static_cast<double>(n);
   c.timeout_s = timeout_s >= 0.0 ? timeout_s : 60.0 + 4.0 * size;
   c.period_s = 0.1 * std::max(1.0, size / 6.0);
-  // A replica is gone after 15 silent periods (8 s at 32): on two saturated cores a live replica's
+  // A replica is gone after 15 silent periods (8 s at 32): on saturated cores a live replica's
   // claims can go unheard for seconds, and each such gap changes every view and restarts the
-  // settle wait (32 containers here: views never held still for 150 s at 6 periods).
+  // settle wait, so a shorter expiry keeps a large swarm from ever settling (docs/architecture.md,
+  // "The compose swarm").
   c.expire_s = std::max(c.expire_s, 15.0 * c.period_s);
   c.settle_s = std::max(c.settle_s, 3.0 * c.period_s);
   c.confirm_s = std::max(c.confirm_s, 3.0 * c.period_s);

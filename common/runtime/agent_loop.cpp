@@ -29,7 +29,7 @@ LifecycleConfig lifecycle_config(const RunConfig& rc, AgentId id, const AgentLoo
   c.join_timeout_s = c.start_timeout_s + 10.0;
   // Every waiting agent announces to every other: N^2 samples per period. 5 ms keeps the start
   // skew small for a few agents; beyond 8 the period grows with N so that the barrier costs no
-  // more than flying does (32 agents in containers saturated two cores at 5 ms).
+  // more than flying does (at 5 ms, 32 containers saturate two cores: docs/architecture.md).
   c.announce_period_s = 0.005 * std::max(1.0, static_cast<double>(rc.agents.size()) / 8.0);
   // Until every peer is heard (which in compose can take minutes while replicas claim ids), a
   // waiting agent only says it is here: 0.05 s per 8 agents (0.2 s at 32; 5 ms up to 8 agents).

@@ -1,0 +1,167 @@
+// What runs beside a transport's threads, with real threads: samples arrive on a feeder thread (as
+// DDS delivers them) while the owner polls, reads and tears down. These tests are CI's
+// ThreadSanitizer stage (tools/test.sh): they pass as plain tests, and TSan reports any data race.
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <filesystem>
+#include <thread>
+
+#include <unistd.h>
+
+#include "common/claim/claim_bus.hpp"
+#include "common/record/supervisor_loop.hpp"
+#include "common/runtime/agent_loop.hpp"
+#include "common/runtime/faulty_bus.hpp"
+#include "common/scenario/scenario.hpp"
+#include "tests/runtime/threaded_bus.hpp"
+
+namespace qswarm {
+namespace {
+
+using test::ThreadFedBus;
+
+StateMessage running_sample(AgentId id, std::uint64_t seq, double t_s) {
+  StateMessage m;
+  m.view.id = id;
+  m.view.seq = seq;
+  m.view.q = Vec3(static_cast<double>(id), 0.0, 10.0);
+  m.view.q0 = m.view.q;
+  m.p_W = m.view.q;
+  m.seq = seq;
+  m.stamp_s = t_s;
+  m.phase = Phase::kRunning;
+  m.incarnation = 1;
+  return m;
+}
+
+// Feeds running samples of `ids` into `bus` from its own thread until stopped.
+class Feeder {
+ public:
+  Feeder(ThreadFedBus& bus, std::vector<AgentId> ids)
+      : thread_([this, &bus, ids = std::move(ids)] {
+          std::uint64_t seq = 0;
+          while (!stop_) {
+            ++seq;
+            for (const AgentId id : ids)
+              bus.feed(running_sample(id, seq, 0.01 * static_cast<double>(seq)));
+            fed_ = seq;
+          }
+        }) {}
+  ~Feeder() { stop(); }
+  void stop() {
+    stop_ = true;
+    if (thread_.joinable()) thread_.join();
+  }
+  // Waits (yielding) until at least n rounds were fed: a condition, not a sleep.
+  void wait_for_rounds(std::uint64_t n) const {
+    while (fed_ < n) std::this_thread::yield();
+  }
+
+ private:
+  std::atomic<bool> stop_{false};
+  std::atomic<std::uint64_t> fed_{0};
+  std::thread thread_;
+};
+
+TEST(Concurrency, AFaultyBusFedFromAnotherThreadServesItsOwnerAndUnregistersSafely) {
+  // Given the fault decorator (loss and jitter) on a transport fed from another thread
+  ThreadFedBus inner;
+  FaultPlan plan;
+  plan.loss.push_back({0.3, 0, 0, 0.0, 0.0});
+  plan.delay.push_back({0.01, 0.005, 0, 0});
+  std::atomic<int> heard{0};
+  {
+    FaultyBus bus(inner, LinkFaults(plan, 1, 7), 1);
+    bus.set_listener([&](const StateMessage&) { ++heard; });
+    Feeder feeder(inner, {2, 3, 4});
+    feeder.wait_for_rounds(50);
+    // When its owner moves time on, reads and counts while samples arrive
+    for (int k = 0; k < 2000; ++k) {
+      bus.set_time(0.001 * k);
+      const std::vector<StateMessage> got = bus.latest(1);
+      for (const StateMessage& m : got) EXPECT_NE(m.view.id, 1u);
+      (void)bus.fault_counters();
+      (void)bus.counters();
+    }
+    // Then it is destroyed while the feeder still delivers (it unregisters first)
+  }
+  EXPECT_GT(heard.load(), 0);
+}
+
+TEST(Concurrency, AnAgentLoopFliesWhileItsTransportDeliversFromAnotherThread) {
+  // Given agent 1 of a two-agent run, and agent 2's samples arriving on a transport thread
+  const RunConfig rc = resolve_scenario(parse_scenario_text(
+      "agents { id: 1 position { x: 0 y: 0 z: 10 } }\n"
+      "agents { id: 2 position { x: 2 y: 0 z: 10 } }\n"
+      "weight { policy: UNWEIGHTED } topology { policy: PROXIMITY threshold_m: 100 }\n",
+      "two"));
+  ThreadFedBus bus;
+  ManualClock clock;  // the loop's own thread is the only one that reads it
+  AgentLoopOptions o;
+  AgentLoop loop(rc, 1, o, bus, clock);
+  Feeder feeder(bus, {2});
+  feeder.wait_for_rounds(10);  // agent 2 is heard running before agent 1's first poll
+  // When it polls through the barrier and a few hundred ticks
+  for (int k = 0; k < 100000 && loop.ticks() < 300; ++k) {
+    const AgentLoop::Poll p = loop.poll();
+    clock.sleep_until(p.wake_at_s);
+  }
+  loop.stop();
+  feeder.stop();
+  // Then it ran, hearing its neighbour all along
+  EXPECT_EQ(loop.phase(), LifePhase::kStopping);
+  EXPECT_GE(loop.ticks(), 300u);
+  EXPECT_GT(loop.transport_counters().received, 0u);
+}
+
+TEST(Concurrency, TheSupervisorRecordsSamplesArrivingWhileItPolls) {
+  // Given the supervisor's loop on a transport fed from another thread
+  const RunConfig rc =
+      resolve_scenario(parse_scenario_text("agents { id: 1 position { x: 0 y: 0 z: 10 } }\n"
+                                           "agents { id: 2 position { x: 2 y: 0 z: 10 } }\n"
+                                           "duration_s: 1000\n",
+                                           "two"));
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("qswarm-concurrency-" + std::to_string(::getpid()));
+  std::filesystem::remove_all(dir);
+  const RunDir run = RunDir::claim(dir.string(), "two", "t");
+  ThreadFedBus bus;
+  SteadyClock clock;  // read on the feeder's thread too, as DDS threads do
+  SupervisorOptions so;
+  so.progress = true;
+  SupervisorLoop sup(rc, run, so, bus, clock);
+  {
+    Feeder feeder(bus, {1, 2, 9});  // 9 is a stranger
+    feeder.wait_for_rounds(20);
+    // When it polls while samples keep arriving, then finishes while they still do
+    for (int k = 0; k < 500; ++k) (void)sup.poll(false);
+    sup.finish("interrupted");
+  }
+  // Then the record is complete and says what it heard
+  EXPECT_TRUE(sup.complete());
+  EXPECT_EQ(sup.exit_code(), 1);
+  EXPECT_GT(std::filesystem::file_size(run.telemetry()), 100u);
+  std::filesystem::remove_all(dir);
+}
+
+TEST(Concurrency, AClaimInboxHeardOnOneThreadIsReadOnAnother) {
+  ClaimInbox inbox(5, claim_capacity(8));
+  std::atomic<bool> stop{false};
+  std::atomic<std::uint64_t> heard{0};
+  std::thread hearer([&] {
+    for (std::uint64_t n = 1; !stop; n = n % 100 + 1) {
+      inbox.hear(IdClaim{n, n, 5, 8, 0, 0, 0.0});
+      ++heard;
+    }
+  });
+  std::size_t most = 0;
+  while (heard < 5000) most = std::max(most, inbox.claims().size());
+  stop = true;
+  hearer.join();
+  EXPECT_LE(most, claim_capacity(8));
+  EXPECT_GT(inbox.evicted(), 0u);
+}
+
+}  // namespace
+}  // namespace qswarm
