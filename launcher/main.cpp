@@ -180,13 +180,25 @@ int run(const RunOptions& opt) {
   return outcome.exit_code;
 }
 
-// Runs a figure script installed beside this binary (tools/plot/) with Debian's interpreter
-// first, where python3-matplotlib lives. Returns only when it cannot be started.
-int exec_script(const std::string& command, const std::string& script,
-                std::vector<std::string> script_args) {
+// Runs a module of the Python package qswarm (python/qswarm/), whose copy the build keeps beside
+// this binary in python/, with Debian's interpreter first, where python3-matplotlib lives. Returns
+// only when it cannot be started.
+int exec_python(const std::string& command, const std::string& module,
+                std::vector<std::string> module_args) {
+  const fs::path package_root = bin_dir() / "python";
+  const fs::path source = package_root / "qswarm" / (module + ".py");
+  if (!fs::is_regular_file(source)) {
+    std::cerr << command << ": " << source.string()
+              << " is missing (the build copies python/qswarm/ there)\n";
+    return 2;
+  }
+  const char* inherited = std::getenv("PYTHONPATH");
+  const std::string path = package_root.string() +
+                           (inherited && *inherited ? ":" + std::string(inherited) : std::string());
+  setenv("PYTHONPATH", path.c_str(), 1);
   const std::string python = fs::exists("/usr/bin/python3") ? "/usr/bin/python3" : "python3";
-  std::vector<std::string> args = {python, (bin_dir() / script).string()};
-  args.insert(args.end(), script_args.begin(), script_args.end());
+  std::vector<std::string> args = {python, "-m", "qswarm." + module};
+  args.insert(args.end(), module_args.begin(), module_args.end());
   std::vector<char*> argv;
   argv.reserve(args.size() + 1);
   for (std::string& a : args) argv.push_back(a.data());
@@ -197,14 +209,14 @@ int exec_script(const std::string& command, const std::string& script,
   return 2;
 }
 
-// `swarm plot`: the figures are drawn by tools/plot/swarm_plot.py (matplotlib).
+// `swarm plot`: the figures are drawn by python -m qswarm.plot (matplotlib).
 int plot(const std::string& run_dir, const std::string& out) {
   std::vector<std::string> args = {run_dir};
   if (!out.empty()) {
     args.push_back("--out");
     args.push_back(out);
   }
-  return exec_script("swarm plot", "swarm_plot.py", args);
+  return exec_python("swarm plot", "plot", args);
 }
 
 struct PaperOptions {
@@ -218,7 +230,7 @@ struct PaperOptions {
 
 // `swarm paper`: the section 4 maneuvers are simulated here (core primitives, in-process); the
 // rendezvous scenarios are flown by `swarm run` and the figures and report are drawn by
-// tools/plot/swarm_paper.py.
+// python -m qswarm.paper.
 int paper(const PaperOptions& opt) {
   std::string runs = opt.from;
   if (runs.empty()) {
@@ -252,7 +264,7 @@ int paper(const PaperOptions& opt) {
     args.push_back(std::to_string(opt.domain));
   }
   if (opt.from.empty()) args.emplace_back("--fly");
-  return exec_script("swarm paper", "swarm_paper.py", args);
+  return exec_python("swarm paper", "paper", args);
 }
 
 }  // namespace

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Tests of `swarm paper` (launcher/main.cpp + tools/plot/swarm_paper.py), end to end.
+"""Tests of `swarm paper` (launcher/main.cpp + python/qswarm/paper.py), end to end.
 
 Flies the paper's scenarios once with the real multi-process swarm (about a minute of wall time
 here) into a temporary directory on a leased DDS test domain, then checks what a user relies on:

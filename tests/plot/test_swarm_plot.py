@@ -1,11 +1,12 @@
 #!/usr/bin/python3
-"""Tests of tools/plot/swarm_plot.py (`swarm plot`) on synthetic run directories.
+"""Tests of `swarm plot` (launcher/main.cpp + python/qswarm/plot.py) on synthetic run directories.
 
 The run directories are written by make_run() below in the recorder's exact formats
 (supervisor/recorder.cpp): telemetry.csv and graph.csv with 10 significant digits, edge weights and
 events.csv times with 6, quoted edge lists and event details, and a summary.json as protobuf's JSON
-printer writes it. Run: /usr/bin/python3 -m unittest discover -s tests/plot -v (or this file
-directly; ctest -L plot runs it too).
+printer writes it.
+
+Usage: test_swarm_plot.py BUILD_BIN_DIR   (ctest -L plot runs it)
 """
 
 import json
@@ -19,9 +20,7 @@ import unittest
 
 import numpy as np
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-SCRIPT = os.path.normpath(os.path.join(HERE, "..", "..", "tools", "plot", "swarm_plot.py"))
-PYTHON = "/usr/bin/python3" if os.path.exists("/usr/bin/python3") else sys.executable
+BIN = None
 
 TELEMETRY_HEADER = ("stamp_s,id,seq,phase,mode,qx,qy,qz,px,py,pz,vx,vy,vz,qw,qxr,qyr,qzr,w1,w2,w3,"
                     "w4,total_weight,links,age_ms")
@@ -200,7 +199,8 @@ def make_run(root, name, n_agents=4, duration=4.0, quad=False, seed=7, rate_hz=5
 
 
 def run_plot(*args):
-    return subprocess.run([PYTHON, SCRIPT, *args], capture_output=True, text=True, timeout=300)
+    return subprocess.run([os.path.join(BIN, "swarm"), "plot", *args], capture_output=True,
+                          text=True, timeout=300)
 
 
 class SwarmPlotTest(unittest.TestCase):
@@ -352,4 +352,8 @@ class SwarmPlotTest(unittest.TestCase):
 
 
 if __name__ == "__main__":
+    if len(sys.argv) < 2:
+        print("usage: test_swarm_plot.py BUILD_BIN_DIR", file=sys.stderr)
+        sys.exit(2)
+    BIN = os.path.abspath(sys.argv.pop(1))
     unittest.main(verbosity=2)

@@ -1,7 +1,6 @@
-#!/usr/bin/python3
 """swarm plot: PNG figures of one recorded swarm run.
 
-Usage: swarm_plot.py RUN_DIR [--out DIR]      (the C++ `swarm plot` subcommand execs this)
+Usage: python3 -m qswarm.plot RUN_DIR [--out DIR]   (the C++ `swarm plot` subcommand execs this)
 
 Reads the run directory written by the supervisor's Recorder (supervisor/recorder.cpp):
 summary.json, telemetry.csv, graph.csv, events.csv and, if present, scenario.txtpb. Writes into

@@ -1,10 +1,10 @@
-#!/usr/bin/python3
 """swarm paper: the paper's figures, flown by our swarm, and a report beside the paper's numbers.
 
 Usage (the C++ `swarm paper` subcommand execs this after it has simulated the section 4 maneuvers
 into RUNS/maneuvers/):
 
-  swarm_paper.py --swarm BIN --scenarios DIR --runs RUNS --out OUT [--fly] [--time-scale K]
+  python3 -m qswarm.paper --swarm BIN --scenarios DIR --runs RUNS --out OUT [--fly]
+                          [--time-scale K]
 
 With --fly every rendezvous scenario of DIR is flown by the multi-process swarm (`BIN run`, one
 process per agent, DDS on loopback) into RUNS/<scenario>/; without it the runs already in RUNS are
@@ -27,7 +27,7 @@ import re
 import subprocess
 import sys
 
-import swarm_plot
+from qswarm import plot as swarm_plot
 
 PROG = "swarm paper"
 
