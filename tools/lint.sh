@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# clang-format (the committed .clang-format) on every source, and clang-tidy (the committed
-# .clang-tidy) on the product's translation units; any finding fails.
+# clang-format (the committed .clang-format) on every source, flake8 (the committed .flake8) on
+# every Python file, and clang-tidy (the committed .clang-tidy) on the product's translation units;
+# any finding fails.
 # Usage: tools/lint.sh [build-dir with compile_commands] [--all]
 #   --all  clang-tidy on the tests' units too (27 files, about 4 more minutes on two cores; CI
 #          leaves them out to stay within its time; the tests are compiled with -Werror there).
@@ -22,6 +23,9 @@ done
 mapfile -t sources < <(git ls-files '*.cpp' '*.hpp')
 echo "lint: clang-format on ${#sources[@]} files"
 clang-format --dry-run --Werror "${sources[@]}"
+mapfile -t python < <(git ls-files '*.py')
+echo "lint: flake8 on ${#python[@]} files"
+flake8 "${python[@]}"
 if ((ALL)); then
   mapfile -t units < <(git ls-files '*.cpp')
 else

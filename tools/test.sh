@@ -11,7 +11,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 # Linters, and the container tools the compose test (label compose) runs the swarm with.
-export QSWARM_EXTRA_PACKAGES="clang-format clang-tidy clang-tools
+export QSWARM_EXTRA_PACKAGES="clang-format clang-tidy clang-tools flake8
   podman podman-compose runc netavark aardvark-dns debootstrap"
 BUILD=build-release
 QSWARM_BUILD_TYPE=Release QSWARM_WERROR=ON tools/setup.sh "$BUILD"

@@ -87,7 +87,7 @@ def import_matplotlib(prog):
 
 
 def save_figure(plt, fig, path):
-    """Writes and closes a figure; no software tag or date, so the same data gives the same bytes."""
+    """Writes and closes a figure; no software tag or date: the same data gives the same bytes."""
     fig.savefig(path, dpi=DPI, metadata={"Software": None})
     plt.close(fig)
 
@@ -602,7 +602,8 @@ class Plotter:
         rows = self.run["graph"]
         t = np.array([r["t_s"] for r in rows])
         fig, axes = self.new_fig(3, 1, size=(10, 8), sharex=True)
-        series = [("edges", "edges", "edge count"), ("lambda2", "lambda2", "$\\lambda_2$ (units of the weights)"),
+        series = [("edges", "edges", "edge count"),
+                  ("lambda2", "lambda2", "$\\lambda_2$ (units of the weights)"),
                   ("components", "components", "components")]
         for k, (col, label, ylab) in enumerate(series):
             ax = axes[k, 0]
@@ -647,7 +648,8 @@ class Plotter:
             rows = self.run["graph"][:1]
         picks, prev = [], None
         for k, r in enumerate(rows):
-            key = r["pairs"]  # the recorder writes edges in a fixed order: equal sets, equal strings
+            # The recorder writes edges in a fixed order: equal sets, equal strings.
+            key = r["pairs"]
             if key != prev:
                 picks.append(k)
                 prev = key
@@ -730,7 +732,8 @@ class Plotter:
         for idx in range(len(panels), nrows * ncols):
             axes[idx // ncols, idx % ncols].set_visible(False)
         what = (f"the graph initially, at its {n_changes} change{'s' if n_changes != 1 else ''}"
-                " and at the end " if n_changes else "the graph (no change), initially and at the end ")
+                " and at the end " if n_changes
+                else "the graph (no change), initially and at the end ")
         if n_candidates > len(panels):
             what += f"({len(panels)} shown) "
         fig.suptitle(self.title(what + "in the x-y plane; line width ~ weight, hollow = no link"),
@@ -842,7 +845,8 @@ class Plotter:
                                          + tr.cols["w3"] ** 2 + tr.cols["w4"] ** 2))
         weight = MASS_KG * GRAVITY
         ax.axhline(weight, color="k", lw=0.8, ls="--", zorder=3)
-        ax.set_ylabel("total thrust $K_r\\,(\\omega_1^2 + \\omega_2^2 + \\omega_3^2 + \\omega_4^2)$ (N)")
+        ax.set_ylabel("total thrust "
+                      "$K_r\\,(\\omega_1^2 + \\omega_2^2 + \\omega_3^2 + \\omega_4^2)$ (N)")
         ax.set_xlabel("time (s, simulated)")
         ax.set_title(self.title("total rotor thrust"))
         self.agent_key(fig, axes, ax,

@@ -43,7 +43,7 @@ EIGENVALUES = {"unweighted": (0, 1, 3, 4), "unweighted_l2": (0, 0.586, 2, 3.414)
 
 
 def lease_domain(key):
-    """A DDS domain in 20..232 no other test holds (the flock scheme of tests/swarm/domain_lease)."""
+    """A DDS domain in 20..232 no other test holds (tests/swarm/domain_lease's flock scheme)."""
     os.makedirs("/tmp/qswarm-test-domains", exist_ok=True)
     start = zlib.crc32(key.encode()) % 213
     for k in range(213):
@@ -79,7 +79,8 @@ class SwarmPaperTest(unittest.TestCase):
         cls.runs = os.path.join(cls.root, "runs")
         cls.out = os.path.join(cls.root, "out")
         cls.first = swarm("paper", "--runs", cls.runs, "--out", cls.out, "--domain",
-                          str(cls.domain), "--scenarios", os.path.join(SOURCE, "scenarios", "paper"))
+                          str(cls.domain), "--scenarios",
+                          os.path.join(SOURCE, "scenarios", "paper"))
 
     @classmethod
     def tearDownClass(cls):
