@@ -2,7 +2,7 @@
 """Tests of `swarm plot` (launcher/main.cpp + python/qswarm/plot.py) on synthetic run directories.
 
 The run directories are written by make_run() below in the recorder's exact formats
-(supervisor/recorder.cpp): telemetry.csv and graph.csv with 10 significant digits, edge weights and
+(common/record/): telemetry.csv and graph.csv with 10 significant digits, edge weights and
 events.csv times with 6, quoted edge lists and event details, and a summary.json as protobuf's JSON
 printer writes it.
 
