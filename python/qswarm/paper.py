@@ -27,6 +27,7 @@ import subprocess
 import sys
 
 from qswarm import plot
+from qswarm import run_dir as run_dir_names
 from qswarm.drawing import import_matplotlib
 from qswarm.paper_figures import Figures, draw_maneuver_figures
 from qswarm.paper_numbers import RUNS, TV_THRESHOLD_M, proximity_additions
@@ -75,7 +76,7 @@ def fly(swarm, scenarios, runs, stem, time_scale, domain):
 def inspect(swarm, run_dir):
     """`swarm inspect --json` of the scenario as the run flew it (its scenario.txtpb), so a redraw
     depends only on the runs, not on today's scenario files."""
-    path = os.path.join(run_dir, "scenario.txtpb")
+    path = os.path.join(run_dir, run_dir_names.SCENARIO)
     try:
         r = subprocess.run([swarm, "inspect", path, "--json"], stdout=subprocess.PIPE,
                            stderr=subprocess.PIPE, text=True)
@@ -100,10 +101,10 @@ def load(runs, stem, np):
                          f"({run['summary'].get('end_reason', 'no reason given')})")
     gain = 1.0
     try:
-        with open(os.path.join(run_dir, "scenario.txtpb"), encoding="utf-8") as f:
+        with open(os.path.join(run_dir, run_dir_names.SCENARIO), encoding="utf-8") as f:
             text = f.read()
     except OSError as e:
-        raise Failure(2, f"{os.path.join(run_dir, 'scenario.txtpb')}: {e.strerror}") from None
+        raise Failure(2, f"{os.path.join(run_dir, run_dir_names.SCENARIO)}: {e.strerror}") from None
     for line in text.splitlines():
         if line.startswith("gain:"):
             gain = float(line.split(":", 1)[1])
@@ -198,16 +199,18 @@ def run(args, np, plt):
         # Every agent's consensus state at full rate (running samples, time-sorted).
         runs[stem]["tracks_full"] = {tr.id: (tr.t_full, tr.q_full) for tr in runs[stem]["tracks"]}
         spectra[stem] = inspect(args.swarm, runs[stem]["dir"])
-    man = os.path.join(args.runs, "maneuvers")
-    single = read_maneuver(os.path.join(man, "single_agent.csv"), np)
-    dyn = read_maneuver(os.path.join(man, "rendezvous_dynamics.csv"), np)
-    segments = read_segments(os.path.join(man, "segments.csv"))
+    man = os.path.join(args.runs, run_dir_names.MANEUVERS)
+    single = read_maneuver(os.path.join(man, run_dir_names.SINGLE_AGENT), np)
+    dyn = read_maneuver(os.path.join(man, run_dir_names.RENDEZVOUS_DYNAMICS), np)
+    segments = read_segments(os.path.join(man, run_dir_names.SEGMENTS))
     for agent in dyn:
-        if ("rendezvous_dynamics.csv", agent) not in segments:
-            raise Failure(2, f"{os.path.join(man, 'segments.csv')}: no segments of drone {agent}")
-        dyn[agent]["segments"] = segments[("rendezvous_dynamics.csv", agent)]
-    if ("single_agent.csv", 1) not in segments:
-        raise Failure(2, f"{os.path.join(man, 'segments.csv')}: no segments of the single agent")
+        if (run_dir_names.RENDEZVOUS_DYNAMICS, agent) not in segments:
+            raise Failure(2, f"{os.path.join(man, run_dir_names.SEGMENTS)}: no segments of drone "
+                             f"{agent}")
+        dyn[agent]["segments"] = segments[(run_dir_names.RENDEZVOUS_DYNAMICS, agent)]
+    if (run_dir_names.SINGLE_AGENT, 1) not in segments:
+        raise Failure(2, f"{os.path.join(man, run_dir_names.SEGMENTS)}: no segments of the "
+                         "single agent")
 
     # Everything is drawn into a staging directory first and moved into OUT only when all of it
     # was written, so a failed regeneration never leaves OUT half new.

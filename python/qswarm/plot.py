@@ -32,6 +32,7 @@ import math
 import os
 import sys
 
+from qswarm import run_dir as run_dir_names
 from qswarm.drawing import import_matplotlib, save_figure
 from qswarm.record import RunError, load_run, parse_edges
 
@@ -339,7 +340,7 @@ class Plotter:
             try:
                 edges = parse_edges(r["edge_list"])
             except ValueError:
-                raise RunError("graph.csv", f"t_s {r['t_s']:g}: bad edge_list") from None
+                raise RunError(run_dir_names.GRAPH, f"t_s {r['t_s']:g}: bad edge_list") from None
             panels.append((r, pos, edges))
         allp = np.array([p for _, pos, _ in panels for p in pos.values()] or [[0.0, 0.0]])
         lo, hi = allp.min(axis=0), allp.max(axis=0)
@@ -533,7 +534,7 @@ def main(argv):
         print(f"{PROG}: {where}: {e.what}", file=sys.stderr)
         return 2
 
-    out_dir = args.out or os.path.join(run_dir, "plots")
+    out_dir = args.out or os.path.join(run_dir, run_dir_names.PLOTS)
     try:
         os.makedirs(out_dir, exist_ok=True)
     except OSError as e:

@@ -7,6 +7,8 @@ import math
 import os
 import re
 
+from qswarm import run_dir as run_dir_names
+
 TELEMETRY_COLUMNS = ["stamp_s", "id", "seq", "phase", "mode", "qx", "qy", "qz", "px", "py", "pz",
                      "vx", "vy", "vz", "qw", "qxr", "qyr", "qzr", "w1", "w2", "w3", "w4",
                      "total_weight", "links", "age_ms"]
@@ -84,7 +86,7 @@ def _bad_field(name, lineno, col_name, value):
 
 
 def read_telemetry(run_dir, np):
-    name = "telemetry.csv"
+    name = run_dir_names.TELEMETRY
     text = _read_text(run_dir, name)
     index, width, lines = _csv_lines(name, text, TELEMETRY_COLUMNS)
     # A row of another width is a cut-short (or corrupt) line.
@@ -124,7 +126,7 @@ def parse_edges(s):
 
 
 def read_graph(run_dir):
-    name = "graph.csv"
+    name = run_dir_names.GRAPH
     text = _read_text(run_dir, name)
     index, width, lines = _csv_lines(name, text, GRAPH_COLUMNS)
     rows = []
@@ -159,7 +161,7 @@ def read_graph(run_dir):
 
 
 def read_events(run_dir):
-    name = "events.csv"
+    name = run_dir_names.EVENTS
     text = _read_text(run_dir, name)
     index, width, lines = _csv_lines(name, text, EVENT_COLUMNS, allow_no_rows=True)
     events = []
@@ -185,12 +187,12 @@ def _vec3(summary, key):
     v = summary.get(key)
     if (not isinstance(v, list) or len(v) != 3
             or not all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in v)):
-        raise RunError("summary.json", f"'{key}' is not a list of 3 numbers")
+        raise RunError(run_dir_names.SUMMARY, f"'{key}' is not a list of 3 numbers")
     return [float(x) for x in v]
 
 
 def read_summary(run_dir):
-    name = "summary.json"
+    name = run_dir_names.SUMMARY
     text = _read_text(run_dir, name)
     try:
         s = json.loads(text)
@@ -209,7 +211,7 @@ def read_summary(run_dir):
 
 def read_scenario(run_dir):
     """name, seed and convergence tolerance from scenario.txtpb (optional; None where absent)."""
-    text = _read_text(run_dir, "scenario.txtpb", required=False)
+    text = _read_text(run_dir, run_dir_names.SCENARIO, required=False)
     out = {"name": None, "seed": None, "tolerance_m": None}
     if text is None:
         return out

@@ -100,9 +100,12 @@ class SwarmPaperTest(unittest.TestCase):
         r = self.first
         self.assertEqual(r.returncode, 0, r.stdout + r.stderr)
         for name in RUN_NAMES:
-            self.assertTrue(os.path.isfile(os.path.join(self.runs, name, "summary.json")), name)
-        for name in ("single_agent.csv", "rendezvous_dynamics.csv", "segments.csv"):
-            self.assertTrue(os.path.isfile(os.path.join(self.runs, "maneuvers", name)), name)
+            summary = os.path.join(self.runs, name, run_dir_names.SUMMARY)
+            self.assertTrue(os.path.isfile(summary), name)
+        maneuvers = os.path.join(self.runs, run_dir_names.MANEUVERS)
+        for name in (run_dir_names.SINGLE_AGENT, run_dir_names.RENDEZVOUS_DYNAMICS,
+                     run_dir_names.SEGMENTS):
+            self.assertTrue(os.path.isfile(os.path.join(maneuvers, name)), name)
         listed = r.stdout.split()
         for name in FIGURES + ["report.md"]:
             path = os.path.join(self.out, name)
@@ -146,7 +149,7 @@ class SwarmPaperTest(unittest.TestCase):
         self.assertGreater(float(m.group(1)) / float(m.group(2)), 8.0)
         # The quadcopters agree on the paper's point but, with collision avoidance, hold in a
         # cluster about it, never closer than the safe distance; the report says so from the run.
-        with open(os.path.join(self.runs, "time_varying_quadcopter", "summary.json"),
+        with open(os.path.join(self.runs, "time_varying_quadcopter", run_dir_names.SUMMARY),
                   encoding="utf-8") as f:
             quad = json.load(f)
         self.assertTrue(quad["avoidance"])
@@ -167,16 +170,16 @@ class SwarmPaperTest(unittest.TestCase):
 
     def test_a_missing_maneuver_file_is_named_and_exits_2(self):
         runs = self.copy_runs("runs-no-maneuver")
-        os.remove(os.path.join(runs, "maneuvers", "single_agent.csv"))
+        os.remove(os.path.join(runs, run_dir_names.MANEUVERS, run_dir_names.SINGLE_AGENT))
         out = os.path.join(self.root, "out-no-maneuver")
         r = self.paper_from(runs, out)
         self.assertEqual(r.returncode, 2)
-        self.assertIn("single_agent.csv", r.stderr)
+        self.assertIn(run_dir_names.SINGLE_AGENT, r.stderr)
         self.assertFalse(os.path.exists(os.path.join(out, "report.md")))
 
     def test_a_half_written_run_is_named_and_exits_2(self):
         runs = self.copy_runs("runs-half")
-        path = os.path.join(runs, "weighted", "summary.json")
+        path = os.path.join(runs, "weighted", run_dir_names.SUMMARY)
         with open(path, "r+", encoding="utf-8") as f:
             text = f.read()
             f.seek(0)
@@ -184,11 +187,11 @@ class SwarmPaperTest(unittest.TestCase):
             f.write(text[: len(text) // 2])
         r = self.paper_from(runs, os.path.join(self.root, "out-half"))
         self.assertEqual(r.returncode, 2)
-        self.assertIn(os.path.join("weighted", "summary.json"), r.stderr)
+        self.assertIn(os.path.join("weighted", run_dir_names.SUMMARY), r.stderr)
 
     def test_a_run_that_did_not_converge_gives_no_report(self):
         runs = self.copy_runs("runs-failed")
-        path = os.path.join(runs, "time_varying", "summary.json")
+        path = os.path.join(runs, "time_varying", run_dir_names.SUMMARY)
         with open(path, encoding="utf-8") as f:
             text = f.read()
         with open(path, "w", encoding="utf-8") as f:
@@ -239,5 +242,7 @@ if __name__ == "__main__":
         print("usage: test_swarm_paper.py BUILD_BIN_DIR", file=sys.stderr)
         sys.exit(2)
     BIN = os.path.abspath(sys.argv.pop(1))
+    sys.path.insert(0, os.path.join(BIN, "python"))  # the build's copy of python/qswarm
+    from qswarm import run_dir as run_dir_names
     SOURCE = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", ".."))
     unittest.main()

@@ -119,7 +119,7 @@ def make_run(root, name, n_agents=4, duration=4.0, quad=False, seed=7, rate_hz=5
                              q, p, v, quat, w, np.full(t_all.size, 3.5),
                              np.full(t_all.size, n_agents - 1),
                              np.abs(rng.normal(0.2, 0.05, t_all.size))])
-    with open(os.path.join(d, "telemetry.csv"), "w") as f:
+    with open(os.path.join(d, run_dir_names.TELEMETRY), "w") as f:
         f.write(TELEMETRY_HEADER + "\n")
         np.savetxt(f, table, fmt="%.10g", delimiter=",")  # %.10g = ostream setprecision(10)
 
@@ -148,7 +148,7 @@ def make_run(root, name, n_agents=4, duration=4.0, quad=False, seed=7, rate_hz=5
         elist = ";".join(f"{a}-{b}:{w:.6g}" for a, b, w in edges)
         grows.append(",".join([g(t), str(len(live)), str(len(edges)), g(l2), str(comps),
                                g(dis), g(drift), g(sep), g(dis)]) + f',"{elist}"')
-    with open(os.path.join(d, "graph.csv"), "w") as f:
+    with open(os.path.join(d, run_dir_names.GRAPH), "w") as f:
         f.write(GRAPH_HEADER + "\n" + "\n".join(grows) + "\n")
 
     # events.csv (times with the stream's default 6 significant digits, details quoted)
@@ -163,7 +163,7 @@ def make_run(root, name, n_agents=4, duration=4.0, quad=False, seed=7, rate_hz=5
     ev += [(duration * 0.9, "converged", 0, "disagreement 0.00412 m, spread 0.00412 m"),
            (duration, "end", 0, "converged")]
     ev.sort(key=lambda e: e[0])
-    with open(os.path.join(d, "events.csv"), "w") as f:
+    with open(os.path.join(d, run_dir_names.EVENTS), "w") as f:
         f.write("t_s,kind,agent,detail\n")
         for t, kind, a, det in ev:
             f.write(f'{g(t, 6)},{kind},{a},"{det}"\n')
@@ -186,9 +186,9 @@ def make_run(root, name, n_agents=4, duration=4.0, quad=False, seed=7, rate_hz=5
         "min_separation_m": 0.1, "end_reason": "converged", "wall_time_s": duration,
         "final_disagreement_m": 0.004,
     }
-    with open(os.path.join(d, "summary.json"), "w") as f:
+    with open(os.path.join(d, run_dir_names.SUMMARY), "w") as f:
         json.dump(summary, f, indent=1)
-    with open(os.path.join(d, "scenario.txtpb"), "w") as f:
+    with open(os.path.join(d, run_dir_names.SCENARIO), "w") as f:
         f.write(f'name: "{name}"\n')
         for k, a in enumerate(ids):
             f.write(f"agents {{ id: {a} position {{ x: {p0[k, 0]:.3f} y: {p0[k, 1]:.3f} "
@@ -232,7 +232,7 @@ class SwarmPlotTest(unittest.TestCase):
 
     def test_particle_run(self):
         d = make_run(self.root, "particle")
-        self.check_figures(d, os.path.join(d, "plots"), COMMON, absent=QUAD)
+        self.check_figures(d, os.path.join(d, run_dir_names.PLOTS), COMMON, absent=QUAD)
 
     def test_default_out_dir_and_deterministic(self):
         d = make_run(self.root, "determinism", quad=True, seed=3)
@@ -240,12 +240,12 @@ class SwarmPlotTest(unittest.TestCase):
         self.assertEqual(r1.returncode, 0, r1.stderr)
         first = {}
         for name in COMMON + QUAD:
-            with open(os.path.join(d, "plots", name), "rb") as f:
+            with open(os.path.join(d, run_dir_names.PLOTS, name), "rb") as f:
                 first[name] = f.read()
         r2 = run_plot(d)
         self.assertEqual(r2.returncode, 0, r2.stderr)
         for name in COMMON + QUAD:
-            with open(os.path.join(d, "plots", name), "rb") as f:
+            with open(os.path.join(d, run_dir_names.PLOTS, name), "rb") as f:
                 self.assertEqual(f.read(), first[name], f"{name} differs between two runs")
 
     def test_quadcopter_run(self):
@@ -254,7 +254,7 @@ class SwarmPlotTest(unittest.TestCase):
 
     def test_no_faults(self):
         d = make_run(self.root, "calm", faults=False, n_agents=3)
-        self.check_figures(d, os.path.join(d, "plots"), COMMON, absent=QUAD)
+        self.check_figures(d, os.path.join(d, run_dir_names.PLOTS), COMMON, absent=QUAD)
 
     def expect_error(self, run_dir, file_name, words=()):
         r = run_plot(run_dir)
@@ -275,45 +275,45 @@ class SwarmPlotTest(unittest.TestCase):
 
     def test_missing_summary(self):
         d = make_run(self.root, "nosummary", n_agents=3, duration=1.0)
-        os.remove(os.path.join(d, "summary.json"))
-        self.expect_error(d, "summary.json", ["missing"])
+        os.remove(os.path.join(d, run_dir_names.SUMMARY))
+        self.expect_error(d, run_dir_names.SUMMARY, ["missing"])
 
     def test_half_written_summary(self):
         d = make_run(self.root, "halfsummary", n_agents=3, duration=1.0)
-        p = os.path.join(d, "summary.json")
+        p = os.path.join(d, run_dir_names.SUMMARY)
         with open(p) as f:
             text = f.read()
         with open(p, "w") as f:
             f.write(text[:len(text) // 2])
-        self.expect_error(d, "summary.json", ["not valid JSON"])
+        self.expect_error(d, run_dir_names.SUMMARY, ["not valid JSON"])
 
     def test_empty_events(self):
         d = make_run(self.root, "emptyevents", n_agents=3, duration=1.0)
-        open(os.path.join(d, "events.csv"), "w").close()
-        self.expect_error(d, "events.csv", ["empty"])
+        open(os.path.join(d, run_dir_names.EVENTS), "w").close()
+        self.expect_error(d, run_dir_names.EVENTS, ["empty"])
 
     def test_telemetry_cut_mid_line(self):
         d = make_run(self.root, "cutline", n_agents=3, duration=1.0)
-        p = os.path.join(d, "telemetry.csv")
+        p = os.path.join(d, run_dir_names.TELEMETRY)
         with open(p, "rb") as f:
             data = f.read()
         with open(p, "wb") as f:
             f.write(data[:len(data) - 40])  # the last line loses its end and its newline
-        self.expect_error(d, "telemetry.csv", ["cut short"])
+        self.expect_error(d, run_dir_names.TELEMETRY, ["cut short"])
 
     def test_telemetry_short_line_in_the_middle(self):
         d = make_run(self.root, "shortline", n_agents=3, duration=1.0)
-        p = os.path.join(d, "telemetry.csv")
+        p = os.path.join(d, run_dir_names.TELEMETRY)
         with open(p) as f:
             lines = f.read().split("\n")
         lines[10] = lines[10][:30]
         with open(p, "w") as f:
             f.write("\n".join(lines))
-        self.expect_error(d, "telemetry.csv", ["line 11", "fields"])
+        self.expect_error(d, run_dir_names.TELEMETRY, ["line 11", "fields"])
 
     def test_telemetry_not_a_number(self):
         d = make_run(self.root, "nan-field", n_agents=3, duration=1.0)
-        p = os.path.join(d, "telemetry.csv")
+        p = os.path.join(d, run_dir_names.TELEMETRY)
         with open(p) as f:
             lines = f.read().split("\n")
         fields = lines[20].split(",")
@@ -321,32 +321,32 @@ class SwarmPlotTest(unittest.TestCase):
         lines[20] = ",".join(fields)
         with open(p, "w") as f:
             f.write("\n".join(lines))
-        self.expect_error(d, "telemetry.csv", ["line 21", "px", "1.2.3"])
+        self.expect_error(d, run_dir_names.TELEMETRY, ["line 21", "px", "1.2.3"])
 
     def test_header_column_missing(self):
         d = make_run(self.root, "nocolumn", n_agents=3, duration=1.0)
-        p = os.path.join(d, "graph.csv")
+        p = os.path.join(d, run_dir_names.GRAPH)
         with open(p) as f:
             text = f.read()
         with open(p, "w") as f:
             f.write(text.replace("lambda2,", "", 1))
-        self.expect_error(d, "graph.csv", ["lambda2"])
+        self.expect_error(d, run_dir_names.GRAPH, ["lambda2"])
 
     def test_telemetry_header_only(self):
         d = make_run(self.root, "headeronly", n_agents=3, duration=1.0)
-        with open(os.path.join(d, "telemetry.csv"), "w") as f:
+        with open(os.path.join(d, run_dir_names.TELEMETRY), "w") as f:
             f.write(TELEMETRY_HEADER + "\n")
-        self.expect_error(d, "telemetry.csv", ["no rows"])
+        self.expect_error(d, run_dir_names.TELEMETRY, ["no rows"])
 
     def test_64_agents(self):
         t0 = time.monotonic()
         d = make_run(self.root, "big", n_agents=64, duration=60.0, quad=True, seed=11,
                      proximity_m=12.0)
         t1 = time.monotonic()
-        out = os.path.join(d, "plots")
+        out = os.path.join(d, run_dir_names.PLOTS)
         self.check_figures(d, out, COMMON + QUAD)
         t2 = time.monotonic()
-        with open(os.path.join(d, "telemetry.csv")) as f:
+        with open(os.path.join(d, run_dir_names.TELEMETRY)) as f:
             rows = sum(1 for _ in f) - 1
         print(f"\n[64 agents, 60 s, {rows} telemetry rows] writing the run took {t1 - t0:.1f} s, "
               f"swarm plot took {t2 - t1:.1f} s", file=sys.stderr)
@@ -357,4 +357,6 @@ if __name__ == "__main__":
         print("usage: test_swarm_plot.py BUILD_BIN_DIR", file=sys.stderr)
         sys.exit(2)
     BIN = os.path.abspath(sys.argv.pop(1))
+    sys.path.insert(0, os.path.join(BIN, "python"))  # the build's copy of python/qswarm
+    from qswarm import run_dir as run_dir_names
     unittest.main(verbosity=2)
