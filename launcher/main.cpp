@@ -211,7 +211,7 @@ int exec_python(const std::string& command, const std::string& module,
 
 // `swarm plot`: the figures are drawn by python -m qswarm.plot (matplotlib).
 int plot(const std::string& run_dir, const std::string& out) {
-  std::vector<std::string> args = {run_dir};
+  std::vector<std::string> args = {"--swarm", (bin_dir() / "swarm").string(), run_dir};
   if (!out.empty()) {
     args.push_back("--out");
     args.push_back(out);

@@ -19,10 +19,9 @@ malformed run, named); 3 when OUT could not be written.
 
 import argparse
 import csv
+import errno
 import fcntl
-import json
 import os
-import re
 import subprocess
 import sys
 
@@ -30,7 +29,7 @@ from qswarm import plot
 from qswarm import run_dir as run_dir_names
 from qswarm.drawing import import_matplotlib
 from qswarm.paper_figures import Figures, draw_maneuver_figures
-from qswarm.paper_numbers import RUNS, TV_THRESHOLD_M, proximity_additions
+from qswarm.paper_numbers import RUNS, proximity_additions, threshold_m
 from qswarm.paper_report import report
 from qswarm.record import RunError, load_run
 
@@ -73,43 +72,25 @@ def fly(swarm, scenarios, runs, stem, time_scale, domain):
                       + r.stdout.strip())
 
 
-def inspect(swarm, run_dir):
-    """`swarm inspect --json` of the scenario as the run flew it (its scenario.txtpb), so a redraw
-    depends only on the runs, not on today's scenario files."""
-    path = os.path.join(run_dir, run_dir_names.SCENARIO)
-    try:
-        r = subprocess.run([swarm, "inspect", path, "--json"], stdout=subprocess.PIPE,
-                           stderr=subprocess.PIPE, text=True)
-    except OSError as e:
-        raise Failure(2, f"{swarm}: cannot run ({e.strerror})") from None
-    if r.returncode != 0:
-        raise Failure(2, f"{path}: swarm inspect exited {r.returncode}: {r.stderr.strip()}")
-    try:
-        return json.loads(r.stdout)
-    except json.JSONDecodeError:
-        raise Failure(2, f"{path}: swarm inspect printed no JSON") from None
-
-
-def load(runs, stem, np):
+def load(swarm, runs, stem, np):
+    """One rendezvous run, and its scenario as flown (`swarm inspect --json` of its scenario.txtpb,
+    so a redraw depends only on the runs, not on today's scenario files)."""
     run_dir = os.path.join(runs, stem)
     try:
-        run = load_run(run_dir, np)
+        run = load_run(run_dir, np, swarm)
     except RunError as e:
         raise Failure(2, f"{os.path.join(run_dir, e.name)}: {e.what}") from None
     if not run["summary"].get("converged"):
         raise Failure(1, f"{run_dir}: the run did not converge "
                          f"({run['summary'].get('end_reason', 'no reason given')})")
-    gain = 1.0
-    try:
-        with open(os.path.join(run_dir, run_dir_names.SCENARIO), encoding="utf-8") as f:
-            text = f.read()
-    except OSError as e:
-        raise Failure(2, f"{os.path.join(run_dir, run_dir_names.SCENARIO)}: {e.strerror}") from None
-    for line in text.splitlines():
-        if line.startswith("gain:"):
-            gain = float(line.split(":", 1)[1])
-    run["gain"] = gain
-    run["fixed"] = re.search(r"^\s*policy:\s*FIXED", text, re.M) is not None
+    if run["inspection"] is None:
+        path = os.path.join(run_dir, run_dir_names.SCENARIO)
+        raise Failure(2, f"{path}: "
+                         + ("empty" if os.path.exists(path) else os.strerror(errno.ENOENT)))
+    resolved = run["scenario"]
+    run["gain"] = float(resolved["gain"])
+    run["fixed"] = resolved["topology"]["policy"] == "FIXED"
+    run["consensus_hz"] = float(resolved["rates"]["consensus_hz"])
     run["dir"] = run_dir
     return run
 
@@ -195,10 +176,10 @@ def run(args, np, plt):
             fly(args.swarm, args.scenarios, args.runs, stem, args.time_scale, args.domain)
     runs, spectra = {}, {}
     for stem in RUNS:
-        runs[stem] = load(args.runs, stem, np)
+        runs[stem] = load(args.swarm, args.runs, stem, np)
         # Every agent's consensus state at full rate (running samples, time-sorted).
         runs[stem]["tracks_full"] = {tr.id: (tr.t_full, tr.q_full) for tr in runs[stem]["tracks"]}
-        spectra[stem] = inspect(args.swarm, runs[stem]["dir"])
+        spectra[stem] = runs[stem]["inspection"]
     man = os.path.join(args.runs, run_dir_names.MANEUVERS)
     single = read_maneuver(os.path.join(man, run_dir_names.SINGLE_AGENT), np)
     dyn = read_maneuver(os.path.join(man, run_dir_names.RENDEZVOUS_DYNAMICS), np)
@@ -253,7 +234,7 @@ def draw_all(args, np, plt, runs, spectra, single, dyn, out):
         fig.rendezvous_3d(f"fig{n3d}_{b}_3d.png", f"Paper {what}: four agents, each its own "
                           "process over DDS", runs[a], runs[b], la, lb, q)
         marks = ([(t, 0) for t, _, _ in
-                  proximity_additions(runs[b], TV_THRESHOLD_M, spectra[b]["edges"])]
+                  proximity_additions(runs[b], threshold_m(runs[b]), spectra[b]["edges"])]
                  if b == "time_varying" else ())
         fig.agent1_xyz(f"fig{nxyz}_{b}_agent1_xyz.png", f"Paper {what}: agent 1's x, y, z",
                        runs[a], runs[b], la, lb, q, marks)

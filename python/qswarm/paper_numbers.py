@@ -16,8 +16,17 @@ RUNS = {
     "rendezvous3": {"q": (5, 6, 0), "eig": (0, 3, 3)},
     "time_varying_quadcopter": {"q": (15.25, 10.25, 31), "eig": (0, 6.234, 19.385, 37.655)},
 }
-TV_THRESHOLD_M = 12.5  # scenarios/paper/time_varying.txtpb, topology threshold_m
 PAPER_FINAL_EIG = (0, 0.190, 0.196, 0.207)  # 2.7.2, "near the rendezvous agreement"
+
+
+def threshold_m(run):
+    """The proximity threshold of a run's scenario as flown (topology.threshold_m)."""
+    return float(run["scenario"]["topology"]["threshold_m"])
+
+
+def fmt_hz(runs):
+    """The runs' consensus rates for the text: "50", or "50 and 100" when they differ."""
+    return " and ".join(f"{hz:g}" for hz in sorted({run["consensus_hz"] for run in runs}))
 
 
 def laplacian_eigs(n, edges, np):

@@ -1,10 +1,11 @@
 """swarm plot: PNG figures of one recorded swarm run.
 
-Usage: python3 -m qswarm.plot RUN_DIR [--out DIR]   (the C++ `swarm plot` subcommand execs this)
+Usage: python3 -m qswarm.plot --swarm BIN RUN_DIR [--out DIR]
+(the C++ `swarm plot` subcommand execs this, with BIN itself)
 
 Reads the run directory written by the supervisor's Recorder (common/record/recorder.cpp):
-summary.json, telemetry.csv, graph.csv, events.csv and, if present, scenario.txtpb. Writes into
-DIR (default RUN_DIR/plots):
+summary.json, telemetry.csv, graph.csv, events.csv and, if present, scenario.txtpb (through
+`BIN inspect --json`). Writes into DIR (default RUN_DIR/plots):
 
   trajectories_3d.png   3D paths of the physical positions, start/end markers, the agreement point
                         (summary final_consensus_mean) and the initial average
@@ -519,6 +520,8 @@ def main(argv):
     parser = argparse.ArgumentParser(prog=PROG, description="Write PNG figures of a swarm run.")
     parser.add_argument("run_dir", metavar="RUN_DIR")
     parser.add_argument("--out", metavar="DIR", help="output directory (default RUN_DIR/plots)")
+    parser.add_argument("--swarm", metavar="BIN", required=True,
+                        help="the swarm binary, which reads the run's scenario (swarm inspect)")
     args = parser.parse_args(argv)  # exits 2 on a bad command line
     run_dir = args.run_dir
 
@@ -528,7 +531,7 @@ def main(argv):
     np, plt = libs
 
     try:
-        run = load_run(run_dir, np)
+        run = load_run(run_dir, np, args.swarm)
     except RunError as e:
         where = os.path.join(run_dir, e.name) if e.name else run_dir
         print(f"{PROG}: {where}: {e.what}", file=sys.stderr)

@@ -7,6 +7,7 @@ import math
 import os
 import re
 
+from qswarm import binaries
 from qswarm import run_dir as run_dir_names
 
 TELEMETRY_COLUMNS = ["stamp_s", "id", "seq", "phase", "mode", "qx", "qy", "qz", "px", "py", "pz",
@@ -209,25 +210,16 @@ def read_summary(run_dir):
     return s
 
 
-def read_scenario(run_dir):
-    """name, seed and convergence tolerance from scenario.txtpb (optional; None where absent)."""
-    text = _read_text(run_dir, run_dir_names.SCENARIO, required=False)
-    out = {"name": None, "seed": None, "tolerance_m": None}
-    if text is None:
-        return out
-    m = re.search(r'^\s*name:\s*"((?:[^"\\]|\\.)*)"', text, re.M)
-    if m:
-        out["name"] = m.group(1)
-    m = re.search(r"^\s*seed:\s*(\d+)", text, re.M)
-    if m:
-        out["seed"] = int(m.group(1))
-    m = re.search(r"tolerance_m:\s*([-+0-9.eE]+)", text)
-    if m:
-        try:
-            out["tolerance_m"] = float(m.group(1))
-        except ValueError:
-            pass
-    return out
+def read_scenario(run_dir, swarm):
+    """The scenario as run (scenario.txtpb, optional) read by `swarm inspect --json` (see
+    binaries.inspect): its inspection, or None when the run directory has no scenario."""
+    if _read_text(run_dir, run_dir_names.SCENARIO, required=False) is None:
+        return None
+    path = os.path.join(run_dir, run_dir_names.SCENARIO)
+    try:
+        return binaries.inspect(swarm, path)
+    except binaries.BinaryError as e:
+        raise RunError(run_dir_names.SCENARIO, e.what if e.where == path else str(e)) from None
 
 
 # ---------------------------------------------------------------------------------------------
@@ -331,19 +323,21 @@ def fault_windows(events, t_end):
     return windows, marks
 
 
-def load_run(run_dir, np):
+def load_run(run_dir, np, swarm):
+    """Every file of the run directory, checked; `swarm` is the binary that reads its scenario."""
     if not os.path.isdir(run_dir):
         raise RunError("", "no such run directory" if not os.path.exists(run_dir)
                        else "not a directory")
     summary = read_summary(run_dir)
-    scenario = read_scenario(run_dir)
+    inspection = read_scenario(run_dir, swarm)
+    scenario = inspection["resolved"] if inspection else {}
     tel = read_telemetry(run_dir, np)
     graph = read_graph(run_dir)
     events = read_events(run_dir)
     tracks, quad = build_tracks(tel, np)
-    name = summary.get("scenario") or scenario["name"] or os.path.basename(
+    name = summary.get("scenario") or scenario.get("name") or os.path.basename(
         os.path.normpath(run_dir))
-    seed = summary.get("seed", scenario["seed"])
+    seed = summary["seed"]
     mode = "quadcopter" if quad else (summary.get("mode") or "particle")
     if mode == "quadcopter" and not quad:
         quad = True
@@ -356,4 +350,6 @@ def load_run(run_dir, np):
     windows, marks = fault_windows(events, t_end)
     return {"summary": summary, "tracks": tracks, "graph": graph, "events": events,
             "quad": quad, "name": name, "seed": seed, "mode": mode, "t_end": t_end,
-            "windows": windows, "marks": marks, "tolerance_m": scenario["tolerance_m"]}
+            "windows": windows, "marks": marks,
+            "tolerance_m": scenario.get("convergence", {}).get("tolerance_m"),
+            "inspection": inspection, "scenario": scenario}

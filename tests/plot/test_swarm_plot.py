@@ -194,6 +194,8 @@ def make_run(root, name, n_agents=4, duration=4.0, quad=False, seed=7, rate_hz=5
             f.write(f"agents {{ id: {a} position {{ x: {p0[k, 0]:.3f} y: {p0[k, 1]:.3f} "
                     f"z: {p0[k, 2]:.3f} }} }}\n")
         f.write(f"mode: {'QUADCOPTER' if quad else 'PARTICLE'}\n")
+        if quad:  # as the summary says: its random starts may be closer than the safe distance
+            f.write("avoidance { enabled: false }\n")
         f.write("convergence { tolerance_m: 0.05 hold_s: 1 }\n")
         f.write(f"seed: {seed}\n")
     return d
@@ -323,6 +325,30 @@ class SwarmPlotTest(unittest.TestCase):
             f.write("\n".join(lines))
         self.expect_error(d, run_dir_names.TELEMETRY, ["line 21", "px", "1.2.3"])
 
+    def test_scenario_is_read_by_swarm_inspect(self):
+        # The scenario as run, with every default resolved: what the figures label and draw (the
+        # tolerance line) comes from `swarm inspect --json`, not from the text.
+        d = make_run(self.root, "resolved", n_agents=3, duration=1.0)
+        inspection = record.read_scenario(d, os.path.join(BIN, "swarm"))
+        self.assertEqual(inspection["resolved"]["name"], "resolved")
+        self.assertEqual(inspection["resolved"]["convergence"]["tolerance_m"], 0.05)
+        self.assertEqual(inspection["resolved"]["rates"]["consensus_hz"], 50)  # the default
+        with open(os.path.join(d, run_dir_names.SCENARIO), "a") as f:
+            f.write("# commented out: convergence { tolerance_m: 0.5 }\n")
+        inspection = record.read_scenario(d, os.path.join(BIN, "swarm"))
+        self.assertEqual(inspection["resolved"]["convergence"]["tolerance_m"], 0.05)
+
+    def test_bad_scenario_is_named(self):
+        d = make_run(self.root, "badscenario", n_agents=3, duration=1.0)
+        with open(os.path.join(d, run_dir_names.SCENARIO), "a") as f:
+            f.write("gain: -1\n")
+        self.expect_error(d, run_dir_names.SCENARIO, ["swarm inspect exited 2", "gain"])
+
+    def test_no_scenario_is_fine(self):
+        d = make_run(self.root, "noscenario", n_agents=3, faults=False)
+        os.remove(os.path.join(d, run_dir_names.SCENARIO))
+        self.check_figures(d, os.path.join(d, run_dir_names.PLOTS), COMMON, absent=QUAD)
+
     def test_header_column_missing(self):
         d = make_run(self.root, "nocolumn", n_agents=3, duration=1.0)
         p = os.path.join(d, run_dir_names.GRAPH)
@@ -358,5 +384,6 @@ if __name__ == "__main__":
         sys.exit(2)
     BIN = os.path.abspath(sys.argv.pop(1))
     sys.path.insert(0, os.path.join(BIN, "python"))  # the build's copy of python/qswarm
+    from qswarm import record
     from qswarm import run_dir as run_dir_names
     unittest.main(verbosity=2)
