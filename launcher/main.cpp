@@ -255,6 +255,7 @@ int paper(const PaperOptions& opt) {
     }
   }
   std::vector<std::string> args = {"--swarm",      (bin_dir() / "swarm").string(),
+                                   "--preview",    (bin_dir() / "swarm-preview").string(),
                                    "--scenarios",  opt.scenarios,
                                    "--runs",       runs,
                                    "--out",        opt.out,

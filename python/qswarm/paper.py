@@ -3,8 +3,8 @@
 Usage (the C++ `swarm paper` subcommand execs this after it has simulated the section 4 maneuvers
 into RUNS/maneuvers/):
 
-  python3 -m qswarm.paper --swarm BIN --scenarios DIR --runs RUNS --out OUT [--fly]
-                          [--time-scale K]
+  python3 -m qswarm.paper --swarm BIN --preview BIN --scenarios DIR --runs RUNS --out OUT
+                          [--fly] [--time-scale K] [--domain D]
 
 With --fly every rendezvous scenario of DIR is flown by the multi-process swarm (`BIN run`, one
 process per agent, DDS on loopback) into RUNS/<scenario>/; without it the runs already in RUNS are
@@ -25,7 +25,7 @@ import os
 import subprocess
 import sys
 
-from qswarm import plot
+from qswarm import binaries, plot
 from qswarm import run_dir as run_dir_names
 from qswarm.drawing import import_matplotlib
 from qswarm.paper_figures import Figures, draw_maneuver_figures
@@ -72,9 +72,10 @@ def fly(swarm, scenarios, runs, stem, time_scale, domain):
                       + r.stdout.strip())
 
 
-def load(swarm, runs, stem, np):
-    """One rendezvous run, and its scenario as flown (`swarm inspect --json` of its scenario.txtpb,
-    so a redraw depends only on the runs, not on today's scenario files)."""
+def load(swarm, preview, runs, stem, np):
+    """One rendezvous run, its scenario as flown (`swarm inspect --json` of its scenario.txtpb, so
+    a redraw depends only on the runs, not on today's scenario files) and, on a fixed graph, the
+    same scenario flown by the laws in lockstep (swarm-preview)."""
     run_dir = os.path.join(runs, stem)
     try:
         run = load_run(run_dir, np, swarm)
@@ -92,6 +93,13 @@ def load(swarm, runs, stem, np):
     run["fixed"] = resolved["topology"]["policy"] == "FIXED"
     run["consensus_hz"] = float(resolved["rates"]["consensus_hz"])
     run["dir"] = run_dir
+    run["lockstep"] = None
+    if run["fixed"]:
+        try:
+            run["lockstep"] = binaries.lockstep(
+                preview, os.path.join(run_dir, run_dir_names.SCENARIO), np)
+        except binaries.BinaryError as e:
+            raise Failure(2, str(e)) from None
     return run
 
 
@@ -149,6 +157,7 @@ def read_segments(path):
 def main(argv):
     ap = argparse.ArgumentParser(prog=PROG)
     ap.add_argument("--swarm", required=True)
+    ap.add_argument("--preview", required=True)
     ap.add_argument("--scenarios", required=True)
     ap.add_argument("--runs", required=True)
     ap.add_argument("--out", required=True)
@@ -176,7 +185,7 @@ def run(args, np, plt):
             fly(args.swarm, args.scenarios, args.runs, stem, args.time_scale, args.domain)
     runs, spectra = {}, {}
     for stem in RUNS:
-        runs[stem] = load(args.swarm, args.runs, stem, np)
+        runs[stem] = load(args.swarm, args.preview, args.runs, stem, np)
         # Every agent's consensus state at full rate (running samples, time-sorted).
         runs[stem]["tracks_full"] = {tr.id: (tr.t_full, tr.q_full) for tr in runs[stem]["tracks"]}
         spectra[stem] = runs[stem]["inspection"]

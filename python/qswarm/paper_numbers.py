@@ -1,5 +1,6 @@
-"""The paper's printed numbers, and ours from the runs: spectra, decay rates, the lockstep law,
-settling times, edge additions, distances from straight lines, and how the report prints them."""
+"""The paper's printed numbers, and ours from the runs: spectra, decay rates (of the swarm, and of
+the law in lockstep as swarm-preview flies it), settling times, edge additions, distances from
+straight lines, and how the report prints them."""
 
 import math
 
@@ -55,34 +56,18 @@ def decay_rate(run, np):
     return fitted_rate(t, np.array([r["disagreement_m"] for r in g]), np)
 
 
-LOCKSTEP_DT_S = 0.02  # the scenarios' consensus tick (50 Hz, the default)
-
-
-def lockstep(spectrum, gain, t_end, np):
-    """The same discrete law without DDS, for a fixed graph: every agent updates at every tick from
-    its neighbours' states of that tick, q <- q - dt k L q with the initial Laplacian. Returns the
-    time in paper units and the states (ticks x agents x 3)."""
-    L = np.array(spectrum["laplacian"], dtype=float)
-    q = np.array([a["position"] for a in spectrum["agents"]], dtype=float)
-    steps = int(round(t_end / LOCKSTEP_DT_S))
-    hist = np.empty((steps + 1,) + q.shape)
-    for k in range(steps + 1):
-        hist[k] = q
-        q = q - LOCKSTEP_DT_S * gain * (L @ q)
-    return np.arange(steps + 1) * LOCKSTEP_DT_S * gain, hist
-
-
-def lockstep_rate(spectrum, gain, t_end, np):
-    """The decay rate of the lockstep law, fitted as the swarm's is."""
-    t, hist = lockstep(spectrum, gain, t_end, np)
+def lockstep_rate(run, np):
+    """The decay rate of the law in lockstep (run["lockstep"], from swarm-preview), fitted as the
+    swarm's is, per paper time unit."""
+    t, _, hist = run["lockstep"]
     d = np.max(np.linalg.norm(hist - hist.mean(axis=1, keepdims=True), axis=2), axis=1)
-    return fitted_rate(t, d, np)
+    return fitted_rate(t * run["gain"], d, np)
 
 
-def lockstep_offset(spectrum, run, agent, np):
+def lockstep_offset(run, agent):
     """Largest distance of one agent's lockstep path from the straight segment to the average."""
-    _, hist = lockstep(spectrum, run["gain"], run["t_end"], np)
-    path = hist[:, agent - 1, :]
+    _, ids, hist = run["lockstep"]
+    path = hist[:, ids.index(agent), :]
     return max_offset_from_segment(path, path[0], hist[0].mean(axis=0))
 
 
@@ -162,8 +147,7 @@ def run_numbers(run, spectrum, paper, np):
         "eig": spectrum["eigenvalues"], "lambda2": spectrum["lambda2"],
         "t_conv": s.get("convergence_time_s", float("nan")), "gain": run["gain"],
         "rate": decay_rate(run, np),
-        "lockstep": (lockstep_rate(spectrum, run["gain"], run["t_end"], np)
-                     if run["fixed"] else float("nan")),
+        "lockstep": lockstep_rate(run, np) if run["lockstep"] else float("nan"),
         "settle1": settle_time(t1, p1, paper["q"], 0.01) * run["gain"],
         "start": first_moves(run)[1],
     }

@@ -13,6 +13,7 @@ def report(runs, spectra, single, dyn, np):
     # What the text says of the scenarios comes from the runs' scenarios as flown.
     hz = fmt_hz(runs[stem] for stem in RUNS)
     k_w = runs["weighted"]["gain"]
+    lambda2_w = RUNS["weighted"]["eig"][1]
     out = []
     w = out.append
     w("# The paper's figures, flown by quadswarm\n")
@@ -52,8 +53,9 @@ def report(runs, spectra, single, dyn, np):
       "its peak, per paper time unit; for a fixed graph the continuous theory says lambda_2. "
       "\"Measured\" is the swarm's (graph.csv); \"lockstep\" is the same discrete law at the same "
       f"{hz} Hz tick computed without DDS, every agent updating at every tick from its neighbours' "
-      "states of that tick, so the difference between the two is what the processes' timing "
-      "costs. \"Converged "
+      "states of that tick (`swarm-preview SCENARIO --law laplacian`, the C++ oracle "
+      "`LockstepLaws`; in lockstep the laplacian and edge-flow laws coincide), so the difference "
+      "between the two is what the processes' timing costs. \"Converged "
       "after\" is when every agent stayed within the scenario's tolerance of the mean (0.005 m; "
       "0.008 m time-varying; 0.05 m quadcopters) for the hold time; the quadcopters, which "
       "collision avoidance keeps about 1.3 m apart around the point, count instead once they hold "
@@ -93,7 +95,7 @@ def report(runs, spectra, single, dyn, np):
       f"2 off its line and the next ones pull it back: its largest distance from the line is "
       f"{off2 * 100:.0f} cm, while the same law in lockstep (every agent at every tick from that "
       f"tick's states) keeps it within "
-      f"{lockstep_offset(spectra['unweighted'], runs['unweighted'], 2, np) * 100:.1f} cm. The "
+      f"{lockstep_offset(runs['unweighted'], 2) * 100:.1f} cm. The "
       f"wobble changes from flight to flight; the meeting point does not.\n")
 
     # Figures 3 and 4.
@@ -116,15 +118,20 @@ def report(runs, spectra, single, dyn, np):
       f"text says agent 2 no longer moves on a straight line with weights: its largest distance "
       f"from the straight segment is {offw * 100:.0f} cm weighted against {offu * 100:.1f} cm "
       f"unweighted.\n")
+    slowed = (": a tick moves along each edge by (w/W)(1 - exp(-k W dt)) of the difference, W "
+              "the larger total weight of its ends, which falls short of the ODE's k w dt when "
+              "k W dt is not small ([docs/agreement-law.md](../agreement-law.md))")
     w(f"*Why ours differs.* The paper's weighted modes are as fast as 62.6 per time unit; a "
       f"{runs['weighted']['consensus_hz']:g} Hz tick resolves them only with the time unit "
       f"stretched to {1 / k_w:g} s (gain {k_w:g}). The same "
-      f"discrete law in lockstep decays at {b['lockstep']:.2f} per unit over the same window "
-      f"(the discretisation makes it a little faster than 13.06); the swarm's "
-      f"{b['rate']:.2f} is slower than that: its processes update from neighbour samples that "
-      f"can be a tick old and start when they first hear a neighbour, and the fast weighted "
-      f"modes feel that most. Unweighted, the lockstep and measured rates are "
-      f"{a['lockstep']:.3f} and {a['rate']:.3f}.\n")
+      f"discrete law in lockstep decays at {b['lockstep']:.2f} per unit over the same window, "
+      f"{'slower' if b['lockstep'] < lambda2_w else 'faster'} than {lambda2_w:.2f}"
+      f"{slowed if b['lockstep'] < lambda2_w else ''}. The swarm's {b['rate']:.2f} is "
+      f"{abs(1 - b['rate'] / b['lockstep']) * 100:.0f} % "
+      f"{'slower' if b['rate'] < b['lockstep'] else 'faster'} than that: its processes update "
+      f"from neighbour samples that can be a tick old and start when they first hear a "
+      f"neighbour, and the fast weighted modes feel that most. Unweighted, the lockstep and "
+      f"measured rates are {a['lockstep']:.3f} and {a['rate']:.3f}.\n")
 
     # Figures 5 and 6.
     a, b = N["unweighted"], N["time_varying"]
@@ -253,8 +260,7 @@ def report(runs, spectra, single, dyn, np):
       "different parametrisations (figure 12): the point agents move at once and fastest at the "
       "start; the drones first turn in place for 4 s and then accelerate and brake smoothly.\n")
     starts = first_moves(runs["rendezvous3"])
-    lock = max(lockstep_offset(spectra["rendezvous3"], runs["rendezvous3"], k, np)
-               for k in sorted(parts))
+    lock = max(lockstep_offset(runs["rendezvous3"], k) for k in sorted(parts))
     w(f"*Why ours differs.* The paper's theorem makes the point agents' paths straight lines on "
       f"K_3, and the same discrete law in lockstep keeps them straight (largest distance from the "
       f"lines {lock * 100:.1f} cm). Ours bend by the centimetres in the table. The three processes "

@@ -136,12 +136,14 @@ class SwarmPaperTest(unittest.TestCase):
             self.assertEqual(len(ours), len(eig), stem)
             for a, b in zip(ours, eig):
                 self.assertAlmostEqual(a, b, delta=1e-3, msg=stem)
-        # Measured decay rates of the fixed unweighted graphs are near lambda_2, and each fixed
-        # graph's lockstep rate (same law without DDS) is within 5 % of lambda_2 too.
-        for stem, lam in (("unweighted", 1.0), ("unweighted_l2", 0.586), ("rendezvous3", 3.0),
-                          ("weighted", 13.06)):
+        # Measured decay rates of the fixed graphs are near lambda_2, and so is each one's lockstep
+        # rate (the same law without DDS, from swarm-preview): within 5 % unweighted, within 10 %
+        # weighted, whose fast modes a 50 Hz tick slows (a tick moves an edge by
+        # (w/W)(1 - exp(-k W dt)), short of k w dt: 12.18 against 13.06 here).
+        for stem, lam, tol in (("unweighted", 1.0, 0.05), ("unweighted_l2", 0.586, 0.05),
+                               ("rendezvous3", 3.0, 0.05), ("weighted", 13.06, 0.10)):
             measured, lock = (float(x) for x in rows[stem][7].split("/"))
-            self.assertAlmostEqual(lock, lam, delta=0.05 * lam, msg=stem)
+            self.assertAlmostEqual(lock, lam, delta=tol * lam, msg=stem)
             self.assertGreater(measured, 0.5 * lam, stem)
         # The weighted network converges faster, by a ratio of decay rates near lambda_2's 13.06.
         m = re.search(r"measured decay rates ([0-9.]+) against ([0-9.]+)", text)
