@@ -59,10 +59,10 @@ Flight plan_flight(const RunConfig& rc) {
   const std::string& about = rc.resolved.description();
   f.title = about.empty() ? rc.name : rc.name + ": " + about;
   for (const AgentSpec& a : rc.agents) f.lockstep.agents.push_back({a.id, a.q0()});
-  f.lockstep.law = rc.law;
-  f.lockstep.consensus_rate_hz = rc.consensus_hz;
-  f.duration_s = rc.duration_s;
-  f.tolerance_m = rc.tolerance_m;
+  f.lockstep.law = rc.agent.law;
+  f.lockstep.consensus_rate_hz = rc.agent.consensus_hz;
+  f.duration_s = rc.judge.duration_s;
+  f.tolerance_m = rc.judge.tolerance_m;
   return f;
 }
 
