@@ -6,6 +6,8 @@
 #include <google/protobuf/util/json_util.h>
 
 #include <fstream>
+#include <regex>
+#include <set>
 #include <sstream>
 
 #include "common/scenario/proto_util.hpp"
@@ -90,6 +92,28 @@ TEST_F(RunDirs, ACrashTheSupervisorCouldNotSeeUnmakesConvergedInTheSummary) {
   ASSERT_TRUE(google::protobuf::util::JsonStringToMessage(text.str(), &back).ok());
   EXPECT_FALSE(back.converged());
   EXPECT_EQ(back.end_reason(), "converged; agent 3 killed by signal Aborted at teardown");
+}
+
+// The figure scripts spell the run directory's files in python/qswarm/run_dir.py: every name there
+// must be one RunDir writes (or lists), so the two cannot drift apart.
+TEST(RunDirFiles, ThePythonSpellsEveryFileAsRunDirDoes) {
+  std::ifstream in(std::string(QSWARM_SOURCE_DIR) + "/python/qswarm/run_dir.py");
+  ASSERT_TRUE(in) << "cannot read python/qswarm/run_dir.py";
+  std::set<std::string> known;
+  for (const RunDir::File& f : RunDir::files()) known.insert(f.name);
+  const std::regex constant(R"re(^[A-Z_]+ = "([^"]+)")re");
+  std::string line;
+  bool in_block = false;
+  int checked = 0;
+  std::smatch m;
+  while (std::getline(in, line)) {
+    if (line == "# One run directory.") in_block = true;
+    if (in_block && line.empty()) break;
+    if (!in_block || !std::regex_search(line, m, constant)) continue;
+    EXPECT_TRUE(known.count(m[1])) << m[1] << " is not a file RunDir knows";
+    ++checked;
+  }
+  EXPECT_GE(checked, 6) << "python/qswarm/run_dir.py's block of run directory names not found";
 }
 
 }  // namespace
