@@ -78,7 +78,7 @@ for N in "$@"; do
     podman logs "$c" >>"$work/agents.log" 2>&1 || true
   done
   conv=$(podman logs "$sup" 2>&1 | sed -n 's/^converged at t = \([0-9.]*\) s.*/\1/p')
-  cp "$(find "$work/runs" -name summary.json | head -1)" "$work/summary.json" 2>/dev/null || true
+  run_dir=$(find "$work/runs" -mindepth 1 -maxdepth 1 -type d | head -1)
   /usr/bin/python3 - "$work" "$N" "$code" "${conv:--}" <<'PY'
 import re, statistics, sys
 work, n, code, conv = sys.argv[1], int(sys.argv[2]), sys.argv[3], sys.argv[4]
@@ -100,7 +100,8 @@ mx = lambda v: f"{max(v):.2f}" if v else "-"
 print(f"{n:<4} {med(claim) + '/' + mx(claim):<18} {med(disc) + '/' + mx(disc):<18} "
       f"{med(cpu):<10} {med(mem):<10} {med(rss):<10} {code:<6} {conv}")
 PY
-  /usr/bin/python3 -c "import json,sys; s=json.load(open(sys.argv[1])); print('     end:', s.get('end_reason'), '| missing', s.get('missing_agents'))" "$work/summary.json" 2>/dev/null || true
+  [[ -n $run_dir ]] && PYTHONPATH="$SRC/python" /usr/bin/python3 -m qswarm.report "$run_dir" end_reason \
+    missing_agents 2>/dev/null | awk -F'\t' '{ print "     end:", $1, "| missing", $2 }' || true
   (trap - EXIT; QSWARM_AGENTS="$N" QSWARM_RUNS="$work/runs" "${compose[@]}" down >/dev/null 2>&1 || true)
   podman network rm -f "${project}_swarm" >/dev/null 2>&1 || true
   rm -rf "$work"

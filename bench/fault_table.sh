@@ -10,6 +10,8 @@ BUILD=${BUILD_DIR:-build}
 SEEDS=${1:-3}
 OUT=$BUILD/fault-table
 mkdir -p "$OUT"
+# A run's numbers, read by the Python package (no file name or JSON spelled here).
+report() { PYTHONPATH=python /usr/bin/python3 -m qswarm.report "$@"; }
 median() { sort -g | awk '{a[NR]=$1} END {print (NR % 2) ? a[(NR+1)/2] : (a[NR/2] + a[NR/2+1]) / 2}'; }
 printf "| loss | law | agreed-value drift [m] (median) | relative error | convergence time [s] (median) |\n"
 printf "| --- | --- | --- | --- | --- |\n"
@@ -22,9 +24,9 @@ for loss in 0 0.1 0.3 0.5; do
       rm -rf "$dir"
       "$BUILD"/bin/swarm run scenarios/faults_six.txtpb --law "$law" --loss "$loss" --seed "$seed" \
         --time-scale 4 --domain $((domain++)) --out "$dir" --quiet >/dev/null 2>&1 || true
-      drifts+=("$(grep -o '"average_drift_m": [0-9.e+-]*' "$dir/summary.json" | awk '{print $2}')")
-      rels+=("$(grep -o '"average_relative_error": [0-9.e+-]*' "$dir/summary.json" | awk '{print $2}')")
-      times+=("$(grep -o '"convergence_time_s": [0-9.e+-]*' "$dir/summary.json" | awk '{print $2}')")
+      read -r drift rel t < <(report "$dir" average_drift_m average_relative_error \
+        convergence_time_s)
+      drifts+=("$drift") rels+=("$rel") times+=("$t")
     done
     d=$(printf "%s\n" "${drifts[@]}" | median)
     r=$(printf "%s\n" "${rels[@]}" | median)

@@ -16,9 +16,10 @@ mkdir -p "$(dirname "$OUT")"
 # Time scale 2 keeps 64 processes within two cores; the record is in simulated time either way.
 $BIN/swarm run bench/scale.txtpb --agents "$N" --seed 1 --duration "$D" --time-scale 2 \
   --out "$OUT" --domain 149 --quiet >/dev/null 2>&1 || true
-[[ -f $OUT/summary.json ]] || { echo "plot_bench: the run wrote no summary" >&2; exit 1; }
-rows=$(($(wc -l <"$OUT/telemetry.csv") - 1))
-size=$(du -m "$OUT/telemetry.csv" | cut -f1)
+# The run's numbers, read by the Python package (no file name spelled here).
+report() { PYTHONPATH=python /usr/bin/python3 -m qswarm.report "$OUT" "$@"; }
+rows=$(report telemetry.rows) || { echo "plot_bench: the run wrote no summary" >&2; exit 1; }
+size=$(du -m --total "$OUT" | tail -1 | cut -f1)
 times=()
 for _ in $(seq "$REPEAT"); do
   rm -rf "$OUT/plots"
@@ -28,6 +29,6 @@ for _ in $(seq "$REPEAT"); do
   times+=("$(awk -v ns=$((end - start)) 'BEGIN { printf "%.2f", ns / 1e9 }')")
 done
 median=$(printf "%s\n" "${times[@]}" | sort -n | awk '{ a[NR] = $1 } END { print a[int((NR + 1) / 2)] }')
-echo "| agents | simulated s | telemetry rows | telemetry.csv [MB] | figures | swarm plot median [s] (of $REPEAT) | all runs [s] |"
+echo "| agents | simulated s | telemetry rows | run directory [MB] | figures | swarm plot median [s] (of $REPEAT) | all runs [s] |"
 echo "| --- | --- | --- | --- | --- | --- | --- |"
 echo "| $N | $D | $rows | $size | $(ls "$OUT/plots" | wc -l) | $median | ${times[*]} |"

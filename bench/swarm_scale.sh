@@ -22,18 +22,10 @@ for mode in PARTICLE QUADCOPTER; do
     sed "s/^mode: PARTICLE/mode: $mode/" bench/scale.txtpb > "$scen"
     $BIN/swarm run "$scen" --agents "$n" --seed 1 --duration 30 --time-scale 1 --out "$dir" \
       --domain $((domain++)) --quiet >/dev/null 2>&1 || true
-    awk -v n="$n" -v mode="$mode" '
-      FNR == 1 { files++ }
-      $1 == "cpu_s" { cpu += $2 } $1 == "wall_s" { wall += $2 } $1 == "steps" { steps += $2 }
-      $1 == "overruns" { over += $2 } $1 == "max_rss_kb" { rss += $2 }
-      $1 == "discovery_s" && $2 > disc { disc = $2 }
-      END {
-        if (files == 0) { printf "| %d | %s | (no stats) |\n", n, mode; exit }
-        printf "%d %s %.1f %.3f %.2f %.1f %.1f\n", n, mode, 100 * cpu / wall, (steps ? 100 * over / steps : 0), disc, rss / files / 1024, wall / files
-      }' "$dir"/agent-*.stats > "$dir/agg.txt"
-    read -r _ _ cpu over disc rss wall < "$dir/agg.txt"
-    p50=$(grep -o '"age_p50_ms": [0-9.e+-]*' "$dir/summary.json" | awk '{printf "%.2f", $2}')
-    p99=$(grep -o '"age_p99_ms": [0-9.e+-]*' "$dir/summary.json" | awk '{printf "%.2f", $2}')
+    read -r cpu over disc rss wall p50 p99 < <(PYTHONPATH=python /usr/bin/python3 -m qswarm.report \
+      "$dir" cpu_per_agent_pct late_ticks_pct stats.discovery_s.max stats.max_rss_kb.mean \
+      stats.wall_s.mean messages.age_p50_ms messages.age_p99_ms) || { echo "| $n | ${mode,,} | (no record) |"; continue; }
+    rss=$(awk -v k="$rss" 'BEGIN { printf "%.1f", k / 1024 }')
     printf "| %d | %s | %s | %s %% | %s / %s | %s | %s | %s |\n" "$n" "${mode,,}" "$cpu" "$over" "$p50" "$p99" "$disc" "$rss" "$wall"
   done
 done

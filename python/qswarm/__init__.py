@@ -4,6 +4,7 @@
 PYTHONPATH at the copy of this package the build keeps beside the `swarm` binary (bin/python/).
 
   run_dir        the run directory's file names
+  report         one run's numbers for scripts (python3 -m qswarm.report RUN_DIR FIELD...)
   record         reading and checking one run directory
   binaries       what the C++ binaries answer: a scenario as run (`swarm inspect --json`) and its
                  agreement law in lockstep (swarm-preview); nothing here restates either

@@ -88,10 +88,11 @@ check() { if eval "$2"; then echo "ok: $1"; else echo "FAIL: $1"; fail=1; fi; }
 check "a replica given a flown id exits 2 (got $dup_code)" '[[ $dup_code -eq 2 ]]'
 check "its log says why" 'grep -q "agent id 2 is already held by another replica" "$WORK/dup.log"'
 check "the supervisor exits 0 (converged, complete record)" '[[ $code -eq 0 ]]'
-/usr/bin/python3 - "$run" "$N" "$CUT_AGENT" <<'PY' || fail=1
-import csv, json, sys
+PYTHONPATH="$SRC/python" /usr/bin/python3 - "$run" "$N" "$CUT_AGENT" <<'PY' || fail=1
+import csv, json, os, sys
+from qswarm import run_dir as names
 run, n, cut = sys.argv[1], int(sys.argv[2]), int(sys.argv[3])
-s = json.load(open(f"{run}/summary.json"))
+s = json.load(open(os.path.join(run, names.SUMMARY)))
 bad = []
 def check(name, ok, got):
     print(("ok: " if ok else "FAIL: ") + f"{name} ({got})")
@@ -102,11 +103,11 @@ check(f"all {n} agents in the summary", ids == list(range(1, n + 1)), ids)
 check("no agent missing", not s.get("missing_agents"), s.get("missing_agents"))
 err = s.get("average_relative_error", 1.0)
 check("agreed value = initial average to < 1e-9", err < 1e-9, err)
-events = list(csv.DictReader(open(f"{run}/events.csv")))
+events = list(csv.DictReader(open(os.path.join(run, names.EVENTS))))
 kinds = [e["kind"] for e in events if e["agent"] == str(cut)]
 check(f"agent {cut}'s cut in events.csv (depart, then rejoin)",
       "depart" in kinds and "rejoin" in kinds[kinds.index("depart"):], kinds)
-rows = list(csv.DictReader(open(f"{run}/graph.csv")))
+rows = list(csv.DictReader(open(os.path.join(run, names.GRAPH))))
 full = n * (n - 1) // 2
 edges = [int(r["edges"]) for r in rows]
 edges = edges[edges.index(full):] if full in edges else []  # from the first complete graph on
