@@ -1,31 +1,60 @@
 #!/usr/bin/env bash
-# Multi-process scaling benchmark: N agent processes + supervisor over DDS on loopback, in real
-# time (time scale 1) for 30 s each. Reports per-agent CPU, physics-loop overruns, sample age
-# p50/p99 at the supervisor, and discovery time (until every agent has heard every peer).
-# Usage: bench/swarm_scale.sh [N ...]   (default: 8 16 32 64)
+# Multi-process scaling benchmark: N agent processes and the supervisor over DDS on loopback, each
+# size and scenario one `swarm run`. Two scenarios:
+#   all    N seeded random point agents on one sticky-proximity graph that soon links everyone
+#          (bench/scale.txtpb, never converged, so it flies its whole duration): all-to-all;
+#   range  N point agents from a random cube into a lattice over 4.5 m radio links
+#          (bench/formation_range.txtpb, the cube scaled with N so the density stays that of
+#          scenarios/formation_lattice64.txtpb): each agent has about a dozen neighbours.
+# Reports per run: CPU per agent, late ticks, sample age p50/p99 at the supervisor, samples the
+# agents accepted per second, agent CPU per accepted sample, discovery time (until the last agent's
+# barrier released), RSS per agent, and how the run ended.
+# Usage: bench/swarm_scale.sh [N ...]        (default: 8 32 64 128)
+# Environment: SCENARIOS="all range" DURATION=30 TIME_SCALE=1 RATE_HZ=50 BUILD_DIR=build
 set -euo pipefail
 cd "$(dirname "$0")/.."
-BIN=build/bin
-[[ -x $BIN/swarm ]] || tools/setup.sh build >/dev/null
+BUILD=${BUILD_DIR:-build}
+[[ -x $BUILD/bin/swarm ]] || tools/setup.sh "$BUILD" >/dev/null
 SIZES=("$@")
-((${#SIZES[@]})) || SIZES=(8 16 32 64)
-OUT=build/bench-runs
+((${#SIZES[@]})) || SIZES=(8 32 64 128)
+read -ra KINDS <<<"${SCENARIOS:-all range}"
+DURATION=${DURATION:-30}
+TIME_SCALE=${TIME_SCALE:-1}
+RATE_HZ=${RATE_HZ:-50}
+OUT=$BUILD/bench-runs
 mkdir -p "$OUT"
-printf "| agents | mode | CPU per agent [%% of a core] | late ticks | sample age p50 / p99 [ms] | discovery max [s] | RSS per agent [MB] | converged-free run [s] |\n"
-printf "| --- | --- | --- | --- | --- | --- | --- | --- |\n"
-domain=150
-for mode in PARTICLE QUADCOPTER; do
+report() { PYTHONPATH=python /usr/bin/python3 -m qswarm.report "$@"; }
+printf "| agents | scenario | consensus [Hz] | time scale | CPU per agent [%% of a core] | late ticks [%%] | sample age p50 / p99 [ms] | accepted samples [1/s] | CPU per accepted sample [us] | discovery max [s] | RSS per agent [MB] | end |\n"
+printf "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n"
+domain=${DOMAIN:-40}
+for kind in "${KINDS[@]}"; do
   for n in "${SIZES[@]}"; do
-    dir="$OUT/scale-$mode-$n"
+    dir="$OUT/scale-$kind-$n"
     rm -rf "$dir"
-    scen="$OUT/scale-$mode.txtpb"
-    sed "s/^mode: PARTICLE/mode: $mode/" bench/scale.txtpb > "$scen"
-    $BIN/swarm run "$scen" --agents "$n" --seed 1 --duration 30 --time-scale 1 --out "$dir" \
-      --domain $((domain++)) --quiet >/dev/null 2>&1 || true
-    read -r cpu over disc rss wall p50 p99 < <(PYTHONPATH=python /usr/bin/python3 -m qswarm.report \
-      "$dir" cpu_per_agent_pct late_ticks_pct stats.discovery_s.max stats.max_rss_kb.mean \
-      stats.wall_s.mean messages.age_p50_ms messages.age_p99_ms) || { echo "| $n | ${mode,,} | (no record) |"; continue; }
-    rss=$(awk -v k="$rss" 'BEGIN { printf "%.1f", k / 1024 }')
-    printf "| %d | %s | %s | %s %% | %s / %s | %s | %s | %s |\n" "$n" "${mode,,}" "$cpu" "$over" "$p50" "$p99" "$disc" "$rss" "$wall"
+    scen="$OUT/scale-$kind-$n.txtpb"
+    case $kind in
+      all) sed "s/consensus_hz: 50/consensus_hz: $RATE_HZ/" bench/scale.txtpb >"$scen" ;;
+      range)
+        box=$(awk -v n="$n" 'BEGIN { printf "%.2f", 10 * (n / 64) ^ (1 / 3) }')
+        sed -e "s/box_m: 10/box_m: $box/" -e "s/consensus_hz: 50/consensus_hz: $RATE_HZ/" \
+          -e "s/physics_hz: 50/physics_hz: $RATE_HZ/" bench/formation_range.txtpb >"$scen"
+        ;;
+      *) echo "swarm_scale: unknown scenario $kind (all, range)" >&2; exit 2 ;;
+    esac
+    "$BUILD"/bin/swarm run "$scen" --agents "$n" --seed 3 --duration "$DURATION" \
+      --time-scale "$TIME_SCALE" --out "$dir" --domain $((domain++)) --quiet >"$dir.log" 2>&1 || true
+    if ! row=$(report "$dir" cpu_per_agent_pct late_ticks_pct messages.age_p50_ms \
+      messages.age_p99_ms delivered_per_s cpu_us_per_delivered stats.discovery_s.max \
+      stats.max_rss_kb.median end_reason 2>/dev/null); then
+      printf "| %d | %s | %s | %s | (no record: %s) |\n" "$n" "$kind" "$RATE_HZ" "$TIME_SCALE" \
+        "$(tail -1 "$dir.log")"
+      continue
+    fi
+    IFS=$'\t' read -r cpu late p50 p99 per_s cpu_per disc rss end <<<"$row"
+    awk -v n="$n" -v k="$kind" -v hz="$RATE_HZ" -v ts="$TIME_SCALE" -v cpu="$cpu" -v late="$late" \
+      -v p50="$p50" -v p99="$p99" -v s="$per_s" -v cs="$cpu_per" -v d="$disc" -v rss="$rss" \
+      -v end="$end" 'BEGIN {
+        printf "| %d | %s | %s | %s | %.2f | %.2f | %.1f / %.1f | %.0f | %.1f | %.2f | %.1f | %s |\n",
+          n, k, hz, ts, cpu, late, p50, p99, s, cs, d, rss / 1024, end }'
   done
 done
