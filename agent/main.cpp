@@ -49,13 +49,15 @@ int main(int argc, char** argv) {
   try {
     SteadyClock clock;
     DdsOptions dopt = dds_options(*rc, "swarm-agent", f.process);
-    dopt.id_claims = claiming;
-    DdsBus bus(dopt, clock);
+    DdsParticipant participant(dopt.participant);
+    // A replica claims its id before it reads or writes any state: the state reader then leaves
+    // out its own samples from the start.
+    std::optional<DdsClaimBus> claims;
     std::optional<IdClaimRunner> claim;
     if (claiming) {
       const std::set<AgentId> ids = rc->ids();
-      claim.emplace(bus.claim_bus(), std::vector<AgentId>(ids.begin(), ids.end()),
-                    rc->transport.run_id, id,
+      claims.emplace(participant, rc->transport.run_id, claim_capacity(rc->agents.size()));
+      claim.emplace(*claims, std::vector<AgentId>(ids.begin(), ids.end()), rc->transport.run_id, id,
                     IdClaimer::Config::for_swarm(rc->agents.size(), f.claim_timeout_s),
                     random_nonce(), clock);
       std::string why;
@@ -68,6 +70,8 @@ int main(int argc, char** argv) {
       }
       id = *taken;
     }
+    dopt.state.self = id;
+    DdsStateBus bus(participant, dopt.state, clock);
     const std::string name = "agent-" + std::to_string(id);
     const RunDir dir(f.run_dir);
     log = make_process_logger(name, dir.empty() ? "" : dir.agent_log(id).string());

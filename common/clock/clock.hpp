@@ -21,6 +21,9 @@ class Clock {
   virtual std::int64_t wall_ns() const = 0;
   // Returns at or after t_s (a ManualClock jumps there).
   virtual void sleep_until(double t_s) = 0;
+  // Where this clock's zero lies on a time line every process of the host shares (the monotonic
+  // clock's): processes that align events to multiples of a period on that line act together.
+  virtual double shared_origin_s() const { return 0.0; }
 };
 
 // The process's clock: std::chrono::steady_clock, seconds since construction; the wall time is
@@ -39,6 +42,9 @@ class SteadyClock final : public Clock {
     std::this_thread::sleep_until(t0_ +
                                   std::chrono::duration_cast<std::chrono::steady_clock::duration>(
                                       std::chrono::duration<double>(t_s)));
+  }
+  double shared_origin_s() const override {
+    return std::chrono::duration<double>(t0_.time_since_epoch()).count();
   }
 
  private:

@@ -12,28 +12,41 @@ namespace dds = eprosima::fastdds::dds;
 
 namespace {
 
+std::uint64_t read_uint(const unsigned char* d, std::size_t at, std::size_t bytes, bool little) {
+  std::uint64_t v = 0;
+  for (std::size_t k = 0; k < bytes; ++k) {
+    const std::size_t i = little ? at + bytes - 1 - k : at + k;
+    v = v << 8 | d[i];
+  }
+  return v;
+}
+
 class RosterFilter final : public dds::IContentFilter {
  public:
-  RosterFilter(std::vector<std::pair<AgentId, AgentId>> ranges, StrangerTally& tally)
-      : ranges_(std::move(ranges)), tally_(tally) {}
+  RosterFilter(RosterExpression expr, StrangerTally& tally)
+      : expr_(std::move(expr)), tally_(tally) {}
   bool evaluate(const SerializedPayload& payload, const FilterSampleInfo&,
                 const GUID_t&) const override {
-    if (payload.data == nullptr || payload.length < 8) return false;
+    if (payload.data == nullptr || payload.length <= kRosterPhaseOffset) return false;
     const unsigned char* d = payload.data;
     const bool little = (d[1] & 1) != 0;  // CDR_LE / PL_CDR_LE
-    const AgentId id =
-        little ? AgentId{d[4]} | AgentId{d[5]} << 8 | AgentId{d[6]} << 16 | AgentId{d[7]} << 24
-               : AgentId{d[7]} | AgentId{d[6]} << 8 | AgentId{d[5]} << 16 | AgentId{d[4]} << 24;
-    for (const auto& [lo, hi] : ranges_)
-      if (id >= lo && id <= hi) return true;
-    std::lock_guard<std::mutex> lock(tally_.mu);
-    ++tally_.samples;
-    if (tally_.ids.size() < StrangerTally::kMaxIds) tally_.ids.insert(id);
-    return false;
+    const auto id = static_cast<AgentId>(read_uint(d, kRosterIdOffset, 4, little));
+    bool known = false;
+    for (const auto& [lo, hi] : expr_.ranges) known |= id >= lo && id <= hi;
+    if (!known) {
+      std::lock_guard<std::mutex> lock(tally_.mu);
+      ++tally_.samples;
+      if (tally_.ids.size() < StrangerTally::kMaxIds) tally_.ids.insert(id);
+      return false;
+    }
+    if (id == expr_.self) return false;
+    if (expr_.every > 1 && d[kRosterPhaseOffset] == 1 /* running */)
+      return read_uint(d, kRosterSeqOffset, 8, little) % expr_.every == 0;
+    return true;
   }
 
  private:
-  std::vector<std::pair<AgentId, AgentId>> ranges_;
+  RosterExpression expr_;
   StrangerTally& tally_;
 };
 
@@ -42,10 +55,12 @@ class RosterFilter final : public dds::IContentFilter {
 RosterFilterFactory::ReturnCode_t RosterFilterFactory::create_content_filter(
     const char*, const char*, const dds::TopicDataType*, const char* expression,
     const ParameterSeq&, dds::IContentFilter*& filter) {
-  auto ranges = parse_roster_filter(expression ? expression : "");
-  if (!ranges) return ReturnCode_t::RETCODE_BAD_PARAMETER;
-  delete static_cast<RosterFilter*>(filter);  // an expression update replaces the previous one
-  filter = new RosterFilter(std::move(*ranges), tally);
+  auto expr = parse_roster_filter(expression ? expression : "");
+  if (!expr) return ReturnCode_t::RETCODE_BAD_PARAMETER;
+  // Made once, with the reader's topic: the project never changes a filter's expression (Fast DDS
+  // would swap the filter while its receive threads evaluate it).
+  if (filter != nullptr) return ReturnCode_t::RETCODE_UNSUPPORTED;
+  filter = new RosterFilter(std::move(*expr), tally);
   return ReturnCode_t::RETCODE_OK;
 }
 
@@ -55,7 +70,7 @@ RosterFilterFactory::ReturnCode_t RosterFilterFactory::delete_content_filter(
   return ReturnCode_t::RETCODE_OK;
 }
 
-std::string roster_filter(std::vector<AgentId> roster) {
+std::string roster_filter(std::vector<AgentId> roster, AgentId self, std::uint32_t every) {
   std::sort(roster.begin(), roster.end());
   roster.erase(std::unique(roster.begin(), roster.end()), roster.end());
   std::string expr;
@@ -67,39 +82,66 @@ std::string roster_filter(std::vector<AgentId> roster) {
     if (j > i) expr += "-" + std::to_string(roster[j]);
     i = j + 1;
   }
+  if (self != 0) expr += ";self=" + std::to_string(self);
+  if (every > 1) expr += ";every=" + std::to_string(every);
   return expr;
 }
 
-std::optional<std::vector<std::pair<AgentId, AgentId>>> parse_roster_filter(
-    const std::string& expr) {
-  std::vector<std::pair<AgentId, AgentId>> ranges;
+std::optional<RosterExpression> parse_roster_filter(const std::string& text) {
+  RosterExpression out;
+  const std::size_t semi = text.find(';');
+  const std::string expr = text.substr(0, semi);
   std::size_t pos = 0;
-  const auto number = [&](AgentId& out) {
-    std::size_t end = pos;
-    while (end < expr.size() && end - pos < 10 &&
-           std::isdigit(static_cast<unsigned char>(expr[end])))
+  const auto number = [](const std::string& s, std::size_t& at, std::uint64_t max,
+                         std::uint64_t& out_v) {
+    std::size_t end = at;
+    while (end < s.size() && end - at < 10 && std::isdigit(static_cast<unsigned char>(s[end])))
       ++end;
-    if (end == pos) return false;
-    const unsigned long long v = std::stoull(expr.substr(pos, end - pos));
-    if (v > std::numeric_limits<AgentId>::max()) return false;
-    out = static_cast<AgentId>(v);
-    pos = end;
+    if (end == at) return false;
+    const unsigned long long v = std::stoull(s.substr(at, end - at));
+    if (v > max) return false;
+    out_v = v;
+    at = end;
     return true;
   };
+  constexpr std::uint64_t kMaxId = std::numeric_limits<AgentId>::max();
   while (pos < expr.size()) {
-    AgentId lo = 0;
-    if (!number(lo)) return std::nullopt;
-    AgentId hi = lo;
+    std::uint64_t lo = 0;
+    if (!number(expr, pos, kMaxId, lo)) return std::nullopt;
+    std::uint64_t hi = lo;
     if (pos < expr.size() && expr[pos] == '-') {
       ++pos;
-      if (!number(hi) || hi < lo) return std::nullopt;
+      if (!number(expr, pos, kMaxId, hi) || hi < lo) return std::nullopt;
     }
-    ranges.emplace_back(lo, hi);
+    out.ranges.emplace_back(static_cast<AgentId>(lo), static_cast<AgentId>(hi));
     if (pos < expr.size() && expr[pos++] != ',') return std::nullopt;
     if (pos == expr.size() && expr.back() == ',') return std::nullopt;
   }
-  if (ranges.empty()) return std::nullopt;
-  return ranges;
+  if (out.ranges.empty()) return std::nullopt;
+  // ";self=ID" and ";every=K", each at most once.
+  std::size_t at = semi;
+  bool seen_self = false, seen_every = false;
+  while (at != std::string::npos) {
+    const std::size_t next = text.find(';', at + 1);
+    const std::string opt = text.substr(at + 1, next == std::string::npos ? next : next - at - 1);
+    std::size_t p = 0;
+    std::uint64_t v = 0;
+    if (opt.rfind("self=", 0) == 0 && !seen_self) {
+      p = 5;
+      if (!number(opt, p, kMaxId, v) || p != opt.size() || v == 0) return std::nullopt;
+      out.self = static_cast<AgentId>(v);
+      seen_self = true;
+    } else if (opt.rfind("every=", 0) == 0 && !seen_every) {
+      p = 6;
+      if (!number(opt, p, 1000000, v) || p != opt.size() || v == 0) return std::nullopt;
+      out.every = static_cast<std::uint32_t>(v);
+      seen_every = true;
+    } else {
+      return std::nullopt;
+    }
+    at = next;
+  }
+  return out;
 }
 
 }  // namespace qswarm

@@ -146,7 +146,8 @@ DdsStateBus::DdsStateBus(DdsParticipant& participant, const StateBusOptions& opt
     d.participant->register_content_filter_factory(RosterFilterFactory::kRosterFilterClass,
                                                    &d.roster_factory);
     d.roster_topic = d.participant->create_contentfilteredtopic(
-        "qswarm/agent_state/roster", d.topic, roster_filter(opts.roster), {},
+        "qswarm/agent_state/roster", d.topic,
+        roster_filter(opts.roster, opts.self, opts.record_every), {},
         RosterFilterFactory::kRosterFilterClass);
     if (!d.roster_topic) throw std::runtime_error("dds: cannot create the roster filter");
     read_from = d.roster_topic;

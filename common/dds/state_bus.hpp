@@ -26,6 +26,11 @@ struct StateBusOptions {
   // sample takes a slot in the reader), so a stranger publishing many keys on the run's partition
   // cannot fill the reader and blind it. Empty: any id.
   std::vector<AgentId> roster;
+  // Of each agent's running samples, read only every `record_every`-th (the supervisor's record
+  // rate; 1: all). Needs a roster.
+  std::uint32_t record_every = 1;
+  // The agent this process flies: its reader does not read its own samples (0: none).
+  AgentId self = 0;
 };
 
 std::string run_partition(std::uint64_t run_id);

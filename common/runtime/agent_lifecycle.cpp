@@ -1,5 +1,7 @@
 #include "common/runtime/agent_lifecycle.hpp"
 
+#include <cmath>
+
 #include <algorithm>
 #include <cstdio>
 
@@ -52,7 +54,9 @@ LifecycleStep AgentLifecycle::step(double now, const std::vector<PeerStatus>& pe
 void AgentLifecycle::enter_running(double now, LifecycleStep& s, double start_time_s) {
   phase_ = LifePhase::kRunning;
   discovery_s_ = now - born_s_;
-  pacer_.emplace(now, cfg_.tick_wall_s);
+  // The first tick on the shared grid at or after now.
+  const double grid = std::ceil((now + cfg_.tick_origin_s) / cfg_.tick_wall_s) * cfg_.tick_wall_s;
+  pacer_.emplace(grid - cfg_.tick_origin_s, cfg_.tick_wall_s);
   s.start = true;
   s.start_time_s = start_time_s;
   // Kills planned before this life began were its predecessors'.

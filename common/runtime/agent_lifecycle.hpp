@@ -35,7 +35,12 @@ struct LifecycleConfig {
   // Slower than ready for large swarms: N agents waiting for the last replicas to come (compose
   // at 32 on two cores) would otherwise flood the network they need to discover each other on.
   double waiting_period_s = 0.005;
-  double tick_wall_s = 0.02;      // wall seconds per consensus tick
+  double tick_wall_s = 0.02;  // wall seconds per consensus tick
+  // Ticks fall on multiples of tick_wall_s on the host's shared time line (Clock::shared_origin_s
+  // is where this clock's zero lies on it): every agent of a run ticks at the same instants, so a
+  // process woken by one neighbour's sample finds the others' there too, instead of waking once
+  // per sample.
+  double tick_origin_s = 0.0;
   double max_wall_s = 150.0;      // wall: stop after running this long
   std::vector<double> kill_at_s;  // planned self-kills (simulated time), ascending
 };

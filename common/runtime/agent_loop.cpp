@@ -12,7 +12,8 @@ std::optional<double> join_time(const RunConfig& rc, AgentId id, const AgentLoop
   return rc.faults.late_join_at(id);
 }
 
-LifecycleConfig lifecycle_config(const RunConfig& rc, AgentId id, const AgentLoopOptions& o) {
+LifecycleConfig lifecycle_config(const RunConfig& rc, AgentId id, const AgentLoopOptions& o,
+                                 double tick_origin_s) {
   LifecycleConfig c;
   c.join_at_s = join_time(rc, id, o);
   if (!c.join_at_s) {
@@ -36,6 +37,7 @@ LifecycleConfig lifecycle_config(const RunConfig& rc, AgentId id, const AgentLoo
   c.waiting_period_s = rc.agents.size() <= 8 ? c.announce_period_s
                                              : 0.05 * static_cast<double>(rc.agents.size()) / 8.0;
   c.tick_wall_s = rc.agent.steps_per_tick() / (rc.agent.physics_hz * o.time_scale);
+  c.tick_origin_s = tick_origin_s;
   c.max_wall_s =
       o.max_wall_s >= 0.0 ? o.max_wall_s : 2.0 * rc.judge.duration_s / o.time_scale + 30.0;
   c.kill_at_s = rc.faults.kills_of(id);
@@ -70,7 +72,7 @@ AgentLoop::AgentLoop(const RunConfig& rc, AgentId id, const AgentLoopOptions& op
       transport_(transport),
       faulty_(transport, LinkFaults(rc.faults, id, rc.seed), id),
       runtime_(params_for(rc, id, opts), faulty_),
-      life_(lifecycle_config(rc, id, opts), clock.now_s()) {}
+      life_(lifecycle_config(rc, id, opts, clock.shared_origin_s()), clock.now_s()) {}
 
 std::uint64_t AgentLoop::ticks() const { return life_.pacer() ? life_.pacer()->ticks() : 0; }
 std::uint64_t AgentLoop::overruns() const { return life_.pacer() ? life_.pacer()->overruns() : 0; }

@@ -2,12 +2,16 @@
 // partition hears the other run and says so.
 #include <gtest/gtest.h>
 
+#include <cstring>
+
 #include <memory>
 #include <vector>
 
 #include "common/dds/dds_bus.hpp"
+#include "common/dds/idl_convert.hpp"
 #include "common/dds/roster_filter.hpp"
 #include "common/transport/sample_gate.hpp"
+#include "swarm_statePubSubTypes.h"
 #include "tests/swarm/domain_lease.hpp"
 #include "tests/swarm/harness.hpp"
 
@@ -76,12 +80,63 @@ TEST(RosterFilter, RangesOfConsecutiveIdsBothWays) {
   EXPECT_EQ(roster_filter({3, 1, 2, 2}), "1-3");
   EXPECT_EQ(roster_filter({7, 1, 2, 9, 10}), "1-2,7,9-10");
   EXPECT_EQ(roster_filter({4294967295u}), "4294967295");
+  EXPECT_EQ(roster_filter({1, 2, 3}, 2), "1-3;self=2");
+  EXPECT_EQ(roster_filter({1, 2, 3}, 0, 5), "1-3;every=5");
+  EXPECT_EQ(roster_filter({1, 2, 3}, 2, 5), "1-3;self=2;every=5");
   using Ranges = std::vector<std::pair<AgentId, AgentId>>;
-  EXPECT_EQ(parse_roster_filter("1-2,7,9-10"), (Ranges{{1, 2}, {7, 7}, {9, 10}}));
-  EXPECT_EQ(parse_roster_filter("4294967295"), (Ranges{{4294967295u, 4294967295u}}));
-  for (const char* bad : {"", ",", "1,", ",1", "1-", "-1", "3-1", "1;2", "4294967296", "1--2",
-                          "12345678901", "a", "1-2-3"})
+  EXPECT_EQ(parse_roster_filter("1-2,7,9-10"), (RosterExpression{Ranges{{1, 2}, {7, 7}, {9, 10}}}));
+  EXPECT_EQ(parse_roster_filter("4294967295"),
+            (RosterExpression{Ranges{{4294967295u, 4294967295u}}}));
+  EXPECT_EQ(parse_roster_filter("1-3;self=2;every=5"), (RosterExpression{Ranges{{1, 3}}, 2, 5}));
+  EXPECT_EQ(parse_roster_filter("1-3;every=5;self=2"), (RosterExpression{Ranges{{1, 3}}, 2, 5}));
+  for (const char* bad : {"",
+                          ",",
+                          "1,",
+                          ",1",
+                          "1-",
+                          "-1",
+                          "3-1",
+                          "1;2",
+                          "4294967296",
+                          "1--2",
+                          "12345678901",
+                          "a",
+                          "1-2-3",
+                          "1;self=",
+                          "1;self=0",
+                          "1;every=0",
+                          "1;self=2;self=3",
+                          "1;every=2;every=2",
+                          "1;speed=2",
+                          ";self=1",
+                          "1;self=2x",
+                          "1;every=1000001"})
     EXPECT_FALSE(parse_roster_filter(bad).has_value()) << bad;
+}
+
+// The filter reads the id, the sequence number and the phase at fixed places of a serialized
+// sample: they must be where the generated type puts them.
+TEST(RosterFilter, ReadsItsFieldsWhereTheSerializedSampleHasThem) {
+  StateMessage m;
+  m.view.id = 0x01020304u;
+  m.seq = 0x1122334455667788ull;
+  m.phase = Phase::kReady;
+  m.links = {{2, 1.0}};
+  qswarm_msgs::AgentState s;
+  to_idl(m, s);
+  qswarm_msgs::AgentStatePubSubType type;
+  eprosima::fastrtps::rtps::SerializedPayload_t payload(type.m_typeSize);
+  ASSERT_TRUE(type.serialize(&s, &payload));
+  ASSERT_GT(payload.length, kRosterPhaseOffset);
+  const unsigned char* d = payload.data;
+  ASSERT_EQ(d[1] & 1, 1) << "little-endian CDR expected on this host";
+  std::uint32_t id = 0;
+  std::uint64_t seq = 0;
+  std::memcpy(&id, d + kRosterIdOffset, 4);
+  std::memcpy(&seq, d + kRosterSeqOffset, 8);
+  EXPECT_EQ(id, m.view.id);
+  EXPECT_EQ(seq, m.seq);
+  EXPECT_EQ(d[kRosterPhaseOffset], static_cast<unsigned char>(Phase::kReady));
 }
 
 TEST(RunIsolation, AStrangerFloodingKeysOnTheRunsPartitionCannotBlindAReader) {

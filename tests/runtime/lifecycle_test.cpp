@@ -105,6 +105,26 @@ TEST(Lifecycle, RunningPacesOneTickPerPeriodAndCountsLateTicks) {
   EXPECT_DOUBLE_EQ(s.wake_at_s, 1.04);  // catches up at once
 }
 
+TEST(Lifecycle, TicksFallOnTheHostsSharedGridSoAgentsTickTogether) {
+  // Given two agents whose clocks started at different instants of the host's time line
+  LifecycleConfig a = barrier_config(), b = barrier_config();
+  a.barrier_peers = b.barrier_peers = {};
+  a.tick_origin_s = 100.013;  // clock a read 0 at 100.013 s on the shared line
+  b.tick_origin_s = 100.0;
+  AgentLifecycle la(a, 0.0), lb(b, 0.0);
+  // When they start running at different moments
+  ASSERT_TRUE(la.step(0.5, {}, 0, 0.0).start);
+  ASSERT_TRUE(lb.step(0.531, {}, 0, 0.0).start);
+  // Then each first tick is the next multiple of the period on the shared line, the same instant
+  // for both: 100.52 (a: 0.507 on its clock) and 100.54 (b: 0.54)
+  EXPECT_NEAR(la.pacer()->next_due_s() + a.tick_origin_s, 100.52, 1e-9);
+  EXPECT_NEAR(lb.pacer()->next_due_s() + b.tick_origin_s, 100.54, 1e-9);
+  EXPECT_EQ(la.step(0.5, {}, 0, 0.0).ticks, 0);  // not before the grid
+  const LifecycleStep s = la.step(0.507, {}, 0, 0.0);
+  EXPECT_EQ(s.ticks, 1);
+  EXPECT_NEAR(s.wake_at_s + a.tick_origin_s, 100.54, 1e-9);
+}
+
 TEST(Lifecycle, APlannedKillIsDueAtItsSimulatedTimeAndNotBefore) {
   LifecycleConfig c = barrier_config();
   c.barrier_peers = {};
