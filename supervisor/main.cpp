@@ -75,6 +75,7 @@ int main(int argc, char** argv) {
     SteadyClock clock;
     DdsOptions dopt = dds_options(rc, "swarm-supervisor", opts);
     dopt.state.publish = false;  // a read-only participant: it publishes nothing an agent acts on
+    dopt.state.recorder = true;  // it reads what agents send it, not their state stream
     dopt.participant.test_drop_data_percent = 0;
     dopt.state.hear_all_runs = true;  // so that another run on this domain is seen, and said
     DdsBus bus(dopt, clock);

@@ -46,6 +46,10 @@ void to_idl(const StateMessage& m, qswarm_msgs::AgentState& s) {
   s.faults().cut(m.faults.cut);
   s.faults().partition(m.faults.partition);
   s.faults().delayed(m.faults.delayed);
+  if (m.strangers.size() > kMaxStrangers)
+    throw std::length_error("a sample reports at most " + std::to_string(kMaxStrangers) +
+                            " strangers");
+  s.strangers(m.strangers);
   const auto put_links = [](const std::vector<std::pair<AgentId, double>>& in,
                             std::vector<qswarm_msgs::LinkEntry>& out) {
     out.clear();
@@ -100,6 +104,7 @@ StateMessage from_idl(const qswarm_msgs::AgentState& s) {
   m.overruns = s.overruns();
   m.faults = {s.faults().loss(), s.faults().burst(), s.faults().cut(), s.faults().partition(),
               s.faults().delayed()};
+  m.strangers.assign(s.strangers().begin(), s.strangers().end());
   for (const auto& e : s.links()) m.links.emplace_back(e.peer(), e.weight());
   for (const auto& e : s.initial_links()) m.initial_links.emplace_back(e.peer(), e.weight());
   for (const auto& e : s.copies()) m.view.copies.push_back({e.peer(), vec(e.flow()), 0.0, false});

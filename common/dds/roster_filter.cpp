@@ -27,7 +27,7 @@ class RosterFilter final : public dds::IContentFilter {
       : expr_(std::move(expr)), tally_(tally) {}
   bool evaluate(const SerializedPayload& payload, const FilterSampleInfo&,
                 const GUID_t&) const override {
-    if (payload.data == nullptr || payload.length <= kRosterPhaseOffset) return false;
+    if (payload.data == nullptr || payload.length < kRosterIdOffset + 4) return false;
     const unsigned char* d = payload.data;
     const bool little = (d[1] & 1) != 0;  // CDR_LE / PL_CDR_LE
     const auto id = static_cast<AgentId>(read_uint(d, kRosterIdOffset, 4, little));
@@ -39,10 +39,7 @@ class RosterFilter final : public dds::IContentFilter {
       if (tally_.ids.size() < StrangerTally::kMaxIds) tally_.ids.insert(id);
       return false;
     }
-    if (id == expr_.self) return false;
-    if (expr_.every > 1 && d[kRosterPhaseOffset] == 1 /* running */)
-      return read_uint(d, kRosterSeqOffset, 8, little) % expr_.every == 0;
-    return true;
+    return id != expr_.self;
   }
 
  private:
@@ -70,7 +67,7 @@ RosterFilterFactory::ReturnCode_t RosterFilterFactory::delete_content_filter(
   return ReturnCode_t::RETCODE_OK;
 }
 
-std::string roster_filter(std::vector<AgentId> roster, AgentId self, std::uint32_t every) {
+std::string roster_filter(std::vector<AgentId> roster, AgentId self) {
   std::sort(roster.begin(), roster.end());
   roster.erase(std::unique(roster.begin(), roster.end()), roster.end());
   std::string expr;
@@ -83,7 +80,6 @@ std::string roster_filter(std::vector<AgentId> roster, AgentId self, std::uint32
     i = j + 1;
   }
   if (self != 0) expr += ";self=" + std::to_string(self);
-  if (every > 1) expr += ";every=" + std::to_string(every);
   return expr;
 }
 
@@ -118,28 +114,14 @@ std::optional<RosterExpression> parse_roster_filter(const std::string& text) {
     if (pos == expr.size() && expr.back() == ',') return std::nullopt;
   }
   if (out.ranges.empty()) return std::nullopt;
-  // ";self=ID" and ";every=K", each at most once.
-  std::size_t at = semi;
-  bool seen_self = false, seen_every = false;
-  while (at != std::string::npos) {
-    const std::size_t next = text.find(';', at + 1);
-    const std::string opt = text.substr(at + 1, next == std::string::npos ? next : next - at - 1);
-    std::size_t p = 0;
+  // ";self=ID", at most once.
+  if (semi != std::string::npos) {
+    const std::string opt = text.substr(semi + 1);
+    std::size_t p = 5;
     std::uint64_t v = 0;
-    if (opt.rfind("self=", 0) == 0 && !seen_self) {
-      p = 5;
-      if (!number(opt, p, kMaxId, v) || p != opt.size() || v == 0) return std::nullopt;
-      out.self = static_cast<AgentId>(v);
-      seen_self = true;
-    } else if (opt.rfind("every=", 0) == 0 && !seen_every) {
-      p = 6;
-      if (!number(opt, p, 1000000, v) || p != opt.size() || v == 0) return std::nullopt;
-      out.every = static_cast<std::uint32_t>(v);
-      seen_every = true;
-    } else {
+    if (opt.rfind("self=", 0) != 0 || !number(opt, p, kMaxId, v) || p != opt.size() || v == 0)
       return std::nullopt;
-    }
-    at = next;
+    out.self = static_cast<AgentId>(v);
   }
   return out;
 }

@@ -16,25 +16,21 @@ namespace qswarm {
 
 // What a state reader admits, before a sample is decoded or takes a slot: the run's ids (a
 // stranger's samples are counted and dropped), never its own agent's (a process need not read what
-// it wrote), and of each agent's running samples only every `every`-th by sequence number (the
-// supervisor's record rate; samples of any other phase always pass).
+// it wrote).
 struct RosterExpression {
   std::vector<std::pair<AgentId, AgentId>> ranges;  // inclusive
   AgentId self = 0;                                 // 0: none
-  std::uint32_t every = 1;
   bool operator==(const RosterExpression&) const = default;
 };
 
 // The filter's expression: the ids as ranges of consecutive ids ("1-8,10" for 1..8 and 10), then
-// ";self=ID" and ";every=K" when they are set; and back (nullopt for anything malformed).
-std::string roster_filter(std::vector<AgentId> roster, AgentId self = 0, std::uint32_t every = 1);
+// ";self=ID" when it is set; and back (nullopt for anything malformed).
+std::string roster_filter(std::vector<AgentId> roster, AgentId self = 0);
 std::optional<RosterExpression> parse_roster_filter(const std::string& expr);
 
-// Where the filter reads a sample (idl/swarm_state.idl, plain CDR: a 4-byte encapsulation header,
-// then the fields at their natural alignment): checked against serialized samples by a test.
-inline constexpr std::size_t kRosterIdOffset = 4;      // id: uint32
-inline constexpr std::size_t kRosterSeqOffset = 12;    // seq: uint64
-inline constexpr std::size_t kRosterPhaseOffset = 61;  // phase: octet
+// Where the filter reads the id in a sample (idl/swarm_state.idl, plain CDR: a 4-byte
+// encapsulation header, then the id): checked against a serialized sample by a test.
+inline constexpr std::size_t kRosterIdOffset = 4;
 
 // What a reader's roster filter turned away: the first ids, and every sample.
 struct StrangerTally {

@@ -28,23 +28,32 @@ namespace qswarm {
 
 namespace dds = eprosima::fastdds::dds;
 
-std::string run_partition(std::uint64_t run_id) {
-  char buf[40];
-  std::snprintf(buf, sizeof buf, "qswarm-run-%016llx", static_cast<unsigned long long>(run_id));
+namespace {
+std::string partition(const char* stream, std::uint64_t run_id) {
+  char buf[48];
+  std::snprintf(buf, sizeof buf, "qswarm-%s-%016llx", stream,
+                static_cast<unsigned long long>(run_id));
   return buf;
 }
+}  // namespace
+
+std::string run_partition(std::uint64_t run_id) { return partition("run", run_id); }
+std::string record_partition(std::uint64_t run_id) { return partition("record", run_id); }
 
 struct DdsStateBus::Impl : public dds::DataReaderListener {
   StateBusOptions opts;
   const Clock* clock = nullptr;  // the receiver's wall time, for the gate
   dds::DomainParticipant* participant = nullptr;
   dds::TypeSupport type{new qswarm_msgs::AgentStatePubSubType()};
-  dds::Topic* topic = nullptr;
+  dds::Topic* topic = nullptr;                        // qswarm/agent_state: agent to agent
+  dds::Topic* record_topic = nullptr;                 // qswarm/record: agent to supervisor
   RosterFilterFactory roster_factory;                 // outlives the filtered topic
   dds::ContentFilteredTopic* roster_topic = nullptr;  // StateBusOptions::roster
   dds::Publisher* publisher = nullptr;
+  dds::Publisher* record_publisher = nullptr;
   dds::Subscriber* subscriber = nullptr;
   dds::DataWriter* writer = nullptr;
+  dds::DataWriter* record_writer = nullptr;
   dds::DataReader* reader = nullptr;
 
   mutable std::mutex mu;  // the gate
@@ -60,7 +69,7 @@ struct DdsStateBus::Impl : public dds::DataReaderListener {
                                 const dds::PublicationMatchedStatus& st) override {
       matched = st.current_count;
     }
-  } writer_listener;
+  } writer_listener, record_listener;
   qswarm_msgs::AgentState out_sample;  // reused: publishing allocates nothing in steady state
 
   void on_data_available(dds::DataReader* r) override {
@@ -111,12 +120,11 @@ DdsStateBus::DdsStateBus(DdsParticipant& participant, const StateBusOptions& opt
   d.type.register_type(d.participant);
   d.topic = d.participant->create_topic("qswarm/agent_state", d.type.get_type_name(),
                                         dds::TOPIC_QOS_DEFAULT);
-  if (!d.topic) throw std::runtime_error("dds: cannot create the state topic");
+  d.record_topic =
+      d.participant->create_topic("qswarm/record", d.type.get_type_name(), dds::TOPIC_QOS_DEFAULT);
+  if (!d.topic || !d.record_topic) throw std::runtime_error("dds: cannot create the state topics");
 
   if (opts.publish) {
-    dds::PublisherQos pub_qos = dds::PUBLISHER_QOS_DEFAULT;
-    pub_qos.partition().push_back(run_partition(opts.run_id).c_str());
-    d.publisher = d.participant->create_publisher(pub_qos);
     dds::DataWriterQos wq = best_effort_writer_qos();
     // No filtering on the writer's side: it would evaluate each sample for every filtering reader
     // and send per reader (64 agents on 2 cores fell behind with it); the readers filter.
@@ -124,14 +132,25 @@ DdsStateBus::DdsStateBus(DdsParticipant& participant, const StateBusOptions& opt
         eprosima::fastrtps::ResourceLimitedContainerConfig(0, 0, 0);
     wq.endpoint().history_memory_policy =
         eprosima::fastrtps::rtps::PREALLOCATED_WITH_REALLOC_MEMORY_MODE;
-    d.writer =
-        d.publisher ? d.publisher->create_datawriter(d.topic, wq, &d.writer_listener) : nullptr;
-    if (!d.writer) throw std::runtime_error("dds: cannot create the state writer");
+    const auto writer_in = [&](const std::string& part, dds::Publisher*& pub, dds::Topic* topic,
+                               dds::DataWriterListener* listener) {
+      dds::PublisherQos pub_qos = dds::PUBLISHER_QOS_DEFAULT;
+      pub_qos.partition().push_back(part.c_str());
+      pub = d.participant->create_publisher(pub_qos);
+      dds::DataWriter* w = pub ? pub->create_datawriter(topic, wq, listener) : nullptr;
+      if (!w) throw std::runtime_error("dds: cannot create a writer in " + part);
+      return w;
+    };
+    d.writer = writer_in(run_partition(opts.run_id), d.publisher, d.topic, &d.writer_listener);
+    d.record_writer = writer_in(record_partition(opts.run_id), d.record_publisher, d.record_topic,
+                                &d.record_listener);
   }
 
   dds::SubscriberQos sub_qos = dds::SUBSCRIBER_QOS_DEFAULT;
-  sub_qos.partition().push_back(opts.hear_all_runs ? "qswarm-run-*"
-                                                   : run_partition(opts.run_id).c_str());
+  const std::string mine =
+      opts.recorder ? record_partition(opts.run_id) : run_partition(opts.run_id);
+  const std::string any_run = opts.recorder ? "qswarm-record-*" : "qswarm-run-*";
+  sub_qos.partition().push_back(opts.hear_all_runs ? any_run.c_str() : mine.c_str());
   d.subscriber = d.participant->create_subscriber(sub_qos);
   if (!d.subscriber) throw std::runtime_error("dds: cannot create the state subscriber");
   dds::DataReaderQos rq = best_effort_reader_qos();
@@ -141,13 +160,13 @@ DdsStateBus::DdsStateBus(DdsParticipant& participant, const StateBusOptions& opt
   rq.resource_limits().allocated_samples = 32;
   rq.endpoint().history_memory_policy =
       eprosima::fastrtps::rtps::PREALLOCATED_WITH_REALLOC_MEMORY_MODE;
-  dds::TopicDescription* read_from = d.topic;
+  dds::Topic* stream = opts.recorder ? d.record_topic : d.topic;
+  dds::TopicDescription* read_from = stream;
   if (!opts.roster.empty()) {
     d.participant->register_content_filter_factory(RosterFilterFactory::kRosterFilterClass,
                                                    &d.roster_factory);
     d.roster_topic = d.participant->create_contentfilteredtopic(
-        "qswarm/agent_state/roster", d.topic,
-        roster_filter(opts.roster, opts.self, opts.record_every), {},
+        stream->get_name() + "/roster", stream, roster_filter(opts.roster, opts.self), {},
         RosterFilterFactory::kRosterFilterClass);
     if (!d.roster_topic) throw std::runtime_error("dds: cannot create the roster filter");
     read_from = d.roster_topic;
@@ -168,11 +187,14 @@ DdsStateBus::~DdsStateBus() {
   if (d.subscriber) d.participant->delete_subscriber(d.subscriber);
   if (d.writer) d.publisher->delete_datawriter(d.writer);
   if (d.publisher) d.participant->delete_publisher(d.publisher);
+  if (d.record_writer) d.record_publisher->delete_datawriter(d.record_writer);
+  if (d.record_publisher) d.participant->delete_publisher(d.record_publisher);
   if (d.roster_topic) {
     d.participant->delete_contentfilteredtopic(d.roster_topic);
     d.participant->unregister_content_filter_factory(RosterFilterFactory::kRosterFilterClass);
   }
   if (d.topic) d.participant->delete_topic(d.topic);
+  if (d.record_topic) d.participant->delete_topic(d.record_topic);
 }
 
 void DdsStateBus::publish(const StateMessage& msg) {
@@ -184,6 +206,15 @@ void DdsStateBus::publish(const StateMessage& msg) {
     ++d.gate.counters().published;
   }
 }
+
+void DdsStateBus::record(const StateMessage& msg) {
+  Impl& d = *impl_;
+  if (!d.record_writer) return;
+  to_idl(msg, d.out_sample);
+  d.record_writer->write(&d.out_sample);
+}
+
+int DdsStateBus::recorders_matched() const { return impl_->record_listener.matched; }
 
 std::vector<StateMessage> DdsStateBus::latest(AgentId self) {
   std::lock_guard<std::mutex> lock(impl_->mu);

@@ -16,6 +16,9 @@ namespace qswarm {
 struct StateBusOptions {
   int max_agents = 512;  // sizes the keyed reader (Fast DDS defaults cap it at 10 instances)
   bool publish = true;   // false: a reader only (the supervisor publishes nothing)
+  // Read the record stream (what agents send the supervisor, topic "qswarm/record") instead of
+  // the agents' state stream.
+  bool recorder = false;
   // The run: endpoints use the DDS partition qswarm-run-<hex id> and the gate refuses samples of
   // other runs (0: the partition qswarm-run-0, no check).
   std::uint64_t run_id = 0;
@@ -26,14 +29,13 @@ struct StateBusOptions {
   // sample takes a slot in the reader), so a stranger publishing many keys on the run's partition
   // cannot fill the reader and blind it. Empty: any id.
   std::vector<AgentId> roster;
-  // Of each agent's running samples, read only every `record_every`-th (the supervisor's record
-  // rate; 1: all). Needs a roster.
-  std::uint32_t record_every = 1;
   // The agent this process flies: its reader does not read its own samples (0: none).
   AgentId self = 0;
 };
 
+// The DDS partitions of a run: the agents' state stream, and the record stream to the supervisor.
 std::string run_partition(std::uint64_t run_id);
+std::string record_partition(std::uint64_t run_id);
 
 // The product's NeighborBus: the keyed best-effort topic "qswarm/agent_state" on a participant, a
 // keep-last-1 writer and reader. Incoming samples are checked in the listener through the
@@ -49,6 +51,8 @@ class DdsStateBus final : public NeighborBus {
   DdsStateBus& operator=(const DdsStateBus&) = delete;
 
   void publish(const StateMessage& msg) override;
+  void record(const StateMessage& msg) override;
+  int recorders_matched() const override;
   std::vector<StateMessage> latest(AgentId self) override;
   // Called for every accepted sample, on a DDS thread. set_listener(nullptr) waits for a call in
   // progress to finish.

@@ -1,8 +1,11 @@
 #include "common/record/presence.hpp"
 
+#include <algorithm>
+
 namespace qswarm {
 
-Presence::Presence(const std::vector<AgentId>& ids, double timeout_s) : timeout_s_(timeout_s) {
+Presence::Presence(const std::vector<AgentId>& ids, double timeout_s, std::uint32_t record_every)
+    : timeout_s_(timeout_s), every_(std::max<std::uint32_t>(1, record_every)) {
   for (const AgentId id : ids) tracks_[id];
 }
 
@@ -20,8 +23,11 @@ Presence::Change Presence::on_sample(const StateMessage& m, double now_s) {
   } else if (!a.present && m.phase != Phase::kStopping) {
     change = Change::kRejoin;
   }
-  if (a.samples > 0 && m.incarnation == a.last.incarnation && m.seq > a.last.seq + 1) {
-    a.gaps += m.seq - a.last.seq - 1;
+  // Agents send every k-th sample (seq a multiple of k) and their goodbye: a gap is a multiple of k
+  // that never came.
+  if (a.samples > 0 && m.incarnation == a.last.incarnation && m.seq % every_ == 0 &&
+      a.last.seq % every_ == 0 && m.seq > a.last.seq + every_) {
+    a.gaps += (m.seq - a.last.seq) / every_ - 1;
   }
   if (m.phase == Phase::kStopping && a.present) change = Change::kDepart;
   a.present = m.phase != Phase::kStopping;

@@ -25,7 +25,9 @@ class Presence {
   };
   enum class Change { kNone, kJoin, kRejoin, kDepart, kStranger, kStrangerAgain };
 
-  Presence(const std::vector<AgentId>& ids, double timeout_s);
+  // `record_every`: agents send every k-th of their samples (RunConfig::record_every), so a gap in
+  // sequence numbers of k is no loss.
+  Presence(const std::vector<AgentId>& ids, double timeout_s, std::uint32_t record_every = 1);
   // A sample arrived at swarm time now_s. Returns what changed for its agent.
   Change on_sample(const StateMessage& m, double now_s);
   // Agents silent past the timeout at swarm time now_s: marked departed and returned.
@@ -45,6 +47,7 @@ class Presence {
   std::map<AgentId, Track> tracks_;
   std::set<AgentId> strangers_;
   double timeout_s_;
+  std::uint32_t every_;
 };
 
 }  // namespace qswarm

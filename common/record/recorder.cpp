@@ -25,7 +25,7 @@ Recorder::Recorder(RunConfig rc, RunDir dir, double time_scale)
       dir_(std::move(dir)),
       time_scale_(time_scale),
       sinks_(dir_),
-      presence_(ids_of(rc_), rc_.agent.neighbor_timeout_s),
+      presence_(ids_of(rc_), rc_.agent.neighbor_timeout_s, rc_.record_every()),
       judge_(rc_.judge.tolerance_m, rc_.judge.hold_s, rc_.agent.neighbor_timeout_s, rc_.faults),
       separation_(rc_.agent.avoidance.safe_distance_m),
       timeline_(rc_.faults.timeline()) {
@@ -86,6 +86,11 @@ void Recorder::on_sample(const StateMessage& m, std::int64_t recv_wall_ns) {
       break;
   }
   tally_.fault_counts[{id, m.incarnation}] = m.faults;
+  // Strangers the agent's transport turned away: the recorder does not hear the agents' stream.
+  for (const AgentId s : m.strangers)
+    if (presence_.note_stranger(s))
+      event("unknown_agent", s,
+            "samples from an agent not in the scenario, heard by agent " + std::to_string(id));
   const double age_ms = m.wall_ns > 0 ? static_cast<double>(recv_wall_ns - m.wall_ns) / 1e6 : 0.0;
   if (m.wall_ns > 0) tally_.ages_ms.push_back(age_ms);
   sinks_.sample(m, age_ms);

@@ -33,13 +33,14 @@ AgentLifecycle::AgentLifecycle(LifecycleConfig cfg, double now_wall_s)
 }
 
 LifecycleStep AgentLifecycle::step(double now, const std::vector<PeerStatus>& peers,
-                                   int matched_readers, double agent_time_s) {
+                                   int matched_readers, double agent_time_s,
+                                   bool recorder_matched) {
   switch (phase_) {
     case LifePhase::kJoinWait:
       return join_wait(now, peers);
     case LifePhase::kWaiting:
     case LifePhase::kReady:
-      return barrier(now, peers, matched_readers);
+      return barrier(now, peers, matched_readers, recorder_matched);
     case LifePhase::kRunning:
       return running(now, agent_time_s);
     case LifePhase::kStopping:
@@ -89,7 +90,7 @@ LifecycleStep AgentLifecycle::join_wait(double now, const std::vector<PeerStatus
 }
 
 LifecycleStep AgentLifecycle::barrier(double now, const std::vector<PeerStatus>& peers,
-                                      int matched_readers) {
+                                      int matched_readers, bool recorder_matched) {
   LifecycleStep s;
   std::size_t heard = 0, ready = 0;
   for (const PeerStatus& p : peers) {
@@ -98,7 +99,8 @@ LifecycleStep AgentLifecycle::barrier(double now, const std::vector<PeerStatus>&
     ready += (p.phase == Phase::kReady || p.phase == Phase::kRunning) ? 1 : 0;
   }
   const std::size_t expected = cfg_.barrier_peers.size();
-  const bool all_heard = heard >= expected && matched_readers >= cfg_.min_matched_readers;
+  const bool all_heard = heard >= expected && matched_readers >= cfg_.min_matched_readers &&
+                         (recorder_matched || !cfg_.wait_recorder);
   if (all_heard && ready >= expected) {
     enter_running(now, s, 0.0);
     return s;

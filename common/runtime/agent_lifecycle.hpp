@@ -22,9 +22,11 @@ const char* to_string(LifePhase p);
 struct LifecycleConfig {
   // The peers the start barrier waits for (start_peers(): FIXED-aware, late joiners left out).
   std::set<AgentId> barrier_peers;
-  // With a supervisor: the start also waits until this many readers matched our writer (every
-  // other starting agent's plus the supervisor's), so that the recorder sees the start.
+  // The start also waits until this many readers matched our state writer (the barrier peers':
+  // DDS discovery can lag hearing a peer), and, with a supervisor, until its reader matched our
+  // record stream, so that the recorder sees the start.
   int min_matched_readers = 0;
+  bool wait_recorder = false;
   // Late join or restart: wait silently until the swarm's clock reaches this simulated time.
   std::optional<double> join_at_s;
   double time_scale = 1.0;           // simulated seconds per wall second
@@ -73,7 +75,7 @@ class AgentLifecycle {
   AgentLifecycle(LifecycleConfig cfg, double now_wall_s);
 
   LifecycleStep step(double now_wall_s, const std::vector<PeerStatus>& peers, int matched_readers,
-                     double agent_time_s);
+                     double agent_time_s, bool recorder_matched = true);
   // The process is stopping (a signal, or the wall limit): no more ticks.
   void stop() { phase_ = LifePhase::kStopping; }
 
@@ -84,7 +86,8 @@ class AgentLifecycle {
 
  private:
   LifecycleStep join_wait(double now, const std::vector<PeerStatus>& peers);
-  LifecycleStep barrier(double now, const std::vector<PeerStatus>& peers, int matched_readers);
+  LifecycleStep barrier(double now, const std::vector<PeerStatus>& peers, int matched_readers,
+                        bool recorder_matched);
   LifecycleStep running(double now, double agent_time_s);
   void enter_running(double now, LifecycleStep& s, double start_time_s);
 

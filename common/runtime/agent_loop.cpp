@@ -18,12 +18,8 @@ LifecycleConfig lifecycle_config(const RunConfig& rc, AgentId id, const AgentLoo
   c.join_at_s = join_time(rc, id, o);
   if (!c.join_at_s) {
     c.barrier_peers = rc.start_peers(id);
-    // Every other starting agent's reader, and the supervisor's, match our writer (DDS matching
-    // does not follow the graph).
-    if (o.wait_supervisor) {
-      c.min_matched_readers =
-          static_cast<int>(rc.agents.size() - 1 - rc.faults.late_joiners().size()) + 1;
-    }
+    c.min_matched_readers = static_cast<int>(c.barrier_peers.size());
+    c.wait_recorder = o.wait_supervisor;
   }
   c.time_scale = o.time_scale;
   c.start_timeout_s = o.start_timeout_s >= 0.0 ? o.start_timeout_s : rc.start_timeout_s();
@@ -55,6 +51,7 @@ AgentParams params_for(const RunConfig& rc, AgentId id, const AgentLoopOptions& 
   p.start.incarnation = o.incarnation;
   p.start.run_id = rc.transport.run_id;
   p.start.expected_peers = rc.start_peers(id).size();
+  p.start.record_every = rc.record_every();
   if (join_time(rc, id, o)) {
     p.start.expected_peers = 0;  // joins a running swarm: no first-tick wait
     p.start.recover_flows = o.restarted;
@@ -91,7 +88,8 @@ AgentLoop::Poll AgentLoop::poll() {
     for (const StateMessage& m : transport_.latest(id_))
       if (is_agent_(m.view.id)) peers.push_back({m.view.id, m.phase, m.stamp_s});
   }
-  const LifecycleStep s = life_.step(now, peers, transport_.matched_readers(), runtime_.time_s());
+  const LifecycleStep s = life_.step(now, peers, transport_.matched_readers(), runtime_.time_s(),
+                                     transport_.recorders_matched() > 0);
   if (!s.warning.empty()) r.notes.push_back({true, s.warning});
   if (s.swarm_time_s >= 0.0) faulty_.set_time(s.swarm_time_s);
   runtime_.set_wall_ns(clock_.wall_ns());  // what samples published now carry
@@ -114,6 +112,7 @@ AgentLoop::Poll AgentLoop::poll() {
     const BusCounters c = transport_.counters();
     runtime_.set_counters(c.received, c.dropped + c.stale, overruns());
     runtime_.set_fault_counters(faulty_.fault_counters());
+    runtime_.set_strangers(transport_.strangers());
     faulty_.set_time(runtime_.time_s());
     for (int i = 0; i < runtime_.steps_per_tick(); ++i, ++physics_steps_) {
       for (const AgentEvent& e : runtime_.step()) {

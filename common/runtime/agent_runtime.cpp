@@ -59,7 +59,15 @@ void AgentRuntime::publish(Phase phase) {
   m.dropped = dropped_;
   m.overruns = overruns_;
   m.faults = faults_;
+  m.strangers = strangers_;
   bus_.publish(m);
+  // The recorder gets every k-th sample, and the goodbye (a departure it sees at once).
+  if (m.seq % p_.start.record_every == 0 || phase == Phase::kStopping) bus_.record(m);
+}
+
+void AgentRuntime::set_strangers(const std::set<AgentId>& ids) {
+  strangers_.assign(ids.begin(), ids.end());
+  if (strangers_.size() > kMaxStrangers) strangers_.resize(kMaxStrangers);
 }
 
 void AgentRuntime::consensus_tick(std::vector<AgentEvent>& events) {

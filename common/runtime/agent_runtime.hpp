@@ -31,6 +31,8 @@ struct AgentStart {
   double start_time_s = 0.0;
   // Restarted: recover the flows it owned from the neighbours' copies before its first tick.
   bool recover_flows = false;
+  // Every how many samples one also goes to the recorder (RunConfig::record_every).
+  std::uint32_t record_every = 1;
 };
 
 // One agent: who it is and where it starts (its spec), what every agent of the run flies with (the
@@ -88,6 +90,8 @@ class AgentRuntime {
     dropped_ = dropped;
     overruns_ = overruns;
   }
+  // Stranger ids its transport dropped (reported in its samples, at most kMaxStrangers).
+  void set_strangers(const std::set<AgentId>& ids);
 
  private:
   void consensus_tick(std::vector<AgentEvent>& events);
@@ -121,6 +125,7 @@ class AgentRuntime {
   std::vector<std::pair<AgentId, double>> initial_links_;  // links at the law's first tick
   std::int64_t wall_ns_ = 0;
   std::uint64_t received_ = 0, dropped_ = 0, overruns_ = 0;
+  std::vector<AgentId> strangers_;
   FaultCounters faults_;
 };
 

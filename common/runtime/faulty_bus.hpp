@@ -23,6 +23,8 @@ class FaultyBus final : public NeighborBus {
   // The simulated time that fault windows and delays are judged at.
   void set_time(double t_s);
   void publish(const StateMessage& msg) override { inner_.publish(msg); }
+  void record(const StateMessage& msg) override { inner_.record(msg); }
+  int recorders_matched() const override { return inner_.recorders_matched(); }
   std::vector<StateMessage> latest(AgentId self) override;
   void set_listener(Listener listener) override;
   BusCounters counters() const override { return inner_.counters(); }

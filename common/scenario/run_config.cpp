@@ -37,6 +37,11 @@ int AgentConfig::steps_per_tick() const {
   return std::max(1, static_cast<int>(std::lround(physics_hz / consensus_hz)));
 }
 
+std::uint32_t RunConfig::record_every() const {
+  return static_cast<std::uint32_t>(
+      std::max(1L, std::lround(agent.consensus_hz / judge.record_hz)));
+}
+
 std::set<AgentId> RunConfig::start_peers(AgentId id) const {
   std::set<AgentId> peers;
   if (agent.law.topology.policy == TopologyPolicy::kFixed) {

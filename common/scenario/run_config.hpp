@@ -49,6 +49,9 @@ struct JudgeConfig {
   double tolerance_m = 0.01;  // agreed: every state within this of the mean
   double hold_s = 1.0;        // for this long
   double duration_s = 60.0;   // simulated seconds before the run gives up
+  // Samples per second per agent the supervisor records (each agent sends every record_every()-th
+  // sample to it); at most the consensus rate.
+  double record_hz = 10.0;
 };
 
 // Where the run's DDS traffic goes.
@@ -89,6 +92,9 @@ struct RunConfig {
   // for the first running agent: discovery grows with the swarm (100 agents on 2 cores took 25 s),
   // so 30 s plus half a second per agent.
   double start_timeout_s() const { return 30.0 + 0.5 * static_cast<double>(agents.size()); }
+  // Every how many of its samples an agent sends one to the supervisor: the consensus rate over
+  // the record rate, rounded, at least 1.
+  std::uint32_t record_every() const;
 };
 
 // The slots of a generated formation for n agents (scenario Formation.Shape as an int), centred on

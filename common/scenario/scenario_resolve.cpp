@@ -56,6 +56,7 @@ const NumberField kNumberFields[] = {
   {"convergence.tolerance_m", [](RunConfig& c) -> double& { return c.judge.tolerance_m; }, 0.0, 1e9, true},
   {"convergence.hold_s", [](RunConfig& c) -> double& { return c.judge.hold_s; }, 0.0, 1e6, false},
   {"duration_s", [](RunConfig& c) -> double& { return c.judge.duration_s; }, 0.0, 1e7, true},
+  {"record.rate_hz", [](RunConfig& c) -> double& { return c.judge.record_hz; }, 0.0, 1e3, true},
 };
 // clang-format on
 
@@ -349,6 +350,9 @@ void check_agent(RunConfig& rc) {
   } catch (const std::invalid_argument& e) {
     throw ScenarioError(std::string("scenario limits: ") + e.what());
   }
+  // The supervisor records whole samples: the effective rate is the consensus rate over a whole
+  // number (written back, so the scenario as run says what was recorded).
+  rc.judge.record_hz = a.consensus_hz / static_cast<double>(rc.record_every());
   // At least two consensus ticks: a shorter timeout makes every neighbour flap.
   if (a.neighbor_timeout_s < 2.0 / a.consensus_hz) {
     fail("transport.neighbor_timeout_s",

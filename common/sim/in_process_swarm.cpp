@@ -9,7 +9,7 @@ namespace qswarm {
 InProcessSwarm::InProcessSwarm(RunConfig rc, double time_scale, RunDir record_in)
     : rc_(std::move(rc)), time_scale_(time_scale), restarts_(rc_.faults) {
   if (!record_in.empty()) {
-    supervisor_bus_ = std::make_unique<InMemoryBus>(net_);
+    supervisor_bus_ = std::make_unique<InMemoryBus>(net_, InMemoryBus::Role::kRecorder);
     SupervisorOptions o;
     o.time_scale = time_scale_;
     supervisor_ =

@@ -8,24 +8,34 @@ void InMemoryNetwork::attach(InMemoryBus* bus) { endpoints_.push_back(bus); }
 
 void InMemoryNetwork::detach(InMemoryBus* bus) {
   endpoints_.erase(std::remove(endpoints_.begin(), endpoints_.end(), bus), endpoints_.end());
-  for (auto& [from, m] : queue_)
-    if (from == bus) from = nullptr;
+  for (Posted& p : queue_)
+    if (p.from == bus) p.from = nullptr;
 }
 
-void InMemoryNetwork::post(const InMemoryBus* from, const StateMessage& m) {
-  queue_.emplace_back(from, m);
+void InMemoryNetwork::post(const InMemoryBus* from, const StateMessage& m, bool record) {
+  queue_.push_back({from, m, record});
 }
 
 void InMemoryNetwork::deliver() {
-  std::vector<std::pair<const InMemoryBus*, StateMessage>> round;
+  std::vector<Posted> round;
   round.swap(queue_);
-  for (const auto& [from, m] : round) {
+  for (const Posted& p : round) {
+    const InMemoryBus::Role to_role =
+        p.record ? InMemoryBus::Role::kRecorder : InMemoryBus::Role::kAgent;
     for (InMemoryBus* to : endpoints_)
-      if (to != from) to->receive(m);
+      if (to != p.from && to->role() == to_role) to->receive(p.m);
   }
 }
 
-InMemoryBus::InMemoryBus(InMemoryNetwork& net) : net_(net) { net_.attach(this); }
+int InMemoryNetwork::endpoints(InMemoryRole role) const {
+  return static_cast<int>(
+      std::count_if(endpoints_.begin(), endpoints_.end(),
+                    [role](const InMemoryBus* b) { return b->role() == role; }));
+}
+
+InMemoryBus::InMemoryBus(InMemoryNetwork& net, Role role) : net_(net), role_(role) {
+  net_.attach(this);
+}
 
 InMemoryBus::~InMemoryBus() { net_.detach(this); }
 

@@ -9,33 +9,50 @@
 namespace qswarm {
 
 class InMemoryBus;
+enum class InMemoryRole { kAgent, kRecorder };
 
 // Agents in one process, in lockstep: what endpoints publish during a round is delivered to every
 // other endpoint at deliver(), so every agent reads the others' messages of the previous round
-// whatever order the agents ran in. Deterministic; single-threaded.
+// whatever order the agents ran in. Samples go to agents' endpoints, records to recorders'.
+// Deterministic; single-threaded.
 class InMemoryNetwork {
  public:
   void attach(InMemoryBus* bus);
   void detach(InMemoryBus* bus);
-  void post(const InMemoryBus* from, const StateMessage& m);
-  // Hands every posted message to every other attached endpoint, in posting order.
+  void post(const InMemoryBus* from, const StateMessage& m, bool record = false);
+  // Hands every posted message to every other attached endpoint of its stream, in posting order.
   void deliver();
+  int endpoints(InMemoryRole role) const;
 
  private:
+  struct Posted {
+    const InMemoryBus* from;
+    StateMessage m;
+    bool record;
+  };
   std::vector<InMemoryBus*> endpoints_;
-  std::vector<std::pair<const InMemoryBus*, StateMessage>> queue_;
+  std::vector<Posted> queue_;
 };
 
 // One agent's endpoint on an InMemoryNetwork: it admits samples through the same SampleGate as
 // the DDS bus (checks, staleness, counters).
 class InMemoryBus final : public NeighborBus {
  public:
-  explicit InMemoryBus(InMemoryNetwork& net);
+  using Role = InMemoryRole;
+  // An agent's endpoint hears samples; a recorder's (the supervisor's) hears records.
+  explicit InMemoryBus(InMemoryNetwork& net, Role role = Role::kAgent);
   ~InMemoryBus() override;
   InMemoryBus(const InMemoryBus&) = delete;
   InMemoryBus& operator=(const InMemoryBus&) = delete;
 
   void publish(const StateMessage& msg) override;
+  void record(const StateMessage& msg) override { net_.post(this, msg, true); }
+  int recorders_matched() const override { return net_.endpoints(Role::kRecorder); }
+  // Every other agent's endpoint hears what this one publishes.
+  int matched_readers() const override {
+    return net_.endpoints(Role::kAgent) - (role_ == Role::kAgent ? 1 : 0);
+  }
+  Role role() const { return role_; }
   std::vector<StateMessage> latest(AgentId self) override { return gate_.latest(self); }
   void set_listener(Listener listener) override { listener_ = std::move(listener); }
   // A sample arriving from the network (or a test acting as a stranger on it).
@@ -45,6 +62,7 @@ class InMemoryBus final : public NeighborBus {
 
  private:
   InMemoryNetwork& net_;
+  Role role_;
   SampleGate gate_;
   Listener listener_;
 };

@@ -26,6 +26,9 @@ class NeighborBus {
 
   virtual ~NeighborBus() = default;
   virtual void publish(const StateMessage& msg) = 0;
+  // Sends a sample to the recorder (the supervisor) only, on a stream of its own: agents send it
+  // every k-th sample (the record rate), so what the record costs does not grow with their rate.
+  virtual void record(const StateMessage& msg) = 0;
   // Newest accepted message of every agent other than `self` (one per agent).
   virtual std::vector<StateMessage> latest(AgentId self) = 0;
   // Called for every accepted sample, possibly on a transport thread. When set_listener returns,
@@ -36,6 +39,8 @@ class NeighborBus {
   virtual BusCounters counters() const = 0;
   // Readers matched to our writer (DDS discovery: the start barrier waits for the supervisor's).
   virtual int matched_readers() const { return 0; }
+  // Recorders matched to our record stream (the start barrier waits for the supervisor's).
+  virtual int recorders_matched() const { return 0; }
   // Other runs heard on this transport (their run ids; their samples were refused as foreign).
   virtual std::set<std::uint64_t> foreign_runs() const { return {}; }
   // Ids outside the run whose samples the transport dropped before the gate saw them (the DDS

@@ -22,6 +22,7 @@ std::string check_message(const StateMessage& m) {
   if (!std::isfinite(m.stamp_s) || m.stamp_s < 0.0 || m.stamp_s > 1e7) return "stamp not finite";
   if (m.mode != AgentMode::kParticle && m.mode != AgentMode::kQuadcopter) return "unknown mode";
   if (m.phase > Phase::kReady) return "unknown phase";
+  if (m.strangers.size() > kMaxStrangers) return "too many strangers reported";
   for (const auto* links : {&m.links, &m.initial_links}) {
     for (const auto& [peer, w] : *links) {
       if (!std::isfinite(w) || w < 0.0 || w > 1e9 || peer == m.view.id) return "link invalid";

@@ -34,6 +34,9 @@ struct FaultCounters {
 // swarm starts within one waiting-publish period.
 enum class Phase : std::uint8_t { kWaiting = 0, kRunning = 1, kStopping = 2, kReady = 3 };
 
+// How many stranger ids a sample reports (the wire's bound).
+inline constexpr std::size_t kMaxStrangers = 16;
+
 // One agent's published state: the consensus part its neighbours' laws read, plus the physical
 // part the supervisor records. The DDS type in idl/ mirrors this.
 struct StateMessage {
@@ -57,6 +60,9 @@ struct StateMessage {
   std::uint64_t dropped = 0;   // samples the sender rejected
   std::uint64_t overruns = 0;  // the sender's late ticks
   FaultCounters faults;        // injected in the sender's receive path (this incarnation)
+  // Ids outside the run whose samples the sender's transport dropped (the first kMaxStrangers):
+  // the recorder, which does not hear the agents' stream, names each stranger from these.
+  std::vector<AgentId> strangers;
 };
 
 // Empty if a received message is usable, else why not. Anything non-finite or absurd is refused.

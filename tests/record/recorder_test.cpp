@@ -50,6 +50,18 @@ TEST(Presence, JoinsDepartsInSwarmTimeAndRejoins) {
   EXPECT_EQ(p.strangers(), 1u);
 }
 
+TEST(Presence, WithARecordRateOnlyMissingMultiplesOfItAreGaps) {
+  // Agents send every 5th sample to the recorder (and their goodbye).
+  Presence p({1}, 1.0, 5);
+  p.on_sample(sample(1, 5, 0.1, Vec3::Zero()), 0.1);
+  p.on_sample(sample(1, 10, 0.2, Vec3::Zero()), 0.2);
+  EXPECT_EQ(p.track(1).gaps, 0u);  // 6..9 were never sent to it
+  p.on_sample(sample(1, 25, 0.5, Vec3::Zero()), 0.5);
+  EXPECT_EQ(p.track(1).gaps, 2u);  // 15 and 20 were
+  p.on_sample(sample(1, 27, 0.54, Vec3::Zero(), Phase::kStopping), 0.54);
+  EXPECT_EQ(p.track(1).gaps, 2u);  // a goodbye off the multiples is no gap either
+}
+
 TEST(GraphMetrics, ThePapersWeightedNetworkHasItsSpectrum) {
   // Paper 2.7.1: graph 1 with initial-distance weights, lambda2 = 13.060.
   const std::vector<AgentId> ids = {1, 2, 3, 4};

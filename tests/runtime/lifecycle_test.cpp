@@ -71,14 +71,16 @@ TEST(Lifecycle, WaitingForMissingPeersIsABeaconAndReadyIsFast) {
   EXPECT_DOUBLE_EQ(s.wake_at_s, 0.22);
 }
 
-TEST(Lifecycle, WithASupervisorTheBarrierAlsoWaitsForItsReader) {
+TEST(Lifecycle, TheBarrierWaitsForItsPeersReadersAndTheSupervisorsRecordReader) {
   LifecycleConfig c = barrier_config();
-  c.min_matched_readers = 3;  // peers 2 and 3, and the supervisor
+  c.min_matched_readers = 2;  // peers 2 and 3
+  c.wait_recorder = true;
   AgentLifecycle life(c, 0.0);
   const std::vector<PeerStatus> ready = {{2, Phase::kReady, 0.0}, {3, Phase::kReady, 0.0}};
-  EXPECT_FALSE(life.step(0.0, ready, 2, 0.0).start);
+  EXPECT_FALSE(life.step(0.0, ready, 1, 0.0, true).start);     // one peer's reader missing
+  EXPECT_FALSE(life.step(0.005, ready, 2, 0.0, false).start);  // no recorder yet
   EXPECT_EQ(life.phase(), LifePhase::kWaiting);
-  EXPECT_TRUE(life.step(0.005, ready, 3, 0.0).start);
+  EXPECT_TRUE(life.step(0.01, ready, 2, 0.0, true).start);
 }
 
 TEST(Lifecycle, StartsAnywayAfterTheStartTimeoutAndSaysSo) {

@@ -28,6 +28,7 @@ class ThreadFedBus final : public NeighborBus {
     std::lock_guard<std::mutex> lock(mu_);
     ++gate_.counters().published;
   }
+  void record(const StateMessage&) override {}
   std::vector<StateMessage> latest(AgentId self) override {
     std::lock_guard<std::mutex> lock(mu_);
     return gate_.latest(self);

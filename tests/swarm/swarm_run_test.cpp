@@ -743,7 +743,10 @@ TEST(Record, AThreadLimitEndsTheRunNamingItWithNoAbortAndNoOrphan) {
   EXPECT_TRUE(emptied) << "processes left in the cgroup: " << left;
   EXPECT_NE(events.find("max "), std::string::npos);
   EXPECT_NE(events, "max 0\n") << "the limit never bit";
-  EXPECT_EQ(r.code, 1) << r.output;
+  // Not converged (1), or, when an agent starved of threads could not stop in time and write its
+  // stats, a record that says it is incomplete (3), naming the file.
+  EXPECT_TRUE(r.code == 1 || (r.code == 3 && r.output.find(".stats") != std::string::npos))
+      << r.output;
   EXPECT_EQ(r.output.find("signal"), std::string::npos) << r.output;
   EXPECT_EQ(r.output.find("swarm run: converged"), std::string::npos) << r.output;
   // Who ran out says so: an agent's (or the supervisor's) own line, or the launcher's fork.
