@@ -36,7 +36,8 @@ bool write_stats(const std::filesystem::path& path, const AgentLoop& loop, const
   out << "cpu_s " << cpu_s << "\nwall_s " << (since >= 0 ? wall_now_s - since : 0.0) << "\nsteps "
       << loop.ticks() << "\nphysics_steps " << loop.physics_steps() << "\noverruns "
       << loop.overruns() << "\ndiscovery_s " << loop.lifecycle().discovery_s() << "\nmax_rss_kb "
-      << ru.ru_maxrss << "\nreceived " << c.received << "\ndropped " << c.dropped << "\n";
+      << ru.ru_maxrss << "\nreceived " << c.received << "\ndropped " << c.dropped
+      << "\ninterest_changes " << loop.interest_changes() << "\n";
   return static_cast<bool>(out.flush());
 }
 

@@ -27,6 +27,7 @@ class DdsBus final : public NeighborBus {
   void publish(const StateMessage& msg) override { state_.publish(msg); }
   void record(const StateMessage& msg) override { state_.record(msg); }
   int recorders_matched() const override { return state_.recorders_matched(); }
+  void set_interest(const Interest& interest) override { state_.set_interest(interest); }
   std::vector<StateMessage> latest(AgentId self) override { return state_.latest(self); }
   void set_listener(Listener listener) override { state_.set_listener(std::move(listener)); }
   BusCounters counters() const override { return state_.counters(); }

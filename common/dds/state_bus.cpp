@@ -207,6 +207,34 @@ void DdsStateBus::publish(const StateMessage& msg) {
   }
 }
 
+namespace {
+// The DDS partitions of an interest: the run's partition, or one under it per name.
+dds::PartitionQosPolicy partitions(const std::string& run, const std::vector<std::string>& names) {
+  dds::PartitionQosPolicy p;
+  if (names.empty()) p.push_back(run.c_str());
+  for (const std::string& n : names) p.push_back((run + "/" + n).c_str());
+  return p;
+}
+}  // namespace
+
+void DdsStateBus::set_interest(const Interest& interest) {
+  Impl& d = *impl_;
+  if (d.opts.recorder) return;  // the supervisor hears the record stream, everyone's
+  const std::string run = run_partition(d.opts.run_id);
+  if (d.publisher) {
+    dds::PublisherQos q = d.publisher->get_qos();
+    q.partition() = partitions(run, interest.publish);
+    if (d.publisher->set_qos(q) != ReturnCode_t::RETCODE_OK)
+      throw std::runtime_error("dds: cannot move the state writer's partitions");
+  }
+  if (!d.opts.hear_all_runs) {
+    dds::SubscriberQos q = d.subscriber->get_qos();
+    q.partition() = partitions(run, interest.subscribe);
+    if (d.subscriber->set_qos(q) != ReturnCode_t::RETCODE_OK)
+      throw std::runtime_error("dds: cannot move the state reader's partitions");
+  }
+}
+
 void DdsStateBus::record(const StateMessage& msg) {
   Impl& d = *impl_;
   if (!d.record_writer) return;

@@ -52,6 +52,8 @@ class DdsStateBus final : public NeighborBus {
 
   void publish(const StateMessage& msg) override;
   void record(const StateMessage& msg) override;
+  // Moves the state writer's and reader's partitions (DDS re-matches them with their peers).
+  void set_interest(const Interest& interest) override;
   int recorders_matched() const override;
   std::vector<StateMessage> latest(AgentId self) override;
   // Called for every accepted sample, on a DDS thread. set_listener(nullptr) waits for a call in

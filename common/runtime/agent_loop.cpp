@@ -1,5 +1,7 @@
 #include "common/runtime/agent_loop.hpp"
 
+#include "common/runtime/neighbourhood.hpp"
+
 #include <algorithm>
 #include <cstdio>
 
@@ -17,7 +19,7 @@ LifecycleConfig lifecycle_config(const RunConfig& rc, AgentId id, const AgentLoo
   LifecycleConfig c;
   c.join_at_s = join_time(rc, id, o);
   if (!c.join_at_s) {
-    c.barrier_peers = rc.start_peers(id);
+    c.barrier_peers = start_peers(rc, id);
     c.min_matched_readers = static_cast<int>(c.barrier_peers.size());
     c.wait_recorder = o.wait_supervisor;
   }
@@ -50,7 +52,7 @@ AgentParams params_for(const RunConfig& rc, AgentId id, const AgentLoopOptions& 
   AgentParams p{*spec, rc.agent, {}};
   p.start.incarnation = o.incarnation;
   p.start.run_id = rc.transport.run_id;
-  p.start.expected_peers = rc.start_peers(id).size();
+  p.start.expected_peers = start_peers(rc, id).size();
   p.start.record_every = rc.record_every();
   if (join_time(rc, id, o)) {
     p.start.expected_peers = 0;  // joins a running swarm: no first-tick wait
@@ -69,7 +71,21 @@ AgentLoop::AgentLoop(const RunConfig& rc, AgentId id, const AgentLoopOptions& op
       transport_(transport),
       faulty_(transport, LinkFaults(rc.faults, id, rc.seed), id),
       runtime_(params_for(rc, id, opts), faulty_),
-      life_(lifecycle_config(rc, id, opts, clock.shared_origin_s()), clock.now_s()) {}
+      life_(lifecycle_config(rc, id, opts, clock.shared_origin_s()), clock.now_s()),
+      neighbourhood_(rc, id) {
+  update_interest();
+}
+
+void AgentLoop::update_interest() {
+  std::set<AgentId> linked;
+  for (const auto& [peer, w] : runtime_.law().links()) linked.insert(peer);
+  Interest in = neighbourhood_.update(runtime_.position(), runtime_.consensus(), linked);
+  if (interest_told_ && in == interest_) return;
+  interest_ = std::move(in);
+  if (interest_told_) ++interest_changes_;
+  interest_told_ = true;
+  transport_.set_interest(interest_);
+}
 
 std::uint64_t AgentLoop::ticks() const { return life_.pacer() ? life_.pacer()->ticks() : 0; }
 std::uint64_t AgentLoop::overruns() const { return life_.pacer() ? life_.pacer()->overruns() : 0; }
@@ -123,6 +139,7 @@ AgentLoop::Poll AgentLoop::poll() {
         r.notes.push_back({false, buf});
       }
     }
+    update_interest();  // it may have moved into another cell or gained a link
   }
   return r;
 }

@@ -9,6 +9,7 @@
 #include "common/runtime/agent_lifecycle.hpp"
 #include "common/runtime/agent_runtime.hpp"
 #include "common/runtime/faulty_bus.hpp"
+#include "common/runtime/neighbourhood.hpp"
 #include "common/scenario/run_config.hpp"
 
 namespace qswarm {
@@ -33,6 +34,10 @@ class AgentLoop {
  public:
   AgentLoop(const RunConfig& rc, AgentId id, const AgentLoopOptions& opts, NeighborBus& transport,
             Clock& clock);
+  // What the agent hears now (its neighbourhood's interest, last told to the transport).
+  const Interest& interest() const { return interest_; }
+  // How often its interest moved (each move makes DDS re-match its endpoints with every peer).
+  std::uint64_t interest_changes() const { return interest_changes_; }
 
   struct Note {
     bool warning = false;
@@ -61,6 +66,7 @@ class AgentLoop {
   double running_since_s() const;
 
  private:
+  void update_interest();
   AgentId id_;
   std::function<bool(AgentId)> is_agent_;
   Clock& clock_;
@@ -68,6 +74,10 @@ class AgentLoop {
   FaultyBus faulty_;
   AgentRuntime runtime_;
   AgentLifecycle life_;
+  Neighbourhood neighbourhood_;
+  Interest interest_;  // what the transport was last told
+  bool interest_told_ = false;
+  std::uint64_t interest_changes_ = 0;
   std::uint64_t physics_steps_ = 0;
 };
 

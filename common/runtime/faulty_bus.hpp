@@ -25,6 +25,7 @@ class FaultyBus final : public NeighborBus {
   void publish(const StateMessage& msg) override { inner_.publish(msg); }
   void record(const StateMessage& msg) override { inner_.record(msg); }
   int recorders_matched() const override { return inner_.recorders_matched(); }
+  void set_interest(const Interest& interest) override { inner_.set_interest(interest); }
   std::vector<StateMessage> latest(AgentId self) override;
   void set_listener(Listener listener) override;
   BusCounters counters() const override { return inner_.counters(); }

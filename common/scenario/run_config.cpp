@@ -42,18 +42,6 @@ std::uint32_t RunConfig::record_every() const {
       std::max(1L, std::lround(agent.consensus_hz / judge.record_hz)));
 }
 
-std::set<AgentId> RunConfig::start_peers(AgentId id) const {
-  std::set<AgentId> peers;
-  if (agent.law.topology.policy == TopologyPolicy::kFixed) {
-    peers = listed_peers(agent.law.topology, id);
-  } else {
-    for (const AgentSpec& a : agents)
-      if (a.id != id) peers.insert(a.id);
-  }
-  for (const AgentId late : faults.late_joiners()) peers.erase(late);
-  return peers;
-}
-
 std::vector<Vec3> formation_slots(int shape, int n, double spacing_m) {
   // Shapes as in proto/scenario.proto: 2 line, 3 grid, 4 circle, 5 lattice; else none.
   std::vector<Vec3> out;

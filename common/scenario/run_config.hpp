@@ -54,12 +54,17 @@ struct JudgeConfig {
   double record_hz = 10.0;
 };
 
+// Which samples an agent is sent: those of the agents that can be its neighbours (the default), or
+// everyone's.
+enum class Delivery { kNeighbours, kAll };
+
 // Where the run's DDS traffic goes.
 struct TransportConfig {
   std::uint32_t domain_id = 0;
   std::string interface = "127.0.0.1";  // DDS traffic stays on this host by default
   bool shared_memory = false;
   std::uint64_t run_id = 0;  // isolates this run on a shared DDS domain (0: the launcher draws one)
+  Delivery delivery = Delivery::kNeighbours;
 };
 
 // A scenario with every default filled in and random agents resolved: what a run actually uses.
@@ -84,10 +89,6 @@ struct RunConfig {
   // agent's slot (every agent of a rendezvous to one point). They cannot all reach their slots; the
   // record counts them arrived when they hold still. Empty without avoidance.
   std::set<AgentId> held_agents() const;
-  // The one definition of the peers agent `id` waits for at the start (the barrier, and the law's
-  // first tick): its listed neighbours on a FIXED graph, every other agent otherwise, and never an
-  // agent that the fault plan has joining late.
-  std::set<AgentId> start_peers(AgentId id) const;
   // Wall seconds an agent waits at the start barrier before it starts anyway, and the supervisor
   // for the first running agent: discovery grows with the swarm (100 agents on 2 cores took 25 s),
   // so 30 s plus half a second per agent.

@@ -370,6 +370,7 @@ void resolve_transport(const scenario::Transport& t, RunConfig& rc) {
     fail("transport.interface", "an IPv4 address such as 127.0.0.1", "\"\"");
   if (t.has_shared_memory()) tc.shared_memory = t.shared_memory();
   tc.run_id = t.run_id();
+  tc.delivery = t.delivery() == scenario::Transport::ALL ? Delivery::kAll : Delivery::kNeighbours;
 }
 
 // Checks shared by the fault entries: agent ids, time windows, probabilities.
@@ -513,6 +514,9 @@ void write_back_defaults(RunConfig& rc, scenario::Scenario& s) {
   s.mutable_transport()->set_interface(rc.transport.interface);
   s.mutable_transport()->set_shared_memory(rc.transport.shared_memory);
   s.mutable_transport()->set_run_id(rc.transport.run_id);
+  s.mutable_transport()->set_delivery(rc.transport.delivery == Delivery::kAll
+                                          ? scenario::Transport::ALL
+                                          : scenario::Transport::NEIGHBOURS);
   s.mutable_avoidance()->set_enabled(rc.agent.avoidance.enabled);
 }
 

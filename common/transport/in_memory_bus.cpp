@@ -13,7 +13,7 @@ void InMemoryNetwork::detach(InMemoryBus* bus) {
 }
 
 void InMemoryNetwork::post(const InMemoryBus* from, const StateMessage& m, bool record) {
-  queue_.push_back({from, m, record});
+  queue_.push_back({from, m, record, from ? from->interest() : Interest{}});
 }
 
 void InMemoryNetwork::deliver() {
@@ -22,8 +22,11 @@ void InMemoryNetwork::deliver() {
   for (const Posted& p : round) {
     const InMemoryBus::Role to_role =
         p.record ? InMemoryBus::Role::kRecorder : InMemoryBus::Role::kAgent;
-    for (InMemoryBus* to : endpoints_)
-      if (to != p.from && to->role() == to_role) to->receive(p.m);
+    for (InMemoryBus* to : endpoints_) {
+      if (to == p.from || to->role() != to_role) continue;
+      // A record goes to every recorder; a sample to whoever listens where it was published.
+      if (p.record || Interest::meets(p.published, to->interest())) to->receive(p.m);
+    }
   }
 }
 

@@ -29,6 +29,7 @@ class InMemoryNetwork {
     const InMemoryBus* from;
     StateMessage m;
     bool record;
+    Interest published;  // where the sender published it
   };
   std::vector<InMemoryBus*> endpoints_;
   std::vector<Posted> queue_;
@@ -53,6 +54,8 @@ class InMemoryBus final : public NeighborBus {
     return net_.endpoints(Role::kAgent) - (role_ == Role::kAgent ? 1 : 0);
   }
   Role role() const { return role_; }
+  void set_interest(const Interest& interest) override { interest_ = interest; }
+  const Interest& interest() const { return interest_; }
   std::vector<StateMessage> latest(AgentId self) override { return gate_.latest(self); }
   void set_listener(Listener listener) override { listener_ = std::move(listener); }
   // A sample arriving from the network (or a test acting as a stranger on it).
@@ -63,6 +66,7 @@ class InMemoryBus final : public NeighborBus {
  private:
   InMemoryNetwork& net_;
   Role role_;
+  Interest interest_;
   SampleGate gate_;
   Listener listener_;
 };

@@ -5,6 +5,7 @@
 #include <set>
 #include <vector>
 
+#include "common/transport/interest.hpp"
 #include "common/transport/state_message.hpp"
 
 namespace qswarm {
@@ -41,6 +42,9 @@ class NeighborBus {
   virtual int matched_readers() const { return 0; }
   // Recorders matched to our record stream (the start barrier waits for the supervisor's).
   virtual int recorders_matched() const { return 0; }
+  // Which parts of the state stream this endpoint publishes into and hears (the agents that can
+  // be its neighbours: see Neighbourhood). The default is the whole run.
+  virtual void set_interest(const Interest& interest) { (void)interest; }
   // Other runs heard on this transport (their run ids; their samples were refused as foreign).
   virtual std::set<std::uint64_t> foreign_runs() const { return {}; }
   // Ids outside the run whose samples the transport dropped before the gate saw them (the DDS

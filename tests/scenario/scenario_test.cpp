@@ -184,19 +184,6 @@ TEST(Scenario, TheSchemasDocumentedDefaultsAreTheResolvedOnes) {
   EXPECT_GE(checked, 21) << "the schema's defaults were not found: has its comment style changed?";
 }
 
-TEST(Scenario, StartPeersAreOneDefinitionFixedAwareWithoutLateJoiners) {
-  const RunConfig rc = resolve_scenario(parse_scenario_text(
-      kTwo +
-          "agents { id: 3 }\nagents { id: 4 }\n"
-          "topology { policy: FIXED edges { a: 1 b: 2 } edges { a: 2 b: 3 } edges { a: 3 b: 4 } }\n"
-          "faults { late_join { agent: 3 at_s: 2 } }\n",
-      "s"));
-  EXPECT_EQ(rc.start_peers(2), (std::set<AgentId>{1}));  // 3 joins late
-  EXPECT_EQ(rc.start_peers(4), (std::set<AgentId>{}));
-  const RunConfig open = resolve_scenario(parse_scenario_text(kTwo + "agents { id: 3 }\n", "s"));
-  EXPECT_EQ(open.start_peers(1), (std::set<AgentId>{2, 3}));
-}
-
 TEST(Scenario, FilesThatAreNotRegularOrTooLargeAreRefusedUnread) {
   for (const std::string path : {"/dev/zero", "/dev/null", "/tmp"}) {
     try {

@@ -1,0 +1,126 @@
+#include "common/runtime/neighbourhood.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+namespace qswarm {
+namespace {
+
+Eigen::Vector3i cell_of(const Vec3& x, double cell_m) {
+  const auto c = [&](double v) {
+    // Far-off coordinates stay far off without overflowing (a sample is never beyond 1000 km).
+    return static_cast<int>(std::clamp(std::floor(v / cell_m), -1e9, 1e9));
+  };
+  return {c(x.x()), c(x.y()), c(x.z())};
+}
+
+std::string cell_name(char tag, const Eigen::Vector3i& c) {
+  char buf[48];
+  std::snprintf(buf, sizeof buf, "%c%d.%d.%d", tag, c.x(), c.y(), c.z());
+  return buf;
+}
+
+// Whether x lies within `keep_m` of cell c (its box grown by keep_m on every side).
+bool near_cell(const Vec3& x, const Eigen::Vector3i& c, double cell_m, double keep_m) {
+  for (int k = 0; k < 3; ++k) {
+    const double lo = c[k] * cell_m - keep_m, hi = (c[k] + 1) * cell_m + keep_m;
+    if (x[k] < lo || x[k] >= hi) return false;
+  }
+  return true;
+}
+
+std::string id_name(AgentId id) { return "a" + std::to_string(id); }
+
+void sort_unique(std::vector<std::string>& v) {
+  std::sort(v.begin(), v.end());
+  v.erase(std::unique(v.begin(), v.end()), v.end());
+}
+
+}  // namespace
+
+double Neighbourhood::margin_m(double reach_m) { return std::max(1.0, 0.25 * reach_m); }
+
+Neighbourhood::Neighbourhood(const RunConfig& rc, AgentId self) : self_(self) {
+  const TopologyConfig& t = rc.agent.law.topology;
+  whole_run_ = rc.transport.delivery == Delivery::kAll;
+  for (const auto& [a, b] : t.edges) {
+    if (a == self) listed_.insert(b);
+    if (b == self) listed_.insert(a);
+  }
+  // Links that outlive the reach (sticky proximity keeps them however far) are heard by name;
+  // other links lie within the reach, which the cells cover (and naming them would move the
+  // partitions, and make DDS re-match, at every link that comes and goes).
+  by_name_ = t.policy == TopologyPolicy::kStickyProximity;
+  const double reach = t.threshold_m + t.hysteresis_m;
+  const auto space = [&](char tag, double r) {
+    spaces_.push_back({tag, r + 2.0 * margin_m(r), 0.5 * margin_m(r), std::nullopt});
+  };
+  if (t.policy == TopologyPolicy::kProximity || t.policy == TopologyPolicy::kStickyProximity)
+    space('q', reach);
+  double physical = t.policy == TopologyPolicy::kRange ? reach : 0.0;
+  // The avoidance filter acts on quadcopters within its distance; its reach here also covers a
+  // second of closing at the reference's top speed.
+  if (rc.agent.avoidance.enabled && rc.agent.mode == AgentMode::kQuadcopter)
+    physical = std::max(
+        physical, rc.agent.avoidance.filter_distance_m() + 2.0 * rc.agent.reference_speed_mps);
+  if (physical > 0.0) space('p', physical);
+}
+
+Interest Neighbourhood::update(const Vec3& p_W, const Vec3& q, const std::set<AgentId>& linked) {
+  Interest in;
+  if (whole_run_) return in;
+  in.publish.push_back(id_name(self_));
+  for (Space& s : spaces_) {
+    const Vec3& x = s.tag == 'q' ? q : p_W;
+    if (!s.cell || !near_cell(x, *s.cell, s.cell_m, s.keep_m)) s.cell = cell_of(x, s.cell_m);
+    in.publish.push_back(cell_name(s.tag, *s.cell));
+    for (int dx = -1; dx <= 1; ++dx)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dz = -1; dz <= 1; ++dz)
+          in.subscribe.push_back(cell_name(s.tag, *s.cell + Eigen::Vector3i(dx, dy, dz)));
+  }
+  for (const AgentId id : listed_) in.subscribe.push_back(id_name(id));
+  if (by_name_)
+    for (const AgentId id : linked)
+      if (id != self_) in.subscribe.push_back(id_name(id));
+  sort_unique(in.publish);
+  sort_unique(in.subscribe);
+  return in;
+}
+
+std::set<AgentId> Neighbourhood::heard_at_start(const RunConfig& rc, AgentId id) {
+  std::set<AgentId> out;
+  const AgentSpec* me = rc.spec(id);
+  if (!me) return out;
+  Neighbourhood mine(rc, id);
+  const Interest in = mine.update(me->position_W, me->q0(), {});
+  for (const AgentSpec& a : rc.agents) {
+    if (a.id == id) continue;
+    Neighbourhood theirs(rc, a.id);
+    if (Interest::meets(theirs.update(a.position_W, a.q0(), {}), in)) out.insert(a.id);
+  }
+  return out;
+}
+
+std::set<AgentId> start_peers(const RunConfig& rc, AgentId id) {
+  std::set<AgentId> peers;
+  const TopologyConfig& t = rc.agent.law.topology;
+  if (t.policy == TopologyPolicy::kFixed && rc.transport.delivery == Delivery::kAll) {
+    peers = listed_peers(t, id);  // everyone is heard, but only the listed are neighbours
+  } else {
+    peers = Neighbourhood::heard_at_start(rc, id);
+    if (t.policy == TopologyPolicy::kFixed) {
+      // Under avoidance physical neighbours are heard too; the law waits only for its graph.
+      const std::set<AgentId> listed = listed_peers(t, id);
+      std::set<AgentId> both;
+      for (const AgentId p : peers)
+        if (listed.count(p)) both.insert(p);
+      peers = both;
+    }
+  }
+  for (const AgentId late : rc.faults.late_joiners()) peers.erase(late);
+  return peers;
+}
+
+}  // namespace qswarm

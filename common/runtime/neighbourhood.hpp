@@ -1,0 +1,66 @@
+#pragma once
+
+#include <optional>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "common/scenario/run_config.hpp"
+#include "common/transport/interest.hpp"
+
+namespace qswarm {
+
+// Which agents an agent must hear, as partitions of the run's state stream: those that can be its
+// neighbours soon, and no others, so that the traffic each process handles follows its degree, not
+// the swarm's size.
+//
+// Space is cut into cubic cells of the link reach (threshold + hysteresis) plus twice a margin; an
+// agent publishes into its cell and listens to that cell and the 26 around it. It keeps its cell
+// until it is half a margin outside it (moving cells makes DDS re-match its endpoints with every
+// peer: an agent resting on a cell's border must not flap), so any two agents within the reach
+// plus one margin hear each other: the margin is for links about to form and for motion while DDS
+// re-matches. The cells are in the space the topology measures: consensus states for
+// proximity, physical positions for radio range; and, with collision avoidance, physical cells of
+// the filter's reach too (a radio hears everyone near, whatever the graph). Every agent also
+// publishes into a partition of its own id, which others listen to when they must hear it by name:
+// listed edges (a FIXED graph hears only those), and, under sticky proximity, the links it holds
+// (kept however far). Under `transport { delivery: ALL }` everyone hears everyone (the empty
+// interest). Pure.
+class Neighbourhood {
+ public:
+  Neighbourhood(const RunConfig& rc, AgentId self);
+
+  // The interest of the agent at physical position p_W with consensus state q, holding links to
+  // `linked`; it moves to another cell only once half a margin outside its own.
+  Interest update(const Vec3& p_W, const Vec3& q, const std::set<AgentId>& linked);
+  // Whether it hears the whole run (delivery ALL).
+  bool whole_run() const { return whole_run_; }
+
+  // The agents that agent `id` of `rc` hears at the start (at their start positions, before any
+  // link): its start barrier waits for exactly these.
+  static std::set<AgentId> heard_at_start(const RunConfig& rc, AgentId id);
+
+  // The margin beyond the link reach a cell leaves for links about to form.
+  static double margin_m(double reach_m);
+
+ private:
+  struct Space {
+    char tag;                             // 'q' consensus states, 'p' physical positions
+    double cell_m;                        // edge of a cell
+    double keep_m;                        // how far outside its cell an agent keeps it
+    std::optional<Eigen::Vector3i> cell;  // the agent's cell, once placed
+  };
+  AgentId self_;
+  bool whole_run_ = false;
+  std::vector<Space> spaces_;
+  std::set<AgentId> listed_;
+  bool by_name_ = false;  // links are heard by name too
+};
+
+// The one definition of the peers agent `id` waits for at the start (the barrier, and the law's
+// first tick): the agents it hears at the start (Neighbourhood::heard_at_start: its listed
+// neighbours on a FIXED graph, the agents near enough to be neighbours otherwise, everyone under
+// delivery ALL), never an agent the fault plan has joining late.
+std::set<AgentId> start_peers(const RunConfig& rc, AgentId id);
+
+}  // namespace qswarm

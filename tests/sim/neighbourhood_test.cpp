@@ -1,0 +1,177 @@
+// Traffic that follows the graph: an agent hears the agents that can be its neighbours soon and no
+// others (Neighbourhood), and no agent misses a neighbour it should have had: in-process runs give
+// the same graph, edge for edge and tick for tick, as the same runs with everyone hearing everyone.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "common/runtime/neighbourhood.hpp"
+#include "common/scenario/scenario.hpp"
+#include "common/sim/in_process_swarm.hpp"
+
+namespace qswarm {
+namespace {
+
+RunConfig load(const std::string& text, const std::string& extra = "") {
+  return resolve_scenario(parse_scenario_text(text + extra, "s"));
+}
+
+TEST(Neighbourhood, CellsCoverTheLinkReachAndIdsCoverTheGraph) {
+  // Radio range 4.5 m (+ 0.5 hysteresis): cells of 5 + 1.25 m in physical space.
+  const RunConfig rc = load(
+      "agents { id: 1 position { x: 0 y: 0 z: 0 } }\n"
+      "agents { id: 2 position { x: 6 y: 0 z: 0 } }\n"
+      "agents { id: 3 position { x: 10 y: 0 z: 0 } }\n"
+      "agents { id: 4 position { x: 40 y: 0 z: 0 } }\n"
+      "topology { policy: RANGE threshold_m: 4.5 hysteresis_m: 0.5 edges { a: 1 b: 4 } }\n");
+  Neighbourhood n1(rc, 1);
+  const Interest in = n1.update(Vec3(0, 0, 0), Vec3(0, 0, 0), {});
+  EXPECT_EQ(in.publish, (std::vector<std::string>{"a1", "p0.0.0"}));
+  EXPECT_EQ(in.subscribe.size(), 27u + 1u);  // 27 cells and the listed edge's agent
+  // Who hears whom at the start: within one cell of each other (so also 3, 10 m from 1: cells
+  // over-approximate), and the listed edge both ways.
+  EXPECT_EQ(Neighbourhood::heard_at_start(rc, 1), (std::set<AgentId>{2, 3, 4}));
+  EXPECT_EQ(Neighbourhood::heard_at_start(rc, 2), (std::set<AgentId>{1, 3}));
+  EXPECT_EQ(Neighbourhood::heard_at_start(rc, 4), (std::set<AgentId>{1}));
+  // Under radio range a link lies within the cells; under sticky proximity it is heard by name,
+  // however far.
+  EXPECT_EQ(n1.update(Vec3(0, 0, 0), Vec3(0, 0, 0), {3}), in);
+  const RunConfig sticky = load(
+      "agents { id: 1 } agents { id: 3 position { x: 100 } }\n"
+      "topology { policy: STICKY_PROXIMITY threshold_m: 5 }\n");
+  const Interest linked = Neighbourhood(sticky, 1).update(Vec3(0, 0, 0), Vec3(0, 0, 0), {3});
+  EXPECT_TRUE(std::binary_search(linked.subscribe.begin(), linked.subscribe.end(), "a3"));
+  // Everyone hears everyone under delivery ALL: the empty interest.
+  const RunConfig all = load(
+      "agents { id: 1 } agents { id: 2 position { x: 100 } }\n"
+      "transport { delivery: ALL }\n");
+  EXPECT_TRUE(Neighbourhood(all, 1).whole_run());
+  EXPECT_EQ(Neighbourhood::heard_at_start(all, 1), (std::set<AgentId>{2}));
+}
+
+TEST(Neighbourhood, EveryPairWithinTheReachPlusMarginHearsEachOtherAsTheyWander) {
+  const RunConfig rc = load(
+      "agents { id: 1 } agents { id: 2 position { x: 1 } }\n"
+      "topology { policy: RANGE threshold_m: 4.5 hysteresis_m: 0.5 }\n");
+  const double reach = 5.0 + Neighbourhood::margin_m(5.0);
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> step(-0.4, 0.4), u(-30.0, 30.0);
+  int close = 0, moves = 0;
+  for (int walk = 0; walk < 200; ++walk) {
+    // Two agents wander (each keeping its cell until half a margin outside it), often close.
+    Neighbourhood a(rc, 1), b(rc, 2);
+    Vec3 pa(u(rng), u(rng), u(rng)), pb = pa + Vec3(step(rng), step(rng), step(rng)) * 10.0;
+    Interest last_a;
+    for (int k = 0; k < 400; ++k) {
+      pa += Vec3(step(rng), step(rng), step(rng));
+      pb += Vec3(step(rng), step(rng), step(rng)) + 0.02 * (pa - pb);  // drawn to each other
+      const Interest ia = a.update(pa, pa, {}), ib = b.update(pb, pb, {});
+      moves += ia != last_a;
+      last_a = ia;
+      if ((pa - pb).norm() > reach) continue;
+      ++close;
+      ASSERT_TRUE(Interest::meets(ia, ib) && Interest::meets(ib, ia))
+          << "walk " << walk << " step " << k << ": " << (pa - pb).norm() << " m apart";
+    }
+  }
+  EXPECT_GT(close, 20000);          // the property was tested, not skipped
+  EXPECT_LT(moves, 200 * 400 / 5);  // and cells do not flap at every step
+}
+
+TEST(Neighbourhood, TheWorstCaseAcrossCellBordersStillHearsWithinTheReachPlusMargin) {
+  // Agent 1 comes from the left and stops at x; agent 2 comes from the right and stops just within
+  // the reach plus margin of it: each keeps the cell it came from as long as it may, the farthest
+  // apart their cells can be.
+  const RunConfig rc = load(
+      "agents { id: 1 } agents { id: 2 position { x: 1 } }\n"
+      "topology { policy: RANGE threshold_m: 4.5 hysteresis_m: 0.5 }\n");
+  const double d = 5.0 + Neighbourhood::margin_m(5.0) - 1e-6;
+  for (double x = 0.0; x < 20.0; x += 0.05) {
+    Neighbourhood a(rc, 1), b(rc, 2);
+    Interest ia, ib;
+    for (double at = x - 10.0; at <= x; at += 0.05) ia = a.update(Vec3(at, 0, 0), Vec3::Zero(), {});
+    ia = a.update(Vec3(x, 0, 0), Vec3::Zero(), {});
+    for (double at = x + d + 10.0; at >= x + d; at -= 0.05)
+      ib = b.update(Vec3(at, 0, 0), Vec3::Zero(), {});
+    ib = b.update(Vec3(x + d, 0, 0), Vec3::Zero(), {});
+    ASSERT_TRUE(Interest::meets(ia, ib) && Interest::meets(ib, ia)) << "at x = " << x;
+  }
+}
+
+TEST(Neighbourhood, AFixedGraphHearsExactlyItsEdgesAndStartPeersLeaveOutLateJoiners) {
+  const RunConfig rc = load(
+      "agents { id: 1 } agents { id: 2 } agents { id: 3 } agents { id: 4 }\n"
+      "topology { policy: FIXED edges { a: 1 b: 2 } edges { a: 2 b: 3 } edges { a: 3 b: 4 } }\n"
+      "faults { late_join { agent: 3 at_s: 2 } }\n");
+  EXPECT_EQ(Neighbourhood(rc, 2).update(Vec3::Zero(), Vec3::Zero(), {}).subscribe,
+            (std::vector<std::string>{"a1", "a3"}));
+  EXPECT_EQ(start_peers(rc, 2), (std::set<AgentId>{1}));  // 3 joins late
+  EXPECT_EQ(start_peers(rc, 4), (std::set<AgentId>{}));
+}
+
+std::vector<std::string> edge_lists(const RunDir& dir) {
+  std::ifstream in(dir.graph());
+  std::vector<std::string> out;
+  std::string row;
+  std::getline(in, row);
+  while (std::getline(in, row)) out.push_back(row.substr(row.rfind(',') + 1));
+  return out;
+}
+
+RunDir fresh(const std::string& name) {
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() /
+      ("qswarm-neighbourhood-" + name + "-" + std::to_string(::getpid()));
+  std::filesystem::remove_all(dir);
+  return RunDir::claim(dir.string(), name, "t");
+}
+
+// The same run twice, hearing everyone and hearing neighbours: the graph the recorder saw, row by
+// row, must be the same.
+void same_graph_both_ways(const std::string& scenario, double wall_s) {
+  std::vector<std::string> graphs[2];
+  int k = 0;
+  for (const char* delivery : {"ALL", "NEIGHBOURS"}) {
+    const RunConfig rc = load(scenario, std::string("transport { delivery: ") + delivery + " }\n");
+    const RunDir dir = fresh(delivery);
+    {
+      InProcessSwarm swarm(rc, 1.0, dir);
+      swarm.run_until_wall(wall_s);
+      swarm.run_recorded(wall_s);
+    }
+    graphs[k++] = edge_lists(dir);
+    std::filesystem::remove_all(dir.path());
+  }
+  ASSERT_GT(graphs[0].size(), 10u);
+  EXPECT_EQ(graphs[0], graphs[1]);
+}
+
+TEST(NeighbourDelivery, ThePapersTimeVaryingGraphIsTheSameAsWhenEveryoneHearsEveryone) {
+  same_graph_both_ways(
+      "agents { id: 1 position { x: 16 y: 5 z: 36 } }\n"
+      "agents { id: 2 position { x: 19 y: 19 z: 29 } }\n"
+      "agents { id: 3 position { x: 12 y: 16 z: 33 } }\n"
+      "agents { id: 4 position { x: 14 y: 1 z: 26 } }\n"
+      "weight { policy: DISTANCE } topology { policy: STICKY_PROXIMITY threshold_m: 12.5 }\n"
+      "convergence { tolerance_m: 0.008 hold_s: 0.5 } duration_s: 120 seed: 1\n",
+      25.0);
+}
+
+TEST(NeighbourDelivery, AThirtyTwoAgentFormationOverRadioRangeHasTheSameGraphAsAllToAll) {
+  // Spread over many cells (6.25 m each) and flying across them into a lattice.
+  same_graph_both_ways(
+      "random_agents { count: 32 box_m: 24 }\n"
+      "weight { policy: UNWEIGHTED } topology { policy: RANGE threshold_m: 4.5 hysteresis_m: 0.5 "
+      "}\n"
+      "formation { shape: LATTICE spacing_m: 3 } convergence { tolerance_m: 0.005 hold_s: 1 }\n"
+      "duration_s: 60 seed: 3\n",
+      20.0);
+}
+
+}  // namespace
+}  // namespace qswarm
