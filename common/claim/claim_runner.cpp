@@ -23,7 +23,7 @@ IdClaimRunner::IdClaimRunner(ClaimBus& bus, std::vector<AgentId> roster, std::ui
 IdClaimer::Step IdClaimRunner::poll(const std::function<void(const std::string&)>& progress) {
   const double now = clock_.now_s();
   const int matched = bus_.claim_writers_matched();
-  const IdClaimer::Step s = claimer_.step(now, bus_.claims(), matched);
+  IdClaimer::Step s = claimer_.step(now, bus_.claims(), matched);
   if (progress && now >= next_progress_s_) {
     progress(claimer_.status(now, matched));
     next_progress_s_ += 10.0;

@@ -26,7 +26,7 @@ struct RosterExpression {
 // The filter's expression: the ids as ranges of consecutive ids ("1-8,10" for 1..8 and 10), then
 // ";self=ID" when it is set; and back (nullopt for anything malformed).
 std::string roster_filter(std::vector<AgentId> roster, AgentId self = 0);
-std::optional<RosterExpression> parse_roster_filter(const std::string& expr);
+std::optional<RosterExpression> parse_roster_filter(const std::string& text);
 
 // Where the filter reads the id in a sample (idl/swarm_state.idl, plain CDR: a 4-byte
 // encapsulation header, then the id): checked against a serialized sample by a test.

@@ -212,7 +212,12 @@ namespace {
 dds::PartitionQosPolicy partitions(const std::string& run, const std::vector<std::string>& names) {
   dds::PartitionQosPolicy p;
   if (names.empty()) p.push_back(run.c_str());
-  for (const std::string& n : names) p.push_back((run + "/" + n).c_str());
+  for (const std::string& n : names) {
+    std::string full = run;
+    full += '/';
+    full += n;
+    p.push_back(full.c_str());
+  }
   return p;
 }
 }  // namespace

@@ -92,7 +92,7 @@ void InProcessSwarm::crash(AgentId id) {
 std::string InProcessSwarm::run_recorded(double max_wall_s) {
   if (!supervisor_) throw std::logic_error("run_recorded: this swarm has no run directory");
   run_until([this] { return end_reason_.has_value(); }, max_wall_s);
-  const std::string reason = end_reason_.value_or("interrupted");
+  std::string reason = end_reason_.value_or("interrupted");
   // Like the launcher: the supervisor first, so it keeps the agents' last states; then the agents
   // say they stop.
   const std::string text = supervisor_->finish(reason);
