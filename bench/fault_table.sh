@@ -15,7 +15,7 @@ report() { PYTHONPATH=python /usr/bin/python3 -m qswarm.report "$@"; }
 median() { sort -g | awk '{a[NR]=$1} END {print (NR % 2) ? a[(NR+1)/2] : (a[NR/2] + a[NR/2+1]) / 2}'; }
 printf "| loss | law | agreed-value drift [m] (median) | relative error | convergence time [s] (median) |\n"
 printf "| --- | --- | --- | --- | --- |\n"
-domain=160
+domain=${DOMAIN:-15}  # one run at a time: each reuses the domain the last one left
 for loss in 0 0.1 0.3 0.5; do
   for law in edge-flow laplacian; do
     drifts=() times=() rels=()
@@ -23,7 +23,7 @@ for loss in 0 0.1 0.3 0.5; do
       dir="$OUT/$law-$loss-$seed"
       rm -rf "$dir"
       "$BUILD"/bin/swarm run scenarios/faults_six.txtpb --law "$law" --loss "$loss" --seed "$seed" \
-        --time-scale 4 --domain $((domain++)) --out "$dir" --quiet >/dev/null 2>&1 || true
+        --time-scale 4 --domain "$domain" --out "$dir" --quiet >/dev/null 2>&1 || true
       read -r drift rel t < <(report "$dir" average_drift_m average_relative_error \
         convergence_time_s)
       drifts+=("$drift") rels+=("$rel") times+=("$t")

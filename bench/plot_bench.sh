@@ -15,7 +15,7 @@ rm -rf "$OUT"
 mkdir -p "$(dirname "$OUT")"
 # Time scale 2 keeps 64 processes within two cores; the record is in simulated time either way.
 $BIN/swarm run bench/scale.txtpb --agents "$N" --seed 1 --duration "$D" --time-scale 2 \
-  --out "$OUT" --domain 149 --quiet >/dev/null 2>&1 || true
+  --out "$OUT" --domain 14 --quiet >/dev/null 2>&1 || true
 # The run's numbers, read by the Python package (no file name spelled here).
 report() { PYTHONPATH=python /usr/bin/python3 -m qswarm.report "$OUT" "$@"; }
 rows=$(report telemetry.rows) || { echo "plot_bench: the run wrote no summary" >&2; exit 1; }

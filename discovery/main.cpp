@@ -25,7 +25,7 @@ int main(int argc, char** argv) {
   app.add_option("--listen", listen,
                  "IPv4 address or host name to listen on (default: this host's name)");
   app.add_option("--port", port, "UDP port")->check(CLI::Range(1, 65535));
-  app.add_option("--domain", domain, "DDS domain id")->check(CLI::Range(0, 232));
+  app.add_option("--domain", domain, "DDS domain id")->check(CLI::Range(0, 51));
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -41,6 +41,10 @@ std::vector<std::string> Launcher::supervisor_argv() const {
                                 "--time-scale",
                                 num(spec_.time_scale)};
   if (spec_.progress) a.push_back("--progress");
+  if (spec_.participant_base >= 0) {
+    a.push_back("--participant-id");
+    a.push_back(std::to_string(spec_.participant_base));
+  }
   return a;
 }
 
@@ -60,6 +64,14 @@ std::vector<std::string> Launcher::agent_argv(AgentId id, double join_at_s, bool
   }
   if (restart) a.push_back("--restart");
   a.push_back("--wait-supervisor");
+  if (spec_.participant_base >= 0) {
+    // Its own place in the port plan, the same for every life (a dead process frees its ports).
+    int index = 0;
+    while (index < static_cast<int>(spec_.rc.agents.size()) && spec_.rc.agents[index].id != id)
+      ++index;
+    a.push_back("--participant-id");
+    a.push_back(std::to_string(spec_.participant_base + 1 + index));
+  }
   for (unsigned ign : spec_.ignore_sigterm)
     if (ign == id) a.push_back("--ignore-sigterm");
   return a;
@@ -121,6 +133,12 @@ void Launcher::on_agent_exit(const ChildProcesses::Child& c) {
 }
 
 std::optional<std::string> Launcher::poll(bool interrupted) {
+  std::optional<std::string> why = next_end(interrupted);
+  if (why) end_ = *why;
+  return why;
+}
+
+std::optional<std::string> Launcher::next_end(bool interrupted) {
   for (const auto& c : procs_.reap()) {
     if (c.role == "agent") {
       std::fprintf(stderr, "swarm run: agent %u %s\n", c.id, describe_status(c.status).c_str());
@@ -130,7 +148,7 @@ std::optional<std::string> Launcher::poll(bool interrupted) {
   if (!procs_.children().front().running) return why_.empty() ? "supervisor finished" : why_;
   if (interrupted) return "interrupted";
   if (!why_.empty()) return why_;
-  if (clock_.now_s() - started_s_ > wall_limit_s()) return "the supervisor did not finish in time";
+  if (clock_.now_s() - started_s_ > wall_limit_s()) return std::string(kLate);
   return std::nullopt;
 }
 
@@ -161,9 +179,11 @@ Launcher::Outcome Launcher::conclude(double wall_time_s) {
   Outcome out;
   const int sup = supervisor_status();
   const RunDir& dir = spec_.dir;
-  if (!std::filesystem::exists(dir.summary())) {
-    // The supervisor died before it could write the summary: the launcher says why.
-    const std::string reason = "supervisor " + describe_status(sup);
+  if (!dir.summary_readable()) {
+    // The supervisor died before it could write the summary (or a stranger's file is there): the
+    // launcher says why.
+    std::string reason = "supervisor " + describe_status(sup);
+    if (!end_.empty() && end_ != "supervisor finished") reason = end_ + "; " + reason;
     out.lines.push_back(reason + "; the summary says so");
     out.exit_code = dir.write_fallback_summary(spec_.rc, reason, wall_time_s) ? 1 : 3;
     return out;
@@ -183,6 +203,8 @@ Launcher::Outcome Launcher::conclude(double wall_time_s) {
                       num(spec_.grace_s) + " s of grace?)");
   }
   std::vector<std::string> unseen = problems_;
+  // A supervisor stopped at the wall limit wrote a summary, but not why it was stopped.
+  if (end_ == kLate) unseen.push_back(end_ + " (wall limit " + num(wall_limit_s()) + " s)");
   unseen.insert(unseen.end(), missing.begin(), missing.end());
   for (const std::string& m : missing) out.lines.push_back(m);
   // What the supervisor could not see still unmakes "converged" in the record.

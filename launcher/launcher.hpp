@@ -25,6 +25,9 @@ struct LaunchSpec {
   bool stop_on_agent_exit = false;
   std::vector<unsigned> ignore_sigterm;  // (tests) agents started with --ignore-sigterm
   double supervisor_ready_timeout_s = 20.0;
+  // The first of the run's participant ids in the port plan: the supervisor takes it, agent k (in
+  // the scenario's order) the k-th after it. -1: Fast DDS picks (tests without processes).
+  int participant_base = -1;
 };
 
 // The launcher as a unit: it starts the supervisor and, once it listens, one process per agent;
@@ -63,6 +66,8 @@ class Launcher {
   std::vector<std::string> supervisor_argv() const;
 
  private:
+  static constexpr const char* kLate = "the supervisor did not finish in time";
+  std::optional<std::string> next_end(bool interrupted);
   void on_agent_exit(const ChildProcesses::Child& c);
   void note_abnormal(const ChildProcesses::Child& c, bool at_teardown);
 
@@ -74,6 +79,7 @@ class Launcher {
   RestartPolicy restarts_;
   std::vector<AgentId> at_teardown_;  // agents whose life was still running at teardown
   std::string why_;
+  std::string end_;  // what poll() last said ended the run
   std::vector<std::string> problems_;
 };
 

@@ -22,6 +22,7 @@
 #include "common/scenario/fault_flags.hpp"
 #include "common/scenario/scenario.hpp"
 #include "common/sim/paper_maneuvers.hpp"
+#include "common/transport/port_plan.hpp"
 #include "launcher/inspect.hpp"
 #include "launcher/launcher.hpp"
 #include "launcher/process_group.hpp"
@@ -120,6 +121,31 @@ int run(const RunOptions& opt) {
     std::cerr << "swarm run: " << e.what() << "\n";
     return 2;
   }
+  // Every process gets its own participant id, from a block whose ports are free on this host (so
+  // hundreds of processes come up without Fast DDS shifting ports, and two runs on one domain do
+  // not collide); a domain without room is the user's to change.
+  const int participants = static_cast<int>(rc.agents.size()) + 1;
+  std::optional<PortReservation> ports;
+  std::optional<int> base;
+  try {
+    if (auto r = PortReservation::reserve(rc.transport.domain_id, participants,
+                                          rc.transport.interface)) {
+      ports.emplace(std::move(*r));
+      base = ports->base();
+    }
+  } catch (const std::exception& e) {
+    // Without the registry a run still takes ports that are free now; only a second run started
+    // at the same moment on the same domain could then choose the same ones.
+    std::cerr << "swarm run: warning: " << e.what() << "\n";
+    base = free_participant_block(rc.transport.domain_id, participants, rc.transport.interface);
+  }
+  if (!base) {
+    std::cerr << "swarm run: --domain " << rc.transport.domain_id << ": no room for "
+              << rc.agents.size() + 1
+              << " more DDS participants on this host (other runs hold its ports); choose "
+                 "another --domain (0 to 51)\n";
+    return 2;
+  }
   RunDir dir;
   try {
     dir = RunDir::claim(opt.out, rc.name, run_timestamp());
@@ -136,6 +162,7 @@ int run(const RunOptions& opt) {
   spec.progress = !opt.quiet;
   spec.stop_on_agent_exit = opt.stop_on_agent_exit;
   spec.ignore_sigterm = opt.ignore_sigterm;
+  spec.participant_base = *base;
   if (!dir.write_scenario(rc.resolved)) {
     std::cerr << "swarm run: cannot write " << dir.scenario().string() << " (disk full?)\n";
     return 3;
@@ -293,7 +320,7 @@ int main(int argc, char** argv) {
       ->add_option("--time-scale", ro.time_scale, "simulated seconds per wall second (default 1)")
       ->check(finite_range(0.01, 100.0));
   run_cmd->add_option("--domain", ro.domain, "DDS domain id (overrides the scenario)")
-      ->check(CLI::Range(0, 232));
+      ->check(CLI::Range(0, 51));
   run_cmd->add_option("--grace", ro.grace_s, "seconds between SIGTERM and SIGKILL at teardown")
       ->check(finite_range(0.0, 600.0));
   run_cmd->add_flag("--quiet", ro.quiet, "no progress line");
@@ -374,7 +401,7 @@ int main(int argc, char** argv) {
       ->check(finite_range(0.01, 100.0))
       ->excludes(paper_from);
   paper_cmd->add_option("--domain", po.domain, "DDS domain id for the runs")
-      ->check(CLI::Range(0, 232))
+      ->check(CLI::Range(0, 51))
       ->excludes(paper_from);
   try {
     app.parse(argc, argv);

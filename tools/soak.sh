@@ -9,7 +9,7 @@ tools/setup.sh build >/dev/null
 DIR="${1:-build/soak-$(date +%Y%m%d-%H%M%S)}"
 rm -rf "$DIR"
 set +e
-build/bin/swarm run scenarios/soak.txtpb --out "$DIR" --domain 120 --time-scale 1 \
+build/bin/swarm run scenarios/soak.txtpb --out "$DIR" --domain 13 --time-scale 1 \
   --loss 0.3 --random-cuts 24 --kill 5@60:90 --kill 11@180:210 2>&1 | tee "$DIR.log"
 code=${PIPESTATUS[0]}
 set -e

@@ -1,6 +1,7 @@
 #include "common/app/process_setup.hpp"
 
 #include "common/app/cli_checks.hpp"
+#include "common/transport/port_plan.hpp"
 
 #include <spdlog/sinks/basic_file_sink.h>
 #include <spdlog/sinks/stdout_color_sinks.h>
@@ -21,7 +22,7 @@ void add_process_options(CLI::App& app, ProcessOptions& o) {
   app.add_option("--time-scale", o.time_scale, "simulated seconds per wall second")
       ->check(finite_range(0.01, 100.0));
   app.add_option("--domain", o.domain, "DDS domain id (overrides the scenario)")
-      ->check(CLI::Range(0, 232));
+      ->check(CLI::Range(0, 51));
   app.add_option("--interface", o.interface,
                  "IPv4 address DDS binds to (overrides the scenario; \"any\": every interface, "
                  "as inside a container)");
@@ -35,6 +36,9 @@ void add_process_options(CLI::App& app, ProcessOptions& o) {
                  "\"none\" or empty: simple discovery")
       ->envname("QSWARM_DISCOVERY_SERVER")
       ->transform([](const std::string& v) { return v == "none" ? std::string() : v; });
+  app.add_option("--participant-id", o.participant_id,
+                 "DDS participant id in the port plan (swarm run gives each process its own)")
+      ->check(CLI::Range(0, PortPlan::kMaxParticipantId));
   app.add_option("--seed", o.seed, "run seed (overrides the scenario)")
       ->check(CLI::Range(std::int64_t{0}, std::int64_t{4294967295}));
 }
@@ -115,6 +119,10 @@ DdsOptions dds_options(const RunConfig& rc, const std::string& participant_name,
   p.discovery_server = o.discovery_server;
   p.shared_memory = rc.transport.shared_memory;
   p.test_drop_data_percent = static_cast<std::uint8_t>(rc.faults.transport_drop_percent);
+  p.participant_id = o.participant_id;
+  // Everyone hears every announcement: N^2 per period. Every second up to 25 processes, then
+  // slower with the swarm (10 s at 256); lost first announcements are repeated by the quick ones.
+  p.announce_period_s = std::max(1.0, static_cast<double>(rc.agents.size()) / 25.0);
   StateBusOptions& s = d.state;
   s.max_agents = static_cast<int>(std::max<std::size_t>(rc.agents.size(), 16));
   s.run_id = rc.transport.run_id;

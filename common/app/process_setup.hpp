@@ -27,6 +27,7 @@ struct ProcessOptions {
   std::string interface;         // --interface (overrides the scenario; "any": every interface)
   int agents = -1;               // --agents / QSWARM_AGENTS: N seeded random agents (compose)
   std::string discovery_server;  // --discovery-server / QSWARM_DISCOVERY_SERVER: HOST:PORT
+  int participant_id = -1;       // --participant-id: its place in the port plan (-1: Fast DDS's)
 };
 void add_process_options(CLI::App& app, ProcessOptions& o);
 

@@ -11,6 +11,7 @@
 #include <stdexcept>
 
 #include "common/dds/participant.hpp"
+#include "common/transport/port_plan.hpp"
 
 namespace qswarm {
 
@@ -37,6 +38,10 @@ DiscoveryServer::DiscoveryServer(std::uint32_t domain_id, const std::string& lis
   pqos.name("swarm-discovery");
   pqos.transport().use_builtin_transports = false;
   pqos.transport().user_transports.push_back(std::make_shared<rtps::UDPv4TransportDescriptor>());
+  // The project's port plan, as every participant of the swarm uses it.
+  pqos.wire_protocol().port.portBase = PortPlan::kBase;
+  pqos.wire_protocol().port.domainIDGain = PortPlan::kDomainGain;
+  pqos.wire_protocol().port.participantIDGain = PortPlan::kParticipantGain;
   auto& disc = pqos.wire_protocol().builtin.discovery_config;
   disc.discoveryProtocol = eprosima::fastrtps::rtps::DiscoveryProtocol_t::SERVER;
   // An infinite lease, as every DdsBus participant announces: no client runs a lease check on the

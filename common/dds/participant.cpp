@@ -1,5 +1,7 @@
 #include "common/dds/participant.hpp"
 
+#include "common/transport/port_plan.hpp"
+
 #include <arpa/inet.h>
 #include <fastdds/rtps/attributes/ServerAttributes.h>
 #include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
@@ -11,6 +13,7 @@
 #include <fastdds/dds/domain/DomainParticipant.hpp>
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdlib>
 #include <stdexcept>
@@ -39,17 +42,29 @@ DdsParticipant::DdsParticipant(const ParticipantOptions& opts) : opts_(opts) {
     pqos.transport().user_transports.push_back(
         std::make_shared<rtps::SharedMemTransportDescriptor>());
   }
-  // Many participants on one host: allow more port retries than the default 100.
-  pqos.wire_protocol().builtin.mutation_tries = 400;
+  // The port plan: a block of ports per domain, room for every participant of the largest swarm.
+  auto& ports = pqos.wire_protocol().port;
+  ports.portBase = PortPlan::kBase;
+  ports.domainIDGain = PortPlan::kDomainGain;
+  ports.participantIDGain = PortPlan::kParticipantGain;
+  if (opts.domain_id > PortPlan::kMaxDomain)
+    throw std::invalid_argument("dds: domain " + std::to_string(opts.domain_id) +
+                                " is beyond the port plan's 0..51");
+  // Fast DDS's own choice of ports (its id 0, then the next ports while taken) would take the ports
+  // of a run's reserved ids; every participant gets an id whose ports it checks first, so that a
+  // taken one is said (Fast DDS would otherwise come up without them and hear nobody).
+  pqos.wire_protocol().builtin.mutation_tries = 0;
   // Participants announce an infinite lease, so no peer ever runs a lease check on them: Fast DDS
   // 2.9.1 races a peer's lease check (timer thread) against that peer's removal when it leaves
   // (receive thread), and the check then asserts on a cleared proxy (docs/architecture.md, "No
   // participant lease is checked"). The agents judge liveness themselves (the neighbour timeout);
-  // a participant that leaves is still removed at once by its DISPOSE. Announcements every second,
-  // not every 3 s: one lost while many processes start is repeated a second later.
+  // a participant that leaves is still removed at once by its DISPOSE. Announcements every second
+  // (not Fast DDS's 3 s: one lost while many processes start is repeated a second later), or less
+  // often in a large swarm, where every participant hears every announcement.
   auto& discovery = pqos.wire_protocol().builtin.discovery_config;
   discovery.leaseDuration = eprosima::fastrtps::c_TimeInfinite;
-  discovery.leaseDuration_announcementperiod = eprosima::fastrtps::Duration_t(1, 0);
+  discovery.leaseDuration_announcementperiod =
+      eprosima::fastrtps::Duration_t(std::max(1.0, opts.announce_period_s));
   if (!opts.discovery_server.empty()) {
     const auto [ip, port] = resolve_discovery_server(opts.discovery_server);
     discovery.discoveryProtocol = eprosima::fastrtps::rtps::DiscoveryProtocol_t::CLIENT;
@@ -61,11 +76,39 @@ DdsParticipant::DdsParticipant(const ParticipantOptions& opts) : opts_(opts) {
     server.metatrafficUnicastLocatorList.push_back(loc);
     discovery.m_DiscoveryServers.push_back(server);
   }
-  participant_ =
-      dds::DomainParticipantFactory::get_instance()->create_participant(opts.domain_id, pqos);
-  if (!participant_)
-    throw std::runtime_error("dds: cannot create a participant on domain " +
-                             std::to_string(opts.domain_id));
+  // A process given its id (the launcher's plan) takes exactly that one. One without (a lone
+  // agent, a tool, a test's participant) takes the highest free id, away from the blocks runs
+  // reserve from 0 up, and the next lower one if another process was quicker.
+  const bool given = opts.participant_id >= 0;
+  int id = given ? opts.participant_id : PortPlan::kMaxParticipantId + 1;
+  for (int attempt = 0;; ++attempt) {
+    if (!given) {
+      do --id;
+      while (id >= 0 && !participant_ports_problem(opts.domain_id, id, opts.interface).empty());
+      if (id < 0)
+        throw std::runtime_error("dds: no free participant id on domain " +
+                                 std::to_string(opts.domain_id) + " (0 to 544 all taken)");
+    } else if (const std::string problem =
+                   participant_ports_problem(opts.domain_id, id, opts.interface);
+               !problem.empty()) {
+      throw std::runtime_error("dds: " + problem);
+    }
+    pqos.wire_protocol().participant_id = id;
+    participant_ =
+        dds::DomainParticipantFactory::get_instance()->create_participant(opts.domain_id, pqos);
+    if (!participant_)
+      throw std::runtime_error("dds: cannot create a participant on domain " +
+                               std::to_string(opts.domain_id));
+    // Fast DDS ignores a port it could not open (another process took it after the check) and
+    // comes up deaf; a port that can still be bound here is one it does not hold.
+    if (!participant_ports_problem(opts.domain_id, id, opts.interface).empty()) break;
+    dds::DomainParticipantFactory::get_instance()->delete_participant(participant_);
+    participant_ = nullptr;
+    if (given || attempt >= 8)
+      throw std::runtime_error("dds: participant id " + std::to_string(id) + " on domain " +
+                               std::to_string(opts.domain_id) +
+                               " came up without its unicast ports (taken while it started)");
+  }
 }
 
 DdsParticipant::~DdsParticipant() {

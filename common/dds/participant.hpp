@@ -24,6 +24,12 @@ struct ParticipantOptions {
   // Fast DDS Discovery Server "HOST:PORT" (HOST a name or an IPv4 address): discover through it as
   // a client instead of by multicast (container networks). Empty: the standard simple discovery.
   std::string discovery_server;
+  // Its participant id in the port plan (PortPlan): a given id whose ports are taken is an error;
+  // -1 takes the highest id whose ports are free (runs reserve their blocks from 0 up).
+  int participant_id = -1;
+  // How often it announces itself after its first quick announcements (seconds): everyone hears
+  // every announcement, so a large swarm announces less often.
+  double announce_period_s = 1.0;
 };
 
 // One DomainParticipant with the project's settings: transports (one UDPv4 on the allowed

@@ -364,7 +364,8 @@ void check_agent(RunConfig& rc) {
 void resolve_transport(const scenario::Transport& t, RunConfig& rc) {
   TransportConfig& tc = rc.transport;
   if (t.has_domain_id()) tc.domain_id = t.domain_id();
-  if (tc.domain_id > 232) fail("transport.domain_id", "0..232", std::to_string(tc.domain_id));
+  // The port plan's domains (common/transport/port_plan.hpp): each holds 545 participants.
+  if (tc.domain_id > 51) fail("transport.domain_id", "0..51", std::to_string(tc.domain_id));
   if (t.has_interface()) tc.interface = t.interface();
   if (tc.interface.empty())
     fail("transport.interface", "an IPv4 address such as 127.0.0.1", "\"\"");

@@ -22,6 +22,7 @@
 #include <vector>
 
 #include "common/dds/dds_bus.hpp"
+#include "common/transport/port_plan.hpp"
 #include "tests/swarm/domain_lease.hpp"
 #include "tests/swarm/harness.hpp"
 
@@ -46,6 +47,8 @@ class LeaseWatcher : public dds::DomainParticipantListener {
     dds::DomainParticipantQos q;
     q.name("lease-watcher");
     q.transport().use_builtin_transports = false;
+    // The swarm's port plan: another domain gain would listen on another multicast port.
+    q.wire_protocol().port.domainIDGain = PortPlan::kDomainGain;
     auto udp = std::make_shared<eprosima::fastdds::rtps::UDPv4TransportDescriptor>();
     udp->interfaceWhiteList.push_back("127.0.0.1");
     q.transport().user_transports.push_back(udp);
@@ -102,6 +105,25 @@ TEST(ParticipantChurn, PeersLeavingInBurstsAreForgottenAtOnceAndTheOneThatStaysL
     // No lease is left to expire: only the DISPOSE can remove them.
     ASSERT_TRUE(test::wait_for([&] { return stayer.matched_readers() == own; }, 30.0))
         << "round " << round << ": " << stayer.matched_readers() - own << " readers left";
+  }
+}
+
+// A participant takes the ports the plan gives its id, or refuses to start naming the port: two
+// processes given the same id (or another program on its port) never leave one of them deaf.
+TEST(ParticipantPorts, AnExplicitIdHoldsItsPortsAndASecondOneOnThemIsRefusedNamingThePort) {
+  ParticipantOptions o;
+  o.domain_id = static_cast<std::uint32_t>(test::test_domain().domain());
+  o.participant_id = 530;
+  o.name = "ports-first";
+  const DdsParticipant first(o);
+  EXPECT_NE(participant_ports_problem(o.domain_id, 530, o.interface), "");
+  o.name = "ports-second";
+  try {
+    const DdsParticipant second(o);
+    FAIL() << "a second participant came up on the ports of the first";
+  } catch (const std::runtime_error& e) {
+    const std::string port = std::to_string(PortPlan::discovery_port(o.domain_id, 530));
+    EXPECT_NE(std::string(e.what()).find(port), std::string::npos) << e.what();
   }
 }
 

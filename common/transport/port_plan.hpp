@@ -1,0 +1,71 @@
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+
+namespace qswarm {
+
+// Where DDS participants listen on one host: the project's port plan. Fast DDS numbers a
+// participant's unicast ports from its domain and participant id (7410 + domain gain x domain +
+// 2 x id for discovery, one more for data); with its default domain gain of 250, ids of 120 and up
+// spill into the next domain's ports. The plan gives each domain a block of 1100 ports, room for
+// participant ids 0 to 544 (the largest swarm, 512 agents, and its supervisor; or two runs of
+// 256), and multicast discovery at the block's start (domain 0: Fast DDS's default 7400). Ports
+// must stay below 65536 (Fast DDS exits the process otherwise): domains 0 to 51.
+struct PortPlan {
+  static constexpr std::uint32_t kBase = 7400;
+  static constexpr std::uint32_t kDomainGain = 1100;
+  static constexpr std::uint32_t kParticipantGain = 2;
+  static constexpr std::uint32_t kMaxDomain = 51;
+  static constexpr int kMaxParticipantId = 544;
+
+  // The discovery (metatraffic) and data unicast ports of participant `id` on `domain`.
+  static std::uint32_t discovery_port(std::uint32_t domain, int id) {
+    return kBase + kDomainGain * domain + 10 + kParticipantGain * static_cast<std::uint32_t>(id);
+  }
+  static std::uint32_t data_port(std::uint32_t domain, int id) {
+    return discovery_port(domain, id) + 1;
+  }
+};
+
+// Why participant `id` cannot listen on `domain` at `address` now ("" if it can): one of its two
+// unicast ports is taken (another run on this domain, or another program).
+std::string participant_ports_problem(std::uint32_t domain, int id, const std::string& address);
+
+// The first participant id of a block of `count` consecutive ids whose ports are all free on
+// `domain` at `address`, trying blocks from `first`; nothing if the domain has no such room.
+std::optional<int> free_participant_block(std::uint32_t domain, int count,
+                                          const std::string& address, int first = 0);
+
+// A run's block of participant ids, held for the life of this object (the launcher's): a file per
+// block under `registry` (default /tmp/qswarm-ports) names the domain, the ids and the holder's
+// pid, and blocks are chosen under a lock on that folder, so that two launchers started at once
+// never choose the same ids, and a killed agent's ids stay the run's until it restarts. A
+// holder that died leaves a stale file, which the next choice ignores and removes.
+class PortReservation {
+ public:
+  // Chooses and holds the first block of `count` ids on `domain` that no live holder reserved
+  // and whose ports are free at `address`; nothing if the domain has no such room. Throws
+  // std::runtime_error if the registry cannot be used (naming it).
+  static std::optional<PortReservation> reserve(std::uint32_t domain, int count,
+                                                const std::string& address,
+                                                const std::string& registry = kRegistry);
+  PortReservation(PortReservation&& o) noexcept : base_(o.base_), file_(std::move(o.file_)) {
+    o.file_.clear();
+  }
+  PortReservation& operator=(PortReservation&&) = delete;
+  PortReservation(const PortReservation&) = delete;
+  PortReservation& operator=(const PortReservation&) = delete;
+  ~PortReservation();
+  int base() const { return base_; }
+
+  static constexpr const char* kRegistry = "/tmp/qswarm-ports";
+
+ private:
+  PortReservation(int base, std::string file) : base_(base), file_(std::move(file)) {}
+  int base_;
+  std::string file_;
+};
+
+}  // namespace qswarm
