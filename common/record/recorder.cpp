@@ -265,12 +265,7 @@ std::string Recorder::finish(const std::string& end_reason, double wall_time_s) 
                            {end_reason, t_s_, wall_time_s, time_scale_});
   event("end", 0, end_reason);
   const std::string json = to_json(summary_);
-  {
-    std::ofstream out(dir_.summary());
-    out << json;
-    out.flush();
-    if (!out) sinks_.fail(dir_.summary().string());
-  }
+  if (!dir_.write_summary(json)) sinks_.fail(dir_.summary().string());
   sinks_.flush();
   std::string text = summary_text(summary_, rc_, dir_.str());
   if (!sinks_.ok()) text += "RECORD INCOMPLETE: could not write " + sinks_.failed_file() + "\n";

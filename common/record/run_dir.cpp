@@ -8,6 +8,7 @@
 #include <cstring>
 #include <ctime>
 #include <fstream>
+#include <optional>
 #include <sstream>
 
 #include "proto/records.pb.h"
@@ -43,7 +44,7 @@ bool try_claim(const fs::path& dir, const std::string& flag) {
     if (entry.path().filename() == RunDir::kMarker) return false;
     throw RunDirError(flag + " " + dir.string() +
                       ": expected a new or empty directory; it holds files (e.g. " +
-                      entry.path().filename().string() + "): choose another --out");
+                      entry.path().filename().string() + "): choose another " + flag);
   }
   const std::string marker = (dir / RunDir::kMarker).string();
   const int fd = ::open(marker.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
@@ -159,27 +160,48 @@ bool RunDir::write_fallback_summary(const RunConfig& rc, const std::string& reas
   s.set_law(to_string(rc.agent.law.kind));
   s.set_mode(rc.agent.mode == AgentMode::kQuadcopter ? "quadcopter" : "particle");
   for (int k = 0; k < 3; ++k) s.add_initial_average(rc.initial_average()[k]);
-  const std::string json = to_json(s);
-  std::ofstream f(summary());
-  f << json;
-  f.flush();
-  return static_cast<bool>(f);
+  return write_summary(to_json(s));
 }
 
-bool RunDir::amend_summary(const std::vector<std::string>& problems) const {
-  std::ifstream in(summary());
+bool RunDir::write_summary(const std::string& json) const {
+  const fs::path tmp = summary().string() + ".tmp";
+  {
+    std::ofstream f(tmp, std::ios::trunc);
+    f << json;
+    f.flush();
+    if (!f) {
+      std::error_code ec;
+      fs::remove(tmp, ec);
+      return false;
+    }
+  }
+  std::error_code ec;
+  fs::rename(tmp, summary(), ec);
+  return !ec;
+}
+
+namespace {
+std::optional<records::Summary> read_summary(const fs::path& path) {
+  std::ifstream in(path);
+  if (!in) return std::nullopt;
   std::stringstream text;
   text << in.rdbuf();
   records::Summary s;
-  if (!google::protobuf::util::JsonStringToMessage(text.str(), &s).ok()) return false;
-  s.set_converged(false);
-  std::string reason = s.end_reason();
+  if (!google::protobuf::util::JsonStringToMessage(text.str(), &s).ok()) return std::nullopt;
+  return s;
+}
+}  // namespace
+
+bool RunDir::summary_readable() const { return read_summary(summary()).has_value(); }
+
+bool RunDir::amend_summary(const std::vector<std::string>& problems) const {
+  std::optional<records::Summary> s = read_summary(summary());
+  if (!s) return false;
+  s->set_converged(false);
+  std::string reason = s->end_reason();
   for (const std::string& p : problems) reason += "; " + p;
-  s.set_end_reason(reason);
-  std::ofstream out(summary());
-  out << to_json(s);
-  out.flush();
-  return static_cast<bool>(out);
+  s->set_end_reason(reason);
+  return write_summary(to_json(*s));
 }
 
 }  // namespace qswarm

@@ -65,6 +65,12 @@ class RunDir {
   bool mark_planned_kill(AgentId id, double t_s) const;
   int planned_kills_marked(AgentId id) const;
 
+  // summary.json written whole or not at all (a temporary file renamed over it), so that a process
+  // killed while writing never leaves a summary cut short. False if it could not be written.
+  bool write_summary(const std::string& json) const;
+  // Whether summary.json is there and reads as a summary.
+  bool summary_readable() const;
+
   // When the supervisor could not write the summary (it died), the launcher writes one that says
   // why, so that a run never ends without summary.json. Returns whether it was written.
   bool write_fallback_summary(const RunConfig& rc, const std::string& reason,

@@ -4,9 +4,16 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <google/protobuf/util/json_util.h>
+
 #include <algorithm>
 #include <filesystem>
+#include <fstream>
+#include <sstream>
 
+#include "proto/records.pb.h"
+
+#include "common/scenario/proto_util.hpp"
 #include "common/scenario/scenario.hpp"
 #include "launcher/launcher.hpp"
 
@@ -193,6 +200,46 @@ TEST(Launcher, AnUnplannedAgentExitEndsTheRunWhenAsked) {
   procs.exit_child("agent", 3, exited(1));
   EXPECT_EQ(l.poll(false), "agent 3 exited");
   EXPECT_EQ(l.problems().size(), 1u);
+}
+
+records::Summary read_summary(const RunDir& dir) {
+  std::ifstream in(dir.summary());
+  std::stringstream text;
+  text << in.rdbuf();
+  records::Summary s;
+  EXPECT_TRUE(google::protobuf::util::JsonStringToMessage(text.str(), &s).ok()) << text.str();
+  return s;
+}
+
+// A swarm too large for the machine never gets going and is stopped at the wall limit: the record
+// says so, whether the supervisor wrote its summary on the way out or was killed writing it.
+TEST(Launcher, ARunStoppedAtTheWallLimitSaysSoAndASummaryCutShortIsReplaced) {
+  for (const bool cut_short : {false, true}) {
+    FakeProcesses procs;
+    ManualClock clock;
+    const LaunchSpec spec = spec_for("");
+    Launcher l(spec, procs, clock, [] { return true; });
+    l.start();
+    clock.advance(l.wall_limit_s() + 1.0);
+    ASSERT_EQ(l.poll(false), "the supervisor did not finish in time");
+    if (cut_short) {
+      std::ofstream(spec.dir.summary()).flush();  // 0 bytes: killed while writing
+    } else {
+      records::Summary s;
+      s.set_converged(true);
+      s.set_end_reason("interrupted");
+      ASSERT_TRUE(spec.dir.write_summary(to_json(s)));
+    }
+    l.stop();
+    for (AgentId id = 1; id <= 3; ++id) std::ofstream(spec.dir.agent_stats(id)) << "{}";
+    const Launcher::Outcome out = l.conclude(clock.now_s());
+    EXPECT_EQ(out.exit_code, 1) << cut_short;
+    const records::Summary s = read_summary(spec.dir);
+    EXPECT_FALSE(s.converged()) << cut_short;
+    EXPECT_NE(s.end_reason().find("did not finish in time"), std::string::npos) << s.end_reason();
+    EXPECT_FALSE(std::filesystem::exists(spec.dir.summary().string() + ".tmp"));
+    std::filesystem::remove_all(spec.dir.path());
+  }
 }
 
 }  // namespace
