@@ -19,10 +19,16 @@ ConvergenceJudge::Verdict ConvergenceJudge::update(double t_s, const records::Gr
   // An agent the plan brings back (a due restart or late join) must be running before the hold
   // starts: its return is part of what the swarm agrees on.
   bool planned_back = true;
-  for (const auto& [id, track] : presence.tracks())
+  // An agent still at its start barrier (present, not yet running) is not missing: the swarm has
+  // not started, and agents start as their own neighbours are ready, not all at once.
+  bool starting = false;
+  for (const auto& [id, track] : presence.tracks()) {
     planned_back &= !plan_.due_back(id, t_s) || presence.running(id);
-  const bool agree = g.agents() > 0 && planned_back && t_s >= plan_.last_fault_end_s() &&
-                     g.disagreement_m() < tolerance_m_ && g.spread_m() < tolerance_m_ &&
+    starting |= plan_.due_alive(id, t_s) && track.present && !presence.running(id);
+  }
+  const bool agree = g.agents() > 0 && planned_back && !starting &&
+                     t_s >= plan_.last_fault_end_s() && g.disagreement_m() < tolerance_m_ &&
+                     g.spread_m() < tolerance_m_ &&
                      g.held_speed_mps() < tolerance_m_;  // held agents: tolerance_m per second
   if (!agree) {
     hold_start_s_ = -1.0;

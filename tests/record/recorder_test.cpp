@@ -134,6 +134,28 @@ TEST(ConvergenceJudge, AgentsThatAgreeWithoutAnExpectedAgentHaveNotConverged) {
   EXPECT_EQ(ConvergenceJudge::Verdict::kConverged, planned.update(1.5, agree, p));
 }
 
+// Agents start as their own neighbours are ready: one may fly (and trivially agree with itself)
+// while the others still wait at their barrier. Those are not missing, and nothing is judged until
+// they run; an agent that never leaves its barrier leaves the run unconverged, not "agreed".
+TEST(ConvergenceJudge, AgentsStillAtTheirStartBarrierAreNotMissingAndHoldTheVerdict) {
+  ConvergenceJudge judge(0.01, 0.5, 1.0, FaultPlan{});
+  Presence p({1, 2, 3}, 1.0);
+  p.on_sample(sample(2, 1, 0.0, Vec3::Zero()), 0.0);
+  records::GraphSnapshot agree;
+  agree.set_agents(1);
+  for (int k = 0; k <= 40; ++k) {
+    const double t = 0.1 * k;
+    p.on_sample(sample(1, static_cast<std::uint64_t>(k + 1), t, Vec3::Zero(), Phase::kWaiting), t);
+    p.on_sample(sample(3, static_cast<std::uint64_t>(k + 1), t, Vec3::Zero(), Phase::kReady), t);
+    p.on_sample(sample(2, static_cast<std::uint64_t>(k + 2), t, Vec3::Zero()), t);
+    EXPECT_EQ(ConvergenceJudge::Verdict::kNone, judge.update(t, agree, p)) << t;
+  }
+  agree.set_agents(3);
+  for (const AgentId id : {1u, 3u}) p.on_sample(sample(id, 50, 4.1, Vec3::Zero()), 4.1);
+  EXPECT_EQ(ConvergenceJudge::Verdict::kNone, judge.update(4.1, agree, p));
+  EXPECT_EQ(ConvergenceJudge::Verdict::kConverged, judge.update(4.6, agree, p));
+}
+
 TEST(SeparationMonitor, JudgesEverySampleCountsEachViolationOnceAndForgetsTheDeparted) {
   SeparationMonitor m(1.0);
   EXPECT_FALSE(m.measured());
