@@ -6,9 +6,12 @@
 #include <numbers>
 #include <random>
 
+#include <Eigen/SVD>
+
 #include "common/core/allocation.hpp"
 #include "common/core/coordinate_form.hpp"
 #include "common/core/dynamics.hpp"
+#include "common/core/math.hpp"
 #include "common/core/primitives.hpp"
 
 namespace qswarm {
@@ -149,6 +152,35 @@ TEST(Dynamics, RotationStaysOrthonormal) {
   s = fly(kPaper, s, RotorSpeeds(210, 180, 190, 220), 20.0, 0.002);
   EXPECT_LT((s.R_WB.transpose() * s.R_WB - Mat3::Identity()).norm(), 1e-12);
   EXPECT_NEAR(s.R_WB.determinant(), 1.0, 1e-12);
+}
+
+// The fast iteration must give the SVD's polar factor wherever it answers, and hand everything
+// it cannot (far off SO(3), reflections, NaN) to the SVD rather than return a non-rotation.
+TEST(Dynamics, OrthonormalizeGivesTheSvdsPolarFactor) {
+  std::mt19937 rng(20);
+  std::normal_distribution<double> n(0.0, 1.0);
+  auto svd_polar = [](const Mat3& m) {
+    Eigen::JacobiSVD<Mat3> svd(m, Eigen::ComputeFullU | Eigen::ComputeFullV);
+    Mat3 u = svd.matrixU();
+    if ((u * svd.matrixV().transpose()).determinant() < 0.0) u.col(2) *= -1.0;
+    return Mat3(u * svd.matrixV().transpose());
+  };
+  for (const double noise : {0.0, 1e-12, 1e-8, 1e-5, 1e-3, 0.3}) {
+    for (int i = 0; i < 200; ++i) {
+      const Mat3 rot = rotation_from_tait_bryan({n(rng), 0.7 * n(rng), n(rng)});
+      Mat3 drift;
+      for (int k = 0; k < 9; ++k) drift(k / 3, k % 3) = noise * n(rng);
+      const Mat3 m = rot + drift;
+      const Mat3 r = orthonormalize(m);
+      EXPECT_LT((r.transpose() * r - Mat3::Identity()).cwiseAbs().maxCoeff(), 1e-14) << noise;
+      EXPECT_NEAR(r.determinant(), 1.0, 1e-14) << noise;
+      EXPECT_LT((r - svd_polar(m)).cwiseAbs().maxCoeff(), 1e-13) << noise;
+    }
+  }
+  Mat3 reflection = Mat3::Identity();
+  reflection(2, 2) = -1.0;
+  EXPECT_NEAR(orthonormalize(reflection).determinant(), 1.0, 1e-14);
+  EXPECT_NEAR(orthonormalize(0.5 * Mat3::Identity()).determinant(), 1.0, 1e-14);
 }
 
 TEST(Allocation, InverseOfThePapersAllocationAndRotorLimits) {
