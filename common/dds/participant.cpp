@@ -10,12 +10,14 @@
 #include <fastrtps/utils/IPLocator.h>
 #include <netdb.h>
 #include <sys/socket.h>
+#include <unistd.h>
 #include <fastdds/dds/domain/DomainParticipant.hpp>
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
 
 #include <algorithm>
 #include <chrono>
 #include <cstdlib>
+#include <mutex>
 #include <stdexcept>
 #include <thread>
 
@@ -77,14 +79,20 @@ DdsParticipant::DdsParticipant(const ParticipantOptions& opts) : opts_(opts) {
     discovery.m_DiscoveryServers.push_back(server);
   }
   // A process given its id (the launcher's plan) takes exactly that one. One without (a lone
-  // agent, a tool, a test's participant) takes the highest free id, away from the blocks runs
-  // reserve from 0 up, and the next lower one if another process was quicker.
+  // agent, a tool, a test's participant) takes one of the highest free ids, away from the blocks
+  // runs reserve from 0 up, and another one if a process started at the same moment won it.
+  // One participant of this process at a time takes its ports: the check below cannot tell two
+  // of this process's participants apart.
+  static std::mutex taking_ports;
+  const std::lock_guard<std::mutex> lock(taking_ports);
   const bool given = opts.participant_id >= 0;
   int id = given ? opts.participant_id : PortPlan::kMaxParticipantId + 1;
+  std::uint32_t skip = static_cast<std::uint32_t>(::getpid()) % 8;  // processes started alike
   for (int attempt = 0;; ++attempt) {
     if (!given) {
       do --id;
-      while (id >= 0 && !participant_ports_problem(opts.domain_id, id, opts.interface).empty());
+      while (id >= 0 && (!participant_ports_problem(opts.domain_id, id, opts.interface).empty() ||
+                         (skip > 0 && skip-- > 0)));
       if (id < 0)
         throw std::runtime_error("dds: no free participant id on domain " +
                                  std::to_string(opts.domain_id) + " (0 to 544 all taken)");
@@ -100,11 +108,13 @@ DdsParticipant::DdsParticipant(const ParticipantOptions& opts) : opts_(opts) {
       throw std::runtime_error("dds: cannot create a participant on domain " +
                                std::to_string(opts.domain_id));
     // Fast DDS ignores a port it could not open (another process took it after the check) and
-    // comes up deaf; a port that can still be bound here is one it does not hold.
-    if (!participant_ports_problem(opts.domain_id, id, opts.interface).empty()) break;
+    // comes up deaf: both ports must be this process's.
+    if (this_process_holds_udp_port(PortPlan::discovery_port(opts.domain_id, id)) &&
+        this_process_holds_udp_port(PortPlan::data_port(opts.domain_id, id)))
+      break;
     dds::DomainParticipantFactory::get_instance()->delete_participant(participant_);
     participant_ = nullptr;
-    if (given || attempt >= 8)
+    if (given || attempt >= 16)
       throw std::runtime_error("dds: participant id " + std::to_string(id) + " on domain " +
                                std::to_string(opts.domain_id) +
                                " came up without its unicast ports (taken while it started)");

@@ -13,6 +13,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <stdexcept>
 #include <vector>
 
@@ -53,6 +54,32 @@ std::string participant_ports_problem(std::uint32_t domain, int id, const std::s
     }
   }
   return "";
+}
+
+bool this_process_holds_udp_port(std::uint32_t port) {
+  std::ifstream table("/proc/self/net/udp");
+  std::string line;
+  std::getline(table, line);  // the header
+  std::vector<std::string> inodes;
+  while (std::getline(table, line)) {
+    std::istringstream row(line);
+    std::string slot, local, remote, state, queues, timer, retransmits, uid, timeout, inode;
+    if (!(row >> slot >> local >> remote >> state >> queues >> timer >> retransmits >> uid >>
+          timeout >> inode))
+      continue;
+    const std::size_t colon = local.find(':');
+    if (colon == std::string::npos) continue;
+    if (std::stoul(local.substr(colon + 1), nullptr, 16) == port)
+      inodes.push_back("socket:[" + inode + "]");
+  }
+  if (inodes.empty()) return false;
+  std::error_code ec;
+  for (const auto& fd : std::filesystem::directory_iterator("/proc/self/fd", ec)) {
+    std::error_code link_ec;
+    const std::string target = std::filesystem::read_symlink(fd.path(), link_ec).string();
+    if (!link_ec && std::find(inodes.begin(), inodes.end(), target) != inodes.end()) return true;
+  }
+  return false;
 }
 
 std::optional<int> free_participant_block(std::uint32_t domain, int count,

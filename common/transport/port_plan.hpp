@@ -33,6 +33,10 @@ struct PortPlan {
 // unicast ports is taken (another run on this domain, or another program).
 std::string participant_ports_problem(std::uint32_t domain, int id, const std::string& address);
 
+// Whether a UDP socket of this process is bound to `port` (read from /proc: a port that merely
+// cannot be bound may be another process's).
+bool this_process_holds_udp_port(std::uint32_t port);
+
 // The first participant id of a block of `count` consecutive ids whose ports are all free on
 // `domain` at `address`, trying blocks from `first`; nothing if the domain has no such room.
 std::optional<int> free_participant_block(std::uint32_t domain, int count,

@@ -50,8 +50,10 @@ TEST(PortPlan, ARunsBlockSkipsTakenPortsAndATakenIdIsNamed) {
   // Domain 19 is left to users by the tests' domain leases; ids from 480 are far from any run.
   const std::uint32_t domain = 19;
   ASSERT_EQ(participant_ports_problem(domain, 483, "127.0.0.1"), "") << "the port is in use here";
+  EXPECT_FALSE(this_process_holds_udp_port(PortPlan::data_port(domain, 483)));
   const HeldPort other(PortPlan::data_port(domain, 483));
   ASSERT_TRUE(other.held());
+  EXPECT_TRUE(this_process_holds_udp_port(PortPlan::data_port(domain, 483)));
   const std::string why = participant_ports_problem(domain, 483, "127.0.0.1");
   EXPECT_NE(why.find(std::to_string(PortPlan::data_port(domain, 483))), std::string::npos) << why;
   EXPECT_NE(why.find("another run on this domain"), std::string::npos) << why;
