@@ -204,7 +204,11 @@ Launcher::Outcome Launcher::conclude(double wall_time_s) {
   }
   std::vector<std::string> unseen = problems_;
   // A supervisor stopped at the wall limit wrote a summary, but not why it was stopped.
-  if (end_ == kLate) unseen.push_back(end_ + " (wall limit " + num(wall_limit_s()) + " s)");
+  if (end_ == kLate) {
+    char limit[64];
+    std::snprintf(limit, sizeof limit, " (wall limit %.0f s)", wall_limit_s());
+    unseen.push_back(end_ + limit);
+  }
   unseen.insert(unseen.end(), missing.begin(), missing.end());
   for (const std::string& m : missing) out.lines.push_back(m);
   // What the supervisor could not see still unmakes "converged" in the record.

@@ -42,9 +42,12 @@ bool try_claim(const fs::path& dir, const std::string& flag) {
   if (!fs::is_directory(dir)) throw RunDirError(flag + " " + dir.string() + ": not a directory");
   for (const auto& entry : fs::directory_iterator(dir)) {
     if (entry.path().filename() == RunDir::kMarker) return false;
-    throw RunDirError(flag + " " + dir.string() +
-                      ": expected a new or empty directory; it holds files (e.g. " +
-                      entry.path().filename().string() + "): choose another " + flag);
+    std::string why = flag + " " + dir.string();
+    why += ": expected a new or empty directory; it holds files (e.g. ";
+    why += entry.path().filename().string();
+    why += "): choose another ";
+    why += flag;
+    throw RunDirError(why);
   }
   const std::string marker = (dir / RunDir::kMarker).string();
   const int fd = ::open(marker.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
