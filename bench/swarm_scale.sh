@@ -1,23 +1,27 @@
 #!/usr/bin/env bash
 # Multi-process scaling benchmark: N agent processes and the supervisor over DDS on loopback, each
-# size and scenario one `swarm run`. Two scenarios:
+# size and scenario one `swarm run`. Three scenarios:
 #   all    N seeded random point agents on one sticky-proximity graph that soon links everyone
 #          (bench/scale.txtpb, never converged, so it flies its whole duration): all-to-all;
 #   range  N point agents from a random cube into a lattice over 4.5 m radio links
 #          (bench/formation_range.txtpb, the cube scaled with N so the density stays that of
-#          scenarios/formation_lattice64.txtpb): each agent has about a dozen neighbours.
+#          scenarios/formation_lattice64.txtpb): each agent has about a dozen neighbours, but the
+#          swarm is dense enough that every agent is within reach of the cells every other one
+#          listens to (docs/benchmarks.md);
+#   ring   N point agents on a fixed ring graph of degree 4 (bench/ring.txtpb): the traffic each
+#          agent handles follows its degree, not N.
 # Reports per run: CPU per agent, late ticks, sample age p50/p99 at the supervisor, samples the
 # agents accepted per second, agent CPU per accepted sample, discovery time (until the last agent's
 # barrier released), RSS per agent, and how the run ended.
 # Usage: bench/swarm_scale.sh [N ...]        (default: 8 32 64 128)
-# Environment: SCENARIOS="all range" DURATION=30 TIME_SCALE=1 RATE_HZ=50 BUILD_DIR=build
+# Environment: SCENARIOS="all range ring" DURATION=30 TIME_SCALE=1 RATE_HZ=50 BUILD_DIR=build
 set -euo pipefail
 cd "$(dirname "$0")/.."
 BUILD=${BUILD_DIR:-build}
 [[ -x $BUILD/bin/swarm ]] || tools/setup.sh "$BUILD" >/dev/null
 SIZES=("$@")
 ((${#SIZES[@]})) || SIZES=(8 32 64 128)
-read -ra KINDS <<<"${SCENARIOS:-all range}"
+read -ra KINDS <<<"${SCENARIOS:-all range ring}"
 DURATION=${DURATION:-30}
 TIME_SCALE=${TIME_SCALE:-1}
 RATE_HZ=${RATE_HZ:-50}
@@ -26,7 +30,7 @@ mkdir -p "$OUT"
 report() { PYTHONPATH=python /usr/bin/python3 -m qswarm.report "$@"; }
 printf "| agents | scenario | consensus [Hz] | time scale | CPU per agent [%% of a core] | late ticks [%%] | sample age p50 / p99 [ms] | accepted samples [1/s] | CPU per accepted sample [us] | discovery max [s] | RSS per agent [MB] | end |\n"
 printf "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n"
-domain=${DOMAIN:-40}
+domain=${DOMAIN:-12}  # one run at a time: each reuses the domain the last one left
 for kind in "${KINDS[@]}"; do
   for n in "${SIZES[@]}"; do
     dir="$OUT/scale-$kind-$n"
@@ -39,10 +43,20 @@ for kind in "${KINDS[@]}"; do
         sed -e "s/box_m: 10/box_m: $box/" -e "s/consensus_hz: 50/consensus_hz: $RATE_HZ/" \
           -e "s/physics_hz: 50/physics_hz: $RATE_HZ/" bench/formation_range.txtpb >"$scen"
         ;;
-      *) echo "swarm_scale: unknown scenario $kind (all, range)" >&2; exit 2 ;;
+      ring)
+        {
+          sed "s/consensus_hz: 50/consensus_hz: $RATE_HZ/" bench/ring.txtpb
+          awk -v n="$n" 'BEGIN {
+            printf "topology { policy: FIXED"
+            for (i = 1; i <= n; i++) for (k = 1; k <= 2; k++)
+              printf " edges { a: %d b: %d }", i, (i + k - 1) % n + 1
+            print " }" }'
+        } >"$scen"
+        ;;
+      *) echo "swarm_scale: unknown scenario $kind (all, range, ring)" >&2; exit 2 ;;
     esac
     "$BUILD"/bin/swarm run "$scen" --agents "$n" --seed 3 --duration "$DURATION" \
-      --time-scale "$TIME_SCALE" --out "$dir" --domain $((domain++)) --quiet >"$dir.log" 2>&1 || true
+      --time-scale "$TIME_SCALE" --out "$dir" --domain "$domain" --quiet >"$dir.log" 2>&1 || true
     if ! row=$(report "$dir" cpu_per_agent_pct late_ticks_pct messages.age_p50_ms \
       messages.age_p99_ms delivered_per_s cpu_us_per_delivered stats.discovery_s.max \
       stats.max_rss_kb.median end_reason 2>/dev/null); then
