@@ -361,6 +361,9 @@ void check_agent(RunConfig& rc) {
   }
 }
 
+// Swarms of up to this many agents hear everyone unless the scenario says otherwise.
+constexpr std::size_t kAllToAllUpTo = 8;
+
 void resolve_transport(const scenario::Transport& t, RunConfig& rc) {
   TransportConfig& tc = rc.transport;
   if (t.has_domain_id()) tc.domain_id = t.domain_id();
@@ -371,7 +374,12 @@ void resolve_transport(const scenario::Transport& t, RunConfig& rc) {
     fail("transport.interface", "an IPv4 address such as 127.0.0.1", "\"\"");
   if (t.has_shared_memory()) tc.shared_memory = t.shared_memory();
   tc.run_id = t.run_id();
-  tc.delivery = t.delivery() == scenario::Transport::ALL ? Delivery::kAll : Delivery::kNeighbours;
+  // Unset: a small swarm hears everyone (it costs nothing there, and its start barrier then waits
+  // for every agent, so all start together as the paper's runs do); a larger one its neighbours.
+  if (t.delivery() == scenario::Transport::DELIVERY_UNSPECIFIED)
+    tc.delivery = rc.agents.size() <= kAllToAllUpTo ? Delivery::kAll : Delivery::kNeighbours;
+  else
+    tc.delivery = t.delivery() == scenario::Transport::ALL ? Delivery::kAll : Delivery::kNeighbours;
 }
 
 // Checks shared by the fault entries: agent ids, time windows, probabilities.

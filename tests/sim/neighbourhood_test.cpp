@@ -17,8 +17,11 @@
 namespace qswarm {
 namespace {
 
+// Neighbourhood delivery asked for: small swarms hear everyone by default.
 RunConfig load(const std::string& text, const std::string& extra = "") {
-  return resolve_scenario(parse_scenario_text(text + extra, "s"));
+  const bool own = extra.find("transport") != std::string::npos;
+  return resolve_scenario(parse_scenario_text(
+      text + extra + (own ? "" : "\ntransport { delivery: NEIGHBOURS }\n"), "s"));
 }
 
 TEST(Neighbourhood, CellsCoverTheLinkReachAndIdsCoverTheGraph) {
@@ -47,11 +50,17 @@ TEST(Neighbourhood, CellsCoverTheLinkReachAndIdsCoverTheGraph) {
   const Interest linked = Neighbourhood(sticky, 1).update(Vec3(0, 0, 0), Vec3(0, 0, 0), {3});
   EXPECT_TRUE(std::binary_search(linked.subscribe.begin(), linked.subscribe.end(), "a3"));
   // Everyone hears everyone under delivery ALL: the empty interest.
-  const RunConfig all = load(
-      "agents { id: 1 } agents { id: 2 position { x: 100 } }\n"
-      "transport { delivery: ALL }\n");
+  const RunConfig all = load("agents { id: 1 } agents { id: 2 position { x: 100 } }\n",
+                             "transport { delivery: ALL }\n");
   EXPECT_TRUE(Neighbourhood(all, 1).whole_run());
   EXPECT_EQ(Neighbourhood::heard_at_start(all, 1), (std::set<AgentId>{2}));
+  // Unset, a swarm of up to 8 hears everyone (and starts together); a larger one its neighbours.
+  EXPECT_EQ(
+      resolve_scenario(parse_scenario_text("random_agents { count: 8 }", "s")).transport.delivery,
+      Delivery::kAll);
+  EXPECT_EQ(
+      resolve_scenario(parse_scenario_text("random_agents { count: 9 }", "s")).transport.delivery,
+      Delivery::kNeighbours);
 }
 
 TEST(Neighbourhood, EveryPairWithinTheReachPlusMarginHearsEachOtherAsTheyWander) {

@@ -438,8 +438,7 @@ TEST(SwarmRun, BadSamplesFromATestParticipantAreDroppedByEveryAgentAndChangeNoth
   opt.participant.name = "test-saboteur";
   opt.state.run_id = run_id;
   DdsBus saboteur(opt);
-  // It publishes where the agents listen for each other by name (the graph is FIXED).
-  saboteur.set_interest({{"a1", "a2", "a3", "a4"}, {}});
+  // It publishes where the agents listen: a swarm of four hears the whole run's partition.
   std::uint64_t seq = 1u << 30;
   std::int64_t life =
       system_clock().wall_ns() + 1'000'000'000'000LL;  // "newer" than any agent's incarnation
