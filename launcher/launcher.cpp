@@ -145,7 +145,7 @@ std::optional<std::string> Launcher::next_end(bool interrupted) {
       on_agent_exit(c);
     }
   }
-  if (!procs_.children().front().running) return why_.empty() ? "supervisor finished" : why_;
+  if (!procs_.children().front().running) return why_.empty() ? std::string(kFinished) : why_;
   if (interrupted) return "interrupted";
   if (!why_.empty()) return why_;
   if (clock_.now_s() - started_s_ > wall_limit_s()) return std::string(kLate);
@@ -179,11 +179,11 @@ Launcher::Outcome Launcher::conclude(double wall_time_s) {
   Outcome out;
   const int sup = supervisor_status();
   const RunDir& dir = spec_.dir;
-  if (!dir.summary_readable()) {
+  if (!dir.read_summary()) {
     // The supervisor died before it could write the summary (or a stranger's file is there): the
     // launcher says why.
     std::string reason = "supervisor " + describe_status(sup);
-    if (!end_.empty() && end_ != "supervisor finished") reason = end_ + "; " + reason;
+    if (!end_.empty() && end_ != kFinished) reason = end_ + "; " + reason;
     out.lines.push_back(reason + "; the summary says so");
     out.exit_code = dir.write_fallback_summary(spec_.rc, reason, wall_time_s) ? 1 : 3;
     return out;

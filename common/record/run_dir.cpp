@@ -183,9 +183,8 @@ bool RunDir::write_summary(const std::string& json) const {
   return !ec;
 }
 
-namespace {
-std::optional<records::Summary> read_summary(const fs::path& path) {
-  std::ifstream in(path);
+std::optional<records::Summary> RunDir::read_summary() const {
+  std::ifstream in(summary());
   if (!in) return std::nullopt;
   std::stringstream text;
   text << in.rdbuf();
@@ -193,12 +192,9 @@ std::optional<records::Summary> read_summary(const fs::path& path) {
   if (!google::protobuf::util::JsonStringToMessage(text.str(), &s).ok()) return std::nullopt;
   return s;
 }
-}  // namespace
-
-bool RunDir::summary_readable() const { return read_summary(summary()).has_value(); }
 
 bool RunDir::amend_summary(const std::vector<std::string>& problems) const {
-  std::optional<records::Summary> s = read_summary(summary());
+  std::optional<records::Summary> s = read_summary();
   if (!s) return false;
   s->set_converged(false);
   std::string reason = s->end_reason();

@@ -2,12 +2,14 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "common/core/agent.hpp"
 #include "common/scenario/run_config.hpp"
+#include "proto/records.pb.h"
 
 namespace qswarm {
 
@@ -68,8 +70,8 @@ class RunDir {
   // summary.json written whole or not at all (a temporary file renamed over it), so that a process
   // killed while writing never leaves a summary cut short. False if it could not be written.
   bool write_summary(const std::string& json) const;
-  // Whether summary.json is there and reads as a summary.
-  bool summary_readable() const;
+  // summary.json as a summary; nothing if it is missing or does not read as one.
+  std::optional<records::Summary> read_summary() const;
 
   // When the supervisor could not write the summary (it died), the launcher writes one that says
   // why, so that a run never ends without summary.json. Returns whether it was written.

@@ -4,14 +4,9 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-#include <google/protobuf/util/json_util.h>
-
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
-#include <sstream>
-
-#include "proto/records.pb.h"
 
 #include "common/scenario/proto_util.hpp"
 #include "common/scenario/scenario.hpp"
@@ -203,12 +198,9 @@ TEST(Launcher, AnUnplannedAgentExitEndsTheRunWhenAsked) {
 }
 
 records::Summary read_summary(const RunDir& dir) {
-  std::ifstream in(dir.summary());
-  std::stringstream text;
-  text << in.rdbuf();
-  records::Summary s;
-  EXPECT_TRUE(google::protobuf::util::JsonStringToMessage(text.str(), &s).ok()) << text.str();
-  return s;
+  const std::optional<records::Summary> s = dir.read_summary();
+  EXPECT_TRUE(s.has_value()) << dir.summary() << " does not read as a summary";
+  return s.value_or(records::Summary{});
 }
 
 // A swarm too large for the machine never gets going and is stopped at the wall limit: the record

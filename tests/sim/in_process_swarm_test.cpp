@@ -2,7 +2,6 @@
 // manual clock over the in-memory network: deterministic, and seconds of swarm in milliseconds.
 #include <gtest/gtest.h>
 
-#include <google/protobuf/util/json_util.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -167,12 +166,9 @@ RunDir fresh_run_dir() {
 }
 
 records::Summary summary_of(const RunDir& dir) {
-  std::ifstream in(dir.summary());
-  std::stringstream text;
-  text << in.rdbuf();
-  records::Summary s;
-  EXPECT_TRUE(google::protobuf::util::JsonStringToMessage(text.str(), &s).ok()) << text.str();
-  return s;
+  const std::optional<records::Summary> s = dir.read_summary();
+  EXPECT_TRUE(s.has_value()) << dir.summary() << " does not read as a summary";
+  return s.value_or(records::Summary{});
 }
 
 std::vector<std::string> event_kinds(const RunDir& dir) {
