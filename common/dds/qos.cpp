@@ -4,8 +4,10 @@ namespace qswarm {
 
 namespace dds = eprosima::fastdds::dds;
 
-dds::DataWriterQos best_effort_writer_qos(int depth) {
-  dds::DataWriterQos q = dds::DATAWRITER_QOS_DEFAULT;
+namespace {
+// Writer and reader take the same settings through the same accessors.
+template <typename Qos>
+Qos best_effort(Qos q, int depth) {
   q.reliability().kind = dds::BEST_EFFORT_RELIABILITY_QOS;
   q.durability().kind = dds::VOLATILE_DURABILITY_QOS;
   q.history().kind = dds::KEEP_LAST_HISTORY_QOS;
@@ -13,15 +15,14 @@ dds::DataWriterQos best_effort_writer_qos(int depth) {
   q.data_sharing().off();
   return q;
 }
+}  // namespace
+
+dds::DataWriterQos best_effort_writer_qos(int depth) {
+  return best_effort(dds::DATAWRITER_QOS_DEFAULT, depth);
+}
 
 dds::DataReaderQos best_effort_reader_qos(int depth) {
-  dds::DataReaderQos q = dds::DATAREADER_QOS_DEFAULT;
-  q.reliability().kind = dds::BEST_EFFORT_RELIABILITY_QOS;
-  q.durability().kind = dds::VOLATILE_DURABILITY_QOS;
-  q.history().kind = dds::KEEP_LAST_HISTORY_QOS;
-  q.history().depth = depth;
-  q.data_sharing().off();
-  return q;
+  return best_effort(dds::DATAREADER_QOS_DEFAULT, depth);
 }
 
 }  // namespace qswarm
