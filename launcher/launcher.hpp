@@ -42,6 +42,8 @@ class Launcher {
   // Starts the supervisor, waits until it listens, then starts every agent. Throws
   // std::runtime_error (saying why) if the supervisor does not come up; no agent is started then.
   void start();
+  // What poll() says when the supervisor ended the run itself (not an end to report).
+  static constexpr const char* kFinished = "supervisor finished";
   // One pass of the watch loop. Returns why the run is over, or nothing while it goes on.
   std::optional<std::string> poll(bool interrupted);
   // Tears everything down (SIGTERM, grace, SIGKILL). Returns how many needed SIGKILL.

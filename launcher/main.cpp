@@ -199,7 +199,7 @@ int run(const RunOptions& opt) {
               << (killed ? " (" + std::to_string(killed) + " needed SIGKILL)" : std::string())
               << "\n";
   }
-  if (*why != "supervisor finished") std::cerr << "swarm run: " << *why << "\n";
+  if (*why != Launcher::kFinished) std::cerr << "swarm run: " << *why << "\n";
   for (const std::string& p : launcher.problems()) std::cerr << "swarm run: " << p << "\n";
   const Launcher::Outcome outcome = launcher.conclude(clock.now_s());
   for (const std::string& line : outcome.lines)

@@ -87,12 +87,15 @@ DdsParticipant::DdsParticipant(const ParticipantOptions& opts) : opts_(opts) {
   const std::lock_guard<std::mutex> lock(taking_ports);
   const bool given = opts.participant_id >= 0;
   int id = given ? opts.participant_id : PortPlan::kMaxParticipantId + 1;
-  std::uint32_t skip = static_cast<std::uint32_t>(::getpid()) % 8;  // processes started alike
+  int skip = static_cast<int>(::getpid() % 8);  // processes started alike spread out
   for (int attempt = 0;; ++attempt) {
     if (!given) {
-      do --id;
-      while (id >= 0 && (!participant_ports_problem(opts.domain_id, id, opts.interface).empty() ||
-                         (skip > 0 && skip-- > 0)));
+      // The next lower free id, passing over `skip` free ones on the first try.
+      for (--id; id >= 0; --id) {
+        if (!participant_ports_problem(opts.domain_id, id, opts.interface).empty()) continue;
+        if (skip == 0) break;
+        --skip;
+      }
       if (id < 0)
         throw std::runtime_error("dds: no free participant id on domain " +
                                  std::to_string(opts.domain_id) + " (0 to 544 all taken)");
