@@ -93,6 +93,11 @@ const char* g_prog = "qswarm";
       std::rethrow_exception(e);
     } catch (const std::exception& ex) {
       what = "uncaught exception: " + describe_exception(ex);
+      if (creating_participant() && dynamic_cast<const std::system_error*>(&ex) != nullptr &&
+          what.find("out of threads") == std::string::npos)
+        what +=
+            " (while Fast DDS started its participant's threads: out of threads or memory? run "
+            "fewer agents, or raise the process and thread limits)";
     } catch (...) {
       what = "uncaught exception of an unknown type";
     }

@@ -26,7 +26,8 @@ class DdsBus final : public NeighborBus {
 
   void publish(const StateMessage& msg) override { state_.publish(msg); }
   void record(const StateMessage& msg) override { state_.record(msg); }
-  int recorders_matched() const override { return state_.recorders_matched(); }
+  bool recorder_confirmed() const override { return state_.recorder_confirmed(); }
+  int record_readers_matched() const { return state_.record_readers_matched(); }
   void set_interest(const Interest& interest) override { state_.set_interest(interest); }
   std::vector<StateMessage> latest(AgentId self) override { return state_.latest(self); }
   void set_listener(Listener listener) override { state_.set_listener(std::move(listener)); }

@@ -11,6 +11,7 @@
 #include <netdb.h>
 #include <sys/socket.h>
 #include <unistd.h>
+#include <atomic>
 #include <fastdds/dds/domain/DomainParticipant.hpp>
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
 
@@ -26,14 +27,27 @@ namespace qswarm {
 namespace dds = eprosima::fastdds::dds;
 namespace rtps = eprosima::fastdds::rtps;
 
+namespace {
+std::atomic<int> g_creating{0};
+struct CreatingParticipant {
+  CreatingParticipant() { ++g_creating; }
+  ~CreatingParticipant() { --g_creating; }
+  CreatingParticipant(const CreatingParticipant&) = delete;
+  CreatingParticipant& operator=(const CreatingParticipant&) = delete;
+};
+}  // namespace
+
+bool creating_participant() { return g_creating > 0; }
+
 DdsParticipant::DdsParticipant(const ParticipantOptions& opts) : opts_(opts) {
   dds::DomainParticipantQos pqos;
   pqos.name(opts.name);
   pqos.transport().use_builtin_transports = false;
-  if (opts.test_drop_data_percent > 0) {
+  if (opts.test_drop_data_percent > 0 || opts.test_drop_writer_announcements) {
     auto t = std::make_shared<rtps::test_UDPv4TransportDescriptor>();
     if (!opts.interface.empty()) t->interfaceWhiteList.push_back(opts.interface);
     t->dropDataMessagesPercentage = opts.test_drop_data_percent;
+    t->dropPublicationBuiltinTopicData = opts.test_drop_writer_announcements;
     pqos.transport().user_transports.push_back(t);
   } else {
     auto udp = std::make_shared<rtps::UDPv4TransportDescriptor>();
@@ -105,8 +119,11 @@ DdsParticipant::DdsParticipant(const ParticipantOptions& opts) : opts_(opts) {
       throw std::runtime_error("dds: " + problem);
     }
     pqos.wire_protocol().participant_id = id;
-    participant_ =
-        dds::DomainParticipantFactory::get_instance()->create_participant(opts.domain_id, pqos);
+    {
+      const CreatingParticipant creating;
+      participant_ =
+          dds::DomainParticipantFactory::get_instance()->create_participant(opts.domain_id, pqos);
+    }
     if (!participant_)
       throw std::runtime_error("dds: cannot create a participant on domain " +
                                std::to_string(opts.domain_id));

@@ -21,6 +21,10 @@ struct ParticipantOptions {
   // Fast DDS's test transport instead of plain UDPv4: drop this percentage of data messages on
   // the sending side (0 = plain UDPv4).
   std::uint8_t test_drop_data_percent = 0;
+  // The test transport too, dropping every writer announcement this participant sends (DATA(w)):
+  // its peers never learn its writers while it learns their readers, a lost discovery message
+  // made permanent (tests of a one-sided match).
+  bool test_drop_writer_announcements = false;
   // Fast DDS Discovery Server "HOST:PORT" (HOST a name or an IPv4 address): discover through it as
   // a client instead of by multicast (container networks). Empty: the standard simple discovery.
   std::string discovery_server;
@@ -56,5 +60,11 @@ class DdsParticipant {
 // (with retries for ~15 s while a container network's DNS catches up). Throws
 // std::invalid_argument naming what is wrong.
 std::pair<std::string, std::uint16_t> resolve_discovery_server(const std::string& host_port);
+
+// Whether a thread of this process is inside Fast DDS's participant creation. When a thread of
+// the participant cannot start (a task limit), Fast DDS 2.9 throws, and a destructor on the way
+// out throws again (std::thread::join on the thread that never started: "Invalid argument"), which
+// ends in std::terminate: the terminate handler says what it was from this.
+bool creating_participant();
 
 }  // namespace qswarm

@@ -25,4 +25,19 @@ dds::DataReaderQos best_effort_reader_qos(int depth) {
   return best_effort(dds::DATAREADER_QOS_DEFAULT, depth);
 }
 
+dds::DataWriterQos record_writer_qos() {
+  dds::DataWriterQos q = best_effort_writer_qos(1);
+  q.reliability().kind = dds::RELIABLE_RELIABILITY_QOS;
+  q.resource_limits().max_instances = 1;
+  q.resource_limits().max_samples_per_instance = 1;
+  q.resource_limits().max_samples = 1;
+  return q;
+}
+
+dds::DataReaderQos record_reader_qos() {
+  dds::DataReaderQos q = best_effort_reader_qos(1);
+  q.reliability().kind = dds::RELIABLE_RELIABILITY_QOS;
+  return q;
+}
+
 }  // namespace qswarm

@@ -65,8 +65,16 @@ struct DdsStateBus::Impl : public dds::DataReaderListener {
   Listener listener;
   struct WriterListener : public dds::DataWriterListener {
     std::atomic<int> matched{0};
+    // A sample was written since the last match change: a reader matched before it was written
+    // must acknowledge it (a volatile writer owes a new reader nothing it wrote before).
+    std::atomic<bool> written_since_match{false};
+    // Every reader matched now acknowledged such a sample once (it stays so until a match
+    // changes: the writer keeps writing, and what it wrote last may still be on its way).
+    std::atomic<bool> acknowledged{false};
     void on_publication_matched(dds::DataWriter*,
                                 const dds::PublicationMatchedStatus& st) override {
+      written_since_match = false;
+      acknowledged = false;
       matched = st.current_count;
     }
   } writer_listener, record_listener;
@@ -125,15 +133,14 @@ DdsStateBus::DdsStateBus(DdsParticipant& participant, const StateBusOptions& opt
   if (!d.topic || !d.record_topic) throw std::runtime_error("dds: cannot create the state topics");
 
   if (opts.publish) {
-    dds::DataWriterQos wq = best_effort_writer_qos();
-    // No filtering on the writer's side: it would evaluate each sample for every filtering reader
-    // and send per reader (64 agents on 2 cores fell behind with it); the readers filter.
-    wq.writer_resource_limits().reader_filters_allocation =
-        eprosima::fastrtps::ResourceLimitedContainerConfig(0, 0, 0);
-    wq.endpoint().history_memory_policy =
-        eprosima::fastrtps::rtps::PREALLOCATED_WITH_REALLOC_MEMORY_MODE;
     const auto writer_in = [&](const std::string& part, dds::Publisher*& pub, dds::Topic* topic,
-                               dds::DataWriterListener* listener) {
+                               dds::DataWriterQos wq, dds::DataWriterListener* listener) {
+      // No filtering on the writer's side: it would evaluate each sample for every filtering
+      // reader and send per reader (64 agents on 2 cores fell behind with it); readers filter.
+      wq.writer_resource_limits().reader_filters_allocation =
+          eprosima::fastrtps::ResourceLimitedContainerConfig(0, 0, 0);
+      wq.endpoint().history_memory_policy =
+          eprosima::fastrtps::rtps::PREALLOCATED_WITH_REALLOC_MEMORY_MODE;
       dds::PublisherQos pub_qos = dds::PUBLISHER_QOS_DEFAULT;
       pub_qos.partition().push_back(part.c_str());
       pub = d.participant->create_publisher(pub_qos);
@@ -141,9 +148,10 @@ DdsStateBus::DdsStateBus(DdsParticipant& participant, const StateBusOptions& opt
       if (!w) throw std::runtime_error("dds: cannot create a writer in " + part);
       return w;
     };
-    d.writer = writer_in(run_partition(opts.run_id), d.publisher, d.topic, &d.writer_listener);
+    d.writer = writer_in(run_partition(opts.run_id), d.publisher, d.topic, best_effort_writer_qos(),
+                         &d.writer_listener);
     d.record_writer = writer_in(record_partition(opts.run_id), d.record_publisher, d.record_topic,
-                                &d.record_listener);
+                                record_writer_qos(), &d.record_listener);
   }
 
   dds::SubscriberQos sub_qos = dds::SUBSCRIBER_QOS_DEFAULT;
@@ -153,7 +161,7 @@ DdsStateBus::DdsStateBus(DdsParticipant& participant, const StateBusOptions& opt
   sub_qos.partition().push_back(opts.hear_all_runs ? any_run.c_str() : mine.c_str());
   d.subscriber = d.participant->create_subscriber(sub_qos);
   if (!d.subscriber) throw std::runtime_error("dds: cannot create the state subscriber");
-  dds::DataReaderQos rq = best_effort_reader_qos();
+  dds::DataReaderQos rq = opts.recorder ? record_reader_qos() : best_effort_reader_qos();
   rq.resource_limits().max_instances = opts.max_agents + 16;
   rq.resource_limits().max_samples_per_instance = 1;
   rq.resource_limits().max_samples = opts.max_agents + 16;
@@ -244,10 +252,22 @@ void DdsStateBus::record(const StateMessage& msg) {
   Impl& d = *impl_;
   if (!d.record_writer) return;
   to_idl(msg, d.out_sample);
-  d.record_writer->write(&d.out_sample);
+  if (d.record_writer->write(&d.out_sample) && d.record_listener.matched > 0)
+    d.record_listener.written_since_match = true;
 }
 
-int DdsStateBus::recorders_matched() const { return impl_->record_listener.matched; }
+int DdsStateBus::record_readers_matched() const { return impl_->record_listener.matched; }
+
+bool DdsStateBus::recorder_confirmed() const {
+  Impl& d = *impl_;
+  auto& l = d.record_listener;
+  if (!d.record_writer || l.matched == 0 || !l.written_since_match) return false;
+  // Every matched reliable reader acknowledged every sample still in the history (zero wait).
+  if (!l.acknowledged && d.record_writer->wait_for_acknowledgments(eprosima::fastrtps::Duration_t(
+                             0, 0)) == ReturnCode_t::RETCODE_OK)
+    l.acknowledged = true;
+  return l.acknowledged;
+}
 
 std::vector<StateMessage> DdsStateBus::latest(AgentId self) {
   std::lock_guard<std::mutex> lock(impl_->mu);

@@ -54,7 +54,9 @@ class DdsStateBus final : public NeighborBus {
   void record(const StateMessage& msg) override;
   // Moves the state writer's and reader's partitions (DDS re-matches them with their peers).
   void set_interest(const Interest& interest) override;
-  int recorders_matched() const override;
+  bool recorder_confirmed() const override;
+  // Readers matched to our record writer (our side of discovery only: see recorder_confirmed).
+  int record_readers_matched() const;
   std::vector<StateMessage> latest(AgentId self) override;
   // Called for every accepted sample, on a DDS thread. set_listener(nullptr) waits for a call in
   // progress to finish.

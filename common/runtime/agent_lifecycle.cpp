@@ -34,13 +34,13 @@ AgentLifecycle::AgentLifecycle(LifecycleConfig cfg, double now_wall_s)
 
 LifecycleStep AgentLifecycle::step(double now, const std::vector<PeerStatus>& peers,
                                    int matched_readers, double agent_time_s,
-                                   bool recorder_matched) {
+                                   bool recorder_confirmed) {
   switch (phase_) {
     case LifePhase::kJoinWait:
       return join_wait(now, peers);
     case LifePhase::kWaiting:
     case LifePhase::kReady:
-      return barrier(now, peers, matched_readers, recorder_matched);
+      return barrier(now, peers, matched_readers, recorder_confirmed);
     case LifePhase::kRunning:
       return running(now, agent_time_s);
     case LifePhase::kStopping:
@@ -90,7 +90,7 @@ LifecycleStep AgentLifecycle::join_wait(double now, const std::vector<PeerStatus
 }
 
 LifecycleStep AgentLifecycle::barrier(double now, const std::vector<PeerStatus>& peers,
-                                      int matched_readers, bool recorder_matched) {
+                                      int matched_readers, bool recorder_confirmed) {
   LifecycleStep s;
   std::size_t heard = 0, ready = 0;
   for (const PeerStatus& p : peers) {
@@ -100,7 +100,7 @@ LifecycleStep AgentLifecycle::barrier(double now, const std::vector<PeerStatus>&
   }
   const std::size_t expected = cfg_.barrier_peers.size();
   const bool all_heard = heard >= expected && matched_readers >= cfg_.min_matched_readers &&
-                         (recorder_matched || !cfg_.wait_recorder);
+                         (recorder_confirmed || !cfg_.wait_recorder);
   if (all_heard && ready >= expected) {
     enter_running(now, s, 0.0);
     return s;

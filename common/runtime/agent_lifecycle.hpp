@@ -23,8 +23,8 @@ struct LifecycleConfig {
   // The peers the start barrier waits for (start_peers(): FIXED-aware, late joiners left out).
   std::set<AgentId> barrier_peers;
   // The start also waits until this many readers matched our state writer (the barrier peers':
-  // DDS discovery can lag hearing a peer), and, with a supervisor, until its reader matched our
-  // record stream, so that the recorder sees the start.
+  // DDS discovery can lag hearing a peer), and, with a supervisor, until it confirmed hearing our
+  // record stream (NeighborBus::recorder_confirmed), so that the recorder sees the start.
   int min_matched_readers = 0;
   bool wait_recorder = false;
   // Late join or restart: wait silently until the swarm's clock reaches this simulated time.
@@ -75,7 +75,7 @@ class AgentLifecycle {
   AgentLifecycle(LifecycleConfig cfg, double now_wall_s);
 
   LifecycleStep step(double now_wall_s, const std::vector<PeerStatus>& peers, int matched_readers,
-                     double agent_time_s, bool recorder_matched = true);
+                     double agent_time_s, bool recorder_confirmed = true);
   // The process is stopping (a signal, or the wall limit): no more ticks.
   void stop() { phase_ = LifePhase::kStopping; }
 
@@ -87,7 +87,7 @@ class AgentLifecycle {
  private:
   LifecycleStep join_wait(double now, const std::vector<PeerStatus>& peers);
   LifecycleStep barrier(double now, const std::vector<PeerStatus>& peers, int matched_readers,
-                        bool recorder_matched);
+                        bool recorder_confirmed);
   LifecycleStep running(double now, double agent_time_s);
   void enter_running(double now, LifecycleStep& s, double start_time_s);
 

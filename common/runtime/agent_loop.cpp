@@ -105,7 +105,7 @@ AgentLoop::Poll AgentLoop::poll() {
       if (is_agent_(m.view.id)) peers.push_back({m.view.id, m.phase, m.stamp_s});
   }
   const LifecycleStep s = life_.step(now, peers, transport_.matched_readers(), runtime_.time_s(),
-                                     transport_.recorders_matched() > 0);
+                                     transport_.recorder_confirmed());
   if (!s.warning.empty()) r.notes.push_back({true, s.warning});
   if (s.swarm_time_s >= 0.0) faulty_.set_time(s.swarm_time_s);
   runtime_.set_wall_ns(clock_.wall_ns());  // what samples published now carry

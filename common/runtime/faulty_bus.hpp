@@ -24,7 +24,7 @@ class FaultyBus final : public NeighborBus {
   void set_time(double t_s);
   void publish(const StateMessage& msg) override { inner_.publish(msg); }
   void record(const StateMessage& msg) override { inner_.record(msg); }
-  int recorders_matched() const override { return inner_.recorders_matched(); }
+  bool recorder_confirmed() const override { return inner_.recorder_confirmed(); }
   void set_interest(const Interest& interest) override { inner_.set_interest(interest); }
   std::vector<StateMessage> latest(AgentId self) override;
   void set_listener(Listener listener) override;

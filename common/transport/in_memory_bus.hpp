@@ -48,7 +48,7 @@ class InMemoryBus final : public NeighborBus {
 
   void publish(const StateMessage& msg) override;
   void record(const StateMessage& msg) override { net_.post(this, msg, true); }
-  int recorders_matched() const override { return net_.endpoints(Role::kRecorder); }
+  bool recorder_confirmed() const override { return net_.endpoints(Role::kRecorder) > 0; }
   // Every other agent's endpoint hears what this one publishes.
   int matched_readers() const override {
     return net_.endpoints(Role::kAgent) - (role_ == Role::kAgent ? 1 : 0);

@@ -40,8 +40,11 @@ class NeighborBus {
   virtual BusCounters counters() const = 0;
   // Readers matched to our writer (DDS discovery: the start barrier waits for the supervisor's).
   virtual int matched_readers() const { return 0; }
-  // Recorders matched to our record stream (the start barrier waits for the supervisor's).
-  virtual int recorders_matched() const { return 0; }
+  // Whether a recorder hears our record stream: one matched it and acknowledged what we recorded
+  // since (the start barrier waits for it, so that the record holds every agent from the start).
+  // A writer's match alone does not say it: the recorder may not yet know our writer, and drops
+  // what it sends until it does.
+  virtual bool recorder_confirmed() const { return false; }
   // Which parts of the state stream this endpoint publishes into and hears (the agents that can
   // be its neighbours: see Neighbourhood). The default is the whole run.
   virtual void set_interest(const Interest& interest) { (void)interest; }
