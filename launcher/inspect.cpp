@@ -50,6 +50,15 @@ std::string as_json(const RunConfig& rc, const InitialGraph& g, double tau) {
   ins.set_safe_distance_m(rc.agent.avoidance.safe_distance_m);
   for (const AgentId id : rc.held_agents()) ins.add_held_agents(id);
   *ins.mutable_resolved() = rc.resolved;
+  if (rc.agent.law.kind == LawKind::kWmsr) {
+    const ResilienceCheck c = resilience_of(rc, g);
+    records::Resilience* r = ins.mutable_resilience();
+    r->set_f(static_cast<std::uint32_t>(c.f));
+    r->set_min_degree(static_cast<std::uint32_t>(c.min_degree));
+    r->set_degree_ok(c.degree_ok);
+    if (c.robust) r->set_robust(*c.robust);
+    r->set_ok(c.ok());
+  }
   return to_json(ins);
 }
 
@@ -83,6 +92,7 @@ std::string as_text(const RunConfig& rc, const InitialGraph& g, double tau) {
     << (rc.has_formation() ? " of the agents' estimates of the centre" : "") << "): (" << avg.x()
     << ", " << avg.y() << ", " << avg.z() << ")\n";
   if (tau > 0) o << "time constant 1/(k lambda2) = " << tau << " s (exact for fixed weights)\n";
+  if (rc.agent.law.kind == LawKind::kWmsr) o << describe(resilience_of(rc, g), rc);
   if (rc.agent.avoidance.enabled) {
     o << "collision avoidance on: every quadcopter keeps " << rc.agent.avoidance.safe_distance_m
       << " m from every agent it hears (the filter aims for "
@@ -118,6 +128,31 @@ std::string as_text(const RunConfig& rc, const InitialGraph& g, double tau) {
 }
 
 }  // namespace
+
+ResilienceCheck resilience_of(const RunConfig& rc, const InitialGraph& g) {
+  return check_resilience(static_cast<int>(rc.agents.size()), g.edges, rc.agent.law.wmsr_f);
+}
+
+std::string describe(const ResilienceCheck& c, const RunConfig& rc) {
+  std::ostringstream o;
+  const int f = c.f;
+  o << "W-MSR tolerates " << f << " lying neighbour(s) if every agent has at least " << 2 * f + 1
+    << " neighbours and the graph is (" << f + 1 << ", " << f + 1 << ")-robust:\n  degree "
+    << c.min_degree << (c.degree_ok ? " (enough)" : " (TOO FEW)") << ", robustness ";
+  if (!c.robust) {
+    o << "not decided (more than " << kMaxExactRobustness << " agents)";
+  } else {
+    o << (*c.robust ? "holds" : "FAILS");
+  }
+  o << "\n";
+  if (!c.ok()) {
+    o << (rc.agent.law.topology.policy == TopologyPolicy::kFixed
+              ? "  the FIXED graph never changes: swarm run refuses this scenario\n"
+              : "  the initial graph does not hold it: a liar can drag or split the honest agents "
+                "until proximity adds links\n");
+  }
+  return o.str();
+}
 
 InitialGraph initial_graph(const RunConfig& rc) {
   InitialGraph g;

@@ -16,6 +16,11 @@ struct InitialGraph {
 };
 InitialGraph initial_graph(const RunConfig& rc);
 
+// What law W_MSR needs of the initial graph: `swarm inspect` shows it, `swarm run` refuses a FIXED
+// graph that lacks it (it can never gain it) and warns about any other.
+ResilienceCheck resilience_of(const RunConfig& rc, const InitialGraph& g);
+std::string describe(const ResilienceCheck& c, const RunConfig& rc);
+
 // `swarm inspect`: the scenario's initial graph, Laplacian, spectrum and predicted agreement,
 // as text or (json) as the Inspection message in JSON. Exit code: 0, or 2 for a bad scenario.
 int inspect_scenario(const std::string& path, bool json);

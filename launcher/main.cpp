@@ -100,6 +100,12 @@ RunConfig resolve_run(const RunOptions& opt) {
   // Checked here, before anything flies: an address not on this machine leaves every agent alone.
   if (const std::string problem = interface_problem(rc.transport.interface); !problem.empty())
     throw ScenarioError("scenario field 'transport.interface': " + problem);
+  if (rc.agent.law.kind == LawKind::kWmsr) {
+    const ResilienceCheck c = resilience_of(rc, initial_graph(rc));
+    if (!c.ok() && rc.agent.law.topology.policy == TopologyPolicy::kFixed)
+      throw ScenarioError("scenario field 'wmsr_f': " + describe(c, rc));
+    if (!c.ok()) std::cerr << "swarm run: warning: " << describe(c, rc);
+  }
   {
     // A fresh id for every run, even when the scenario is a previous run's scenario.txtpb (which
     // holds that run's id): two runs on one domain never hear each other.
@@ -327,7 +333,7 @@ int main(int argc, char** argv) {
   run_cmd->add_flag("--stop-on-agent-exit", ro.stop_on_agent_exit,
                     "end the run when any agent exits");
   run_cmd->add_option("--law", ro.law,
-                      "update law: edge-flow or laplacian (overrides the scenario)");
+                      "update law: edge-flow, laplacian or w-msr (overrides the scenario)");
   run_cmd->add_option("--loss", ro.loss, "fault: drop each received message with this probability")
       ->check(finite_range(0.0, 1.0))
       ->allow_extra_args(false)

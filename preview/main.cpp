@@ -4,7 +4,7 @@
 // where the agents met. Without a SCENARIO it flies scenarios/demo.txtpb, the paper's time-varying
 // weighted rendezvous (section 2.7.2), and compares with the paper's point.
 //
-// usage: swarm-preview [SCENARIO] [--law edge-flow|laplacian] [--duration S] [--csv FILE]
+// usage: swarm-preview [SCENARIO] [--law L] [--duration S] [--csv FILE]
 // Exit status: 0 when the agents' mean is within 1e-6 m of the reference (the paper's point for
 // the demo, the initial average for a SCENARIO); 1 when it is not; 2 for bad input (a flag, or a
 // scenario field, named); 3 when the CSV could not be written completely.
@@ -26,10 +26,10 @@ using namespace qswarm;
 namespace {
 
 constexpr char kUsage[] =
-    "usage: swarm-preview [SCENARIO] [--law edge-flow|laplacian] [--duration S] [--csv FILE]\n"
+    "usage: swarm-preview [SCENARIO] [--law L] [--duration S] [--csv FILE]\n"
     "  SCENARIO       a scenario file (default scenarios/demo.txtpb, the paper's time-varying\n"
     "                 rendezvous, from the current directory or the build tree)\n"
-    "  --law L        the agreement law (overrides the scenario's)\n"
+    "  --law L        the agreement law: edge-flow, laplacian or w-msr (overrides the scenario's)\n"
     "  --duration S   simulated seconds before giving up (overrides the scenario's duration_s);\n"
     "                 the flight ends earlier once the disagreement is below the scenario's\n"
     "                 convergence.tolerance_m\n"

@@ -1,5 +1,7 @@
 #include "common/core/graph.hpp"
 
+#include <bit>
+#include <cstdint>
 #include <numeric>
 #include <stdexcept>
 
@@ -67,6 +69,62 @@ Positions agreement_solution(const Eigen::MatrixXd& L, const Positions& q0, doub
   Positions out(n);
   for (int i = 0; i < n; ++i) out[i] = Q.row(i).transpose();
   return out;
+}
+
+namespace {
+std::vector<std::uint32_t> adjacency_masks(int n, const std::vector<Edge>& edges) {
+  std::vector<std::uint32_t> adj(static_cast<std::size_t>(n), 0u);
+  for (const Edge& e : edges) {
+    if (e.i < 0 || e.j < 0 || e.i >= n || e.j >= n || e.i == e.j)
+      throw std::invalid_argument("robustness: edge with a vertex out of range or a self-loop");
+    adj[e.i] |= 1u << e.j;
+    adj[e.j] |= 1u << e.i;
+  }
+  return adj;
+}
+
+// Members of `set` with at least r neighbours outside it (X^r_S in LeBlanc et al.).
+int reachable(const std::vector<std::uint32_t>& adj, std::uint32_t set, int r) {
+  int count = 0;
+  for (std::uint32_t m = set; m != 0; m &= m - 1) {
+    const int v = std::countr_zero(m);
+    count += std::popcount(adj[v] & ~set) >= r ? 1 : 0;
+  }
+  return count;
+}
+}  // namespace
+
+bool is_rs_robust(int n, const std::vector<Edge>& edges, int r, int s) {
+  if (n < 0 || n > kMaxExactRobustness)
+    throw std::invalid_argument("robustness: decided exhaustively only up to " +
+                                std::to_string(kMaxExactRobustness) + " vertices");
+  const std::vector<std::uint32_t> adj = adjacency_masks(n, edges);
+  const std::uint32_t all = n == 0 ? 0u : (1u << n) - 1u;
+  for (std::uint32_t s1 = 1; s1 <= all; ++s1) {
+    const int x1 = reachable(adj, s1, r);
+    if (x1 == std::popcount(s1)) continue;  // S1 alone satisfies the condition for any S2
+    const std::uint32_t rest = all & ~s1;
+    // Every nonempty S2 inside the rest (the pair is unordered, but both orders are cheap).
+    for (std::uint32_t s2 = rest; s2 != 0; s2 = (s2 - 1) & rest) {
+      const int x2 = reachable(adj, s2, r);
+      if (x2 != std::popcount(s2) && x1 + x2 < s) return false;
+    }
+  }
+  return true;
+}
+
+ResilienceCheck check_resilience(int n, const std::vector<Edge>& edges, int f) {
+  ResilienceCheck c;
+  c.f = f;
+  std::vector<int> degree(static_cast<std::size_t>(n), 0);
+  for (const Edge& e : edges) {
+    ++degree.at(e.i);
+    ++degree.at(e.j);
+  }
+  c.min_degree = n == 0 ? 0 : *std::min_element(degree.begin(), degree.end());
+  c.degree_ok = c.min_degree >= 2 * f + 1;
+  if (n <= kMaxExactRobustness) c.robust = is_rs_robust(n, edges, f + 1, f + 1);
+  return c;
 }
 
 Vec3 average(const Positions& q) {

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cstdint>
 #include <map>
+#include <optional>
 #include <utility>
 #include <vector>
 
@@ -62,6 +63,24 @@ std::vector<Edge> edges_from_links(const std::vector<AgentId>& ids, LinksOf&& li
   for (const auto& [key, w] : found) out.push_back({key.first, key.second, w});
   return out;
 }
+
+// What W-MSR with parameter F needs of an undirected graph on n vertices (LeBlanc et al., IEEE
+// JSAC 2013): every vertex has at least 2F+1 neighbours (each can drop 2F values and keep one),
+// and the graph is (F+1, F+1)-robust: for every two disjoint nonempty vertex sets S1, S2, one of
+// them has all its members with F+1 neighbours outside it, or together they have F+1 such
+// members. Robustness is decided exhaustively (3^n placements of the vertices), so only up to
+// kMaxExactRobustness vertices; above, `robust` is unset.
+struct ResilienceCheck {
+  int f = 0;
+  int min_degree = 0;
+  bool degree_ok = false;      // min_degree >= 2F + 1
+  std::optional<bool> robust;  // (F+1, F+1)-robust; unset: too large to decide here
+  bool ok() const { return degree_ok && robust.value_or(true); }
+};
+constexpr int kMaxExactRobustness = 14;
+ResilienceCheck check_resilience(int n, const std::vector<Edge>& edges, int f);
+// (r, s)-robustness by exhaustion (n <= kMaxExactRobustness; std::invalid_argument above).
+bool is_rs_robust(int n, const std::vector<Edge>& edges, int r, int s);
 
 Vec3 average(const Positions& q);
 // Largest distance of any point from the mean (the disagreement the supervisor reports).

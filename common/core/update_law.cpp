@@ -29,12 +29,23 @@ std::string check_view(const NeighborView& v, double max_abs) {
   return {};
 }
 
-std::string to_string(LawKind k) { return k == LawKind::kLaplacian ? "laplacian" : "edge-flow"; }
+std::string to_string(LawKind k) {
+  switch (k) {
+    case LawKind::kLaplacian:
+      return "laplacian";
+    case LawKind::kWmsr:
+      return "w-msr";
+    case LawKind::kEdgeFlow:
+      break;
+  }
+  return "edge-flow";
+}
 
 LawKind parse_law_kind(const std::string& s) {
   if (s == "laplacian") return LawKind::kLaplacian;
   if (s == "edge-flow" || s == "edge_flow") return LawKind::kEdgeFlow;
-  throw std::invalid_argument("update law '" + s + "': expected laplacian or edge-flow");
+  if (s == "w-msr" || s == "w_msr" || s == "wmsr") return LawKind::kWmsr;
+  throw std::invalid_argument("update law '" + s + "': expected laplacian, edge-flow or w-msr");
 }
 
 void LawConfig::validate() const {
@@ -45,6 +56,10 @@ void LawConfig::validate() const {
   if (!std::isfinite(max_step_fraction) || max_step_fraction <= 0.0 || max_step_fraction > 1.0) {
     throw std::invalid_argument("law.max_step_fraction = " + std::to_string(max_step_fraction) +
                                 ": expected a value in (0, 1]");
+  }
+  if (wmsr_f < 0 || wmsr_f > 64) {
+    throw std::invalid_argument("law.wmsr_f = " + std::to_string(wmsr_f) +
+                                ": expected 0 to 64 lying neighbours");
   }
   if (!std::isfinite(weight.scale) || weight.scale <= 0.0) {
     throw std::invalid_argument("weight.scale: expected a finite value > 0");
@@ -105,7 +120,7 @@ void UpdateLaw::step(double dt, const std::vector<NeighborView>& neighbors) {
     const double s = cfg_.max_step_fraction;
     coef[k] = w[k] / W * std::min(-std::expm1(-cfg_.gain * W * dt), s);
   }
-  integrate(neighbors, coef);
+  integrate({neighbors, coef, w, dt});
   ++ticks_;
   published_total_weight_ = w_now;
   observed_ = true;
@@ -125,14 +140,49 @@ NeighborView UpdateLaw::message() const {
 
 std::unique_ptr<UpdateLaw> make_law(AgentId self, const Vec3& q0, const LawConfig& cfg) {
   if (cfg.kind == LawKind::kLaplacian) return std::make_unique<LaplacianLaw>(self, q0, cfg);
+  if (cfg.kind == LawKind::kWmsr) return std::make_unique<WmsrLaw>(self, q0, cfg);
   return std::make_unique<EdgeFlowLaw>(self, q0, cfg);
 }
 
-void LaplacianLaw::integrate(const std::vector<NeighborView>& neighbors,
-                             const std::vector<double>& coef) {
+void LaplacianLaw::integrate(const Tick& t) {
   Vec3 dq = Vec3::Zero();
-  for (size_t k = 0; k < neighbors.size(); ++k) dq -= coef[k] * (q_ - neighbors[k].q);
+  for (size_t k = 0; k < t.neighbors.size(); ++k) dq -= t.coef[k] * (q_ - t.neighbors[k].q);
   q_ += dq;
+}
+
+void WmsrLaw::integrate(const Tick& t) {
+  const auto F = static_cast<std::size_t>(cfg_.wmsr_f);
+  const double s = cfg_.max_step_fraction;
+  trimmed_ = 0;
+  Vec3 next = q_;
+  for (int d = 0; d < 3; ++d) {
+    const double own = q_[d];
+    scratch_.clear();
+    for (size_t k = 0; k < t.neighbors.size(); ++k)
+      if (t.weight[k] > 0.0) scratch_.push_back({t.neighbors[k].q[d], t.weight[k]});
+    std::sort(scratch_.begin(), scratch_.end(),
+              [](const Value& a, const Value& b) { return a.v < b.v; });
+    // scratch_[lo, hi) survives: at most F of the values below own cut from the front, at most F
+    // of those above from the back.
+    std::size_t below = 0, above = 0;
+    for (const Value& x : scratch_) {
+      below += x.v < own ? 1 : 0;
+      above += x.v > own ? 1 : 0;
+    }
+    const std::size_t lo = std::min(below, F);
+    const std::size_t hi = scratch_.size() - std::min(above, F);
+    trimmed_ += lo + (scratch_.size() - hi);
+    double W = 0.0;
+    for (std::size_t k = lo; k < hi; ++k) W += scratch_[k].w;
+    if (W <= 0.0) continue;
+    // The kept neighbours' share of the step: c_k = (w_k / W) min(1 - exp(-k W dt), s), a convex
+    // combination with at least 1 - s on one's own value.
+    const double g = std::min(-std::expm1(-cfg_.gain * W * t.dt_s), s) / W;
+    double dq = 0.0;
+    for (std::size_t k = lo; k < hi; ++k) dq += g * scratch_[k].w * (scratch_[k].v - own);
+    next[d] = own + dq;
+  }
+  q_ = next;
 }
 
 Vec3 EdgeFlowLaw::state() const {
@@ -175,8 +225,9 @@ void EdgeFlowLaw::recover(const std::vector<NeighborView>& neighbors) {
     if (owns(v.id)) adopt(v);
 }
 
-void EdgeFlowLaw::integrate(const std::vector<NeighborView>& neighbors,
-                            const std::vector<double>& coef) {
+void EdgeFlowLaw::integrate(const Tick& t) {
+  const std::vector<NeighborView>& neighbors = t.neighbors;
+  const std::vector<double>& coef = t.coef;
   const Vec3 q = state();  // every edge moves from the same snapshot of q_i (Jacobi)
   for (auto& [peer, f] : owned_) f.active = false;
   std::map<AgentId, bool> heard;

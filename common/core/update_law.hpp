@@ -41,6 +41,7 @@ std::string check_view(const NeighborView& v, double max_abs_coordinate_m = 1e6)
 enum class LawKind {
   kLaplacian,  // dq_i/dt = -k sum_j w_ij (q_i - q_j), as the paper writes it
   kEdgeFlow,   // DESIGN.md: each edge's exchange is integrated by its lower-id endpoint only
+  kWmsr,       // W-MSR: the Laplacian step after trimming up to F extreme values (WmsrLaw)
 };
 std::string to_string(LawKind k);
 LawKind parse_law_kind(const std::string& s);
@@ -53,6 +54,8 @@ struct LawConfig {
   // s: the most a tick may move an agent, as a fraction of the way to its neighbours' weighted
   // mean. Below 1/2 the step survives a tick or two of message delay (see UpdateLaw).
   double max_step_fraction = 0.3;
+  // W-MSR's F: the number of lying neighbours the law tolerates (kWmsr only).
+  int wmsr_f = 1;
   void validate() const;
 };
 
@@ -95,9 +98,15 @@ class UpdateLaw {
   virtual int recovered_count() const { return 0; }
 
  protected:
-  // Move the state: `coef[k]` is c for neighbours[k] (0 when not linked).
-  virtual void integrate(const std::vector<NeighborView>& neighbors,
-                         const std::vector<double>& coef) = 0;
+  // What a tick moves along: `coef[k]` is c for neighbours[k] (0 when not linked), `weight[k]`
+  // its link's weight w (0 when not linked), dt the tick's length.
+  struct Tick {
+    const std::vector<NeighborView>& neighbors;
+    const std::vector<double>& coef;
+    const std::vector<double>& weight;
+    double dt_s;
+  };
+  virtual void integrate(const Tick& t) = 0;
   std::vector<double> update_links(const std::vector<NeighborView>& neighbors);
 
   AgentId self_;
@@ -119,9 +128,35 @@ class LaplacianLaw final : public UpdateLaw {
   Vec3 state() const override { return q_; }
 
  private:
-  void integrate(const std::vector<NeighborView>& neighbors,
-                 const std::vector<double>& coef) override;
+  void integrate(const Tick& t) override;
   Vec3 q_;
+};
+
+// W-MSR (weighted mean-subsequence-reduced; LeBlanc, Zhang, Koutsoukos, Sundaram, IEEE JSAC 2013):
+// each tick and each coordinate, of the linked neighbours' values drop the F largest of those above
+// one's own (all of them when there are fewer) and the F smallest of those below, then take the
+// Laplacian step over the rest, normalised by the kept weights only (a liar's weight cannot slow
+// the honest step). If at most F agents lie, in total, and the graph is (F+1, F+1)-robust, the
+// honest agents agree inside the range of their initial values, per coordinate: for positions,
+// inside the honest initial values' bounding box, not their convex hull. The price: no exact
+// average (trimming is not symmetric), so the agreed point depends on the run.
+class WmsrLaw final : public UpdateLaw {
+ public:
+  WmsrLaw(AgentId self, const Vec3& q0, LawConfig cfg)
+      : UpdateLaw(self, q0, std::move(cfg)), q_(q0) {}
+  Vec3 state() const override { return q_; }
+  // Neighbour values trimmed on the last tick (all coordinates together).
+  std::uint64_t trimmed() const { return trimmed_; }
+
+ private:
+  void integrate(const Tick& t) override;
+  Vec3 q_;
+  std::uint64_t trimmed_ = 0;
+  struct Value {
+    double v;
+    double w;
+  };
+  std::vector<Value> scratch_;  // reused: a tick allocates nothing in steady state
 };
 
 // q_i = q_i(0) - sum_{owned} f_ij + sum_{copies} f_ki. The owner integrates f_ij; the other end
@@ -141,8 +176,7 @@ class EdgeFlowLaw final : public UpdateLaw {
   bool owns(AgentId peer) const { return self_ < peer; }
 
  private:
-  void integrate(const std::vector<NeighborView>& neighbors,
-                 const std::vector<double>& coef) override;
+  void integrate(const Tick& t) override;
   struct Copy {
     Vec3 flow = Vec3::Zero();       // newest f_{owner,self} received
     Vec3 predicted = Vec3::Zero();  // our estimate of the owner's increments since that copy

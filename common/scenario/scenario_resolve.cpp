@@ -127,8 +127,10 @@ void apply_overrides(scenario::Scenario& s, const ScenarioOverrides& o) {
       s.set_law(scenario::LAPLACIAN);
     } else if (o.law == "edge-flow" || o.law == "edge_flow") {
       s.set_law(scenario::EDGE_FLOW);
+    } else if (o.law == "w-msr" || o.law == "w_msr") {
+      s.set_law(scenario::W_MSR);
     } else {
-      fail("--law", "laplacian or edge-flow", o.law);
+      fail("--law", "laplacian, edge-flow or w-msr", o.law);
     }
   }
   if (o.agents >= 0) {
@@ -280,7 +282,14 @@ void resolve_formation(scenario::Scenario& s, RunConfig& rc) {
 
 void resolve_law(const scenario::Scenario& s, RunConfig& rc) {
   LawConfig& law = rc.agent.law;
-  law.kind = s.law() == scenario::LAPLACIAN ? LawKind::kLaplacian : LawKind::kEdgeFlow;
+  law.kind = s.law() == scenario::LAPLACIAN ? LawKind::kLaplacian
+             : s.law() == scenario::W_MSR   ? LawKind::kWmsr
+                                            : LawKind::kEdgeFlow;
+  if (s.has_wmsr_f()) {
+    if (s.law() != scenario::W_MSR) fail("wmsr_f", "law: W_MSR (it is W-MSR's F)", "another law");
+    if (s.wmsr_f() > 64) fail("wmsr_f", "0..64 lying neighbours", std::to_string(s.wmsr_f()));
+    law.wmsr_f = static_cast<int>(s.wmsr_f());
+  }
   switch (s.weight().policy()) {
     case scenario::UNWEIGHTED:
       law.weight.policy = WeightPolicy::kUnweighted;
@@ -519,6 +528,8 @@ void resolve_faults(const scenario::Faults& f, RunConfig& rc) {
 void write_back_defaults(RunConfig& rc, scenario::Scenario& s) {
   write_back_numbers(rc, s);
   s.set_seed(rc.seed);
+  if (rc.agent.law.kind == LawKind::kWmsr)
+    s.set_wmsr_f(static_cast<std::uint32_t>(rc.agent.law.wmsr_f));
   s.mutable_transport()->set_domain_id(rc.transport.domain_id);
   s.mutable_transport()->set_interface(rc.transport.interface);
   s.mutable_transport()->set_shared_memory(rc.transport.shared_memory);

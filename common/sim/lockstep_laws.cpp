@@ -26,16 +26,41 @@ LockstepLaws::LockstepLaws(LockstepConfig cfg) : cfg_(std::move(cfg)) {
     laws_.push_back(make_law(a.id, a.q0, cfg_.law));
   }
   for (const auto& law : laws_) views_[law->id()] = law->message();
+  if (cfg_.liar && !ids.count(cfg_.liar->id)) throw std::invalid_argument("the liar is no agent");
   // Links are found from the first messages before anyone moves, so every published total weight
   // is known at the first tick.
   for (auto& law : laws_) law->observe(others(views_, law->id()));
   for (const auto& law : laws_) views_[law->id()] = law->message();
 }
 
+Vec3 Liar::claim(AgentId to, const Vec3& q0, double t_s) const {
+  switch (kind) {
+    case Kind::kConstant:
+      return value;
+    case Kind::kDrift:
+      return q0 + drift_mps * t_s;
+    case Kind::kSplit:
+      return to % 2 == 0 ? value : Vec3(-value);
+  }
+  return value;
+}
+
+Liar::Kind parse_liar_kind(const std::string& s) {
+  if (s == "constant") return Liar::Kind::kConstant;
+  if (s == "drift") return Liar::Kind::kDrift;
+  if (s == "split") return Liar::Kind::kSplit;
+  throw std::invalid_argument("liar '" + s + "': expected constant, drift or split");
+}
+
 void LockstepLaws::step() {
   std::vector<std::vector<NeighborView>> inbox;
   inbox.reserve(laws_.size());
-  for (const auto& law : laws_) inbox.push_back(others(views_, law->id()));
+  for (const auto& law : laws_) {
+    inbox.push_back(others(views_, law->id()));
+    if (!cfg_.liar) continue;
+    for (NeighborView& v : inbox.back())
+      if (v.id == cfg_.liar->id) v.q = cfg_.liar->claim(law->id(), v.q0, time_s_);
+  }
   for (size_t i = 0; i < laws_.size(); ++i) laws_[i]->step(dt_s(), inbox[i]);
   time_s_ += dt_s();
   for (const auto& law : laws_) views_[law->id()] = law->message();
@@ -52,6 +77,20 @@ bool LockstepLaws::run_until_converged(double tol_m, double max_time_s) {
 Positions LockstepLaws::states() const {
   Positions q;
   for (const auto& law : laws_) q.push_back(law->state());
+  return q;
+}
+
+Positions LockstepLaws::honest_states() const {
+  Positions q;
+  for (int i = 0; i < size(); ++i)
+    if (!is_liar(i)) q.push_back(laws_[i]->state());
+  return q;
+}
+
+Positions LockstepLaws::honest_initial_states() const {
+  Positions q;
+  for (int i = 0; i < size(); ++i)
+    if (!is_liar(i)) q.push_back(laws_[i]->initial_state());
   return q;
 }
 

@@ -3,6 +3,8 @@
 #include <cstdint>
 #include <map>
 #include <memory>
+#include <optional>
+#include <string>
 #include <vector>
 
 #include "common/core/graph.hpp"
@@ -16,8 +18,27 @@ struct SwarmAgentSpec {
   Vec3 q0 = Vec3::Zero();
 };
 
+// An insider with valid credentials that lies: it tells its neighbours a state of its choosing
+// every tick, while the others run their laws (the resilient law's tests and swarm-preview --liar).
+struct Liar {
+  enum class Kind {
+    kConstant,  // claims `value`, always
+    kDrift,     // claims its initial state + drift_mps * t: slow enough to look like motion
+    kSplit,     // claims +value to even ids and -value to odd ids (a transport that lets an
+                // agent tell each neighbour something else; DDS does not: one sample for all)
+  };
+  AgentId id = 0;
+  Kind kind = Kind::kConstant;
+  Vec3 value = Vec3::Zero();
+  Vec3 drift_mps = Vec3::Zero();
+  // What it tells `to` at time t, given its initial state.
+  Vec3 claim(AgentId to, const Vec3& q0, double t_s) const;
+};
+Liar::Kind parse_liar_kind(const std::string& s);  // constant, drift, split
+
 struct LockstepConfig {
   std::vector<SwarmAgentSpec> agents;
+  std::optional<Liar> liar;  // one of `agents` lies
   LawConfig law;
   double consensus_rate_hz = AgentConfig{}.consensus_hz;  // the run's default tick
 };
@@ -43,6 +64,10 @@ class LockstepLaws {
   // (weight as the lower id computes it), by index into agents.
   std::vector<Edge> edges() const;
   const UpdateLaw& law(int index) const { return *laws_[index]; }
+  bool is_liar(int index) const { return cfg_.liar && laws_[index]->id() == cfg_.liar->id; }
+  // The honest agents' states (all but the liar's).
+  Positions honest_states() const;
+  Positions honest_initial_states() const;
 
   // n agents uniformly in a cube of side box_m from a seeded generator (ids 1..n).
   static std::vector<SwarmAgentSpec> random_agents(int n, std::uint64_t seed, double box_m);

@@ -67,7 +67,7 @@ TEST(Validation, LawAndTopologyRefuseBadConfiguration) {
             std::string::npos);
   EXPECT_NE(error_of([] { parse_weight_policy("strong"); }).find("expected unweighted"),
             std::string::npos);
-  EXPECT_NE(error_of([] { parse_law_kind("gossip"); }).find("laplacian or edge-flow"),
+  EXPECT_NE(error_of([] { parse_law_kind("gossip"); }).find("laplacian, edge-flow or w-msr"),
             std::string::npos);
   TrackingGains g;
   g.max_tilt_rad = 2.0;

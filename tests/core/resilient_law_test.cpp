@@ -1,0 +1,181 @@
+// The resilient law (W-MSR) and the graph condition it needs, against one insider that lies.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "common/core/graph.hpp"
+#include "common/core/update_law.hpp"
+#include "common/sim/lockstep_laws.hpp"
+
+namespace qswarm {
+namespace {
+
+std::vector<Edge> complete(int n) {
+  std::vector<Edge> e;
+  for (int i = 0; i < n; ++i)
+    for (int j = i + 1; j < n; ++j) e.push_back({i, j, 1.0});
+  return e;
+}
+
+std::vector<Edge> ring(int n) {
+  std::vector<Edge> e;
+  for (int i = 0; i < n; ++i) e.push_back({std::min(i, (i + 1) % n), std::max(i, (i + 1) % n)});
+  return e;
+}
+
+TEST(Robustness, TheCompleteGraphOnSevenToleratesOneLiarAndARingNone) {
+  // K_n is (ceil(n/2), n)-robust; a cycle is 1-robust only (two arcs each reach out by 1 edge).
+  EXPECT_TRUE(is_rs_robust(7, complete(7), 2, 2));
+  EXPECT_TRUE(is_rs_robust(7, complete(7), 4, 7));
+  EXPECT_FALSE(is_rs_robust(7, complete(7), 5, 1));
+  EXPECT_TRUE(is_rs_robust(7, ring(7), 1, 1));
+  EXPECT_FALSE(is_rs_robust(7, ring(7), 2, 2));
+  const ResilienceCheck k7 = check_resilience(7, complete(7), 1);
+  EXPECT_TRUE(k7.ok());
+  EXPECT_EQ(k7.min_degree, 6);
+  // F = 2 needs degree 5 and (3,3)-robustness: K7 has both (ceil(7/2) = 4 >= 3).
+  EXPECT_TRUE(check_resilience(7, complete(7), 2).ok());
+  // F = 3: degree 7 needed, K7 has 6.
+  EXPECT_FALSE(check_resilience(7, complete(7), 3).degree_ok);
+  const ResilienceCheck r7 = check_resilience(7, ring(7), 1);
+  EXPECT_FALSE(r7.degree_ok);
+  EXPECT_EQ(r7.robust, false);
+}
+
+TEST(Robustness, EnoughDegreeIsNotEnough) {
+  // Two K4 joined by one edge: every vertex has degree >= 3 = 2F+1 for F = 1, but the halves
+  // reach each other through one edge only: not (2,2)-robust, and a liar on the bridge splits it.
+  std::vector<Edge> e;
+  for (int base : {0, 4})
+    for (int i = 0; i < 4; ++i)
+      for (int j = i + 1; j < 4; ++j) e.push_back({base + i, base + j});
+  e.push_back({3, 4});
+  const ResilienceCheck c = check_resilience(8, e, 1);
+  EXPECT_TRUE(c.degree_ok);
+  EXPECT_EQ(c.robust, false);
+  EXPECT_FALSE(c.ok());
+}
+
+TEST(Robustness, LargeGraphsAreNotDecidedExhaustively) {
+  EXPECT_FALSE(check_resilience(kMaxExactRobustness + 1, complete(kMaxExactRobustness + 1), 1)
+                   .robust.has_value());
+  EXPECT_THROW(is_rs_robust(kMaxExactRobustness + 1, {}, 1, 1), std::invalid_argument);
+}
+
+LawConfig wmsr(int f) {
+  LawConfig c;
+  c.kind = LawKind::kWmsr;
+  c.wmsr_f = f;
+  c.weight.policy = WeightPolicy::kUnweighted;
+  // Everyone within 1000 km: the complete graph, whatever anyone claims.
+  c.topology.policy = TopologyPolicy::kStickyProximity;
+  c.topology.threshold_m = 1e6;
+  return c;
+}
+
+NeighborView view(AgentId id, const Vec3& q) {
+  NeighborView v;
+  v.id = id;
+  v.q = q;
+  v.q0 = q;
+  v.total_weight = 1.0;
+  v.seq = 1;
+  return v;
+}
+
+TEST(WmsrLaw, DropsTheFExtremesOnEachSideOfItsOwnValuePerCoordinate) {
+  // Own x = 0; neighbours at -3, -1, 2, 50 (x) and all at y = z = 0. F = 1 drops -3 and 50: the
+  // step moves toward the mean of -1 and 2 only, i.e. to the right, never toward 50's pull.
+  WmsrLaw law(1, Vec3::Zero(), wmsr(1));
+  const std::vector<NeighborView> n = {view(2, {-3, 0, 0}), view(3, {-1, 0, 0}), view(4, {2, 0, 0}),
+                                       view(5, {50, 0, 0})};
+  law.observe(n);
+  law.step(0.02, n);
+  EXPECT_GT(law.state().x(), 0.0);
+  EXPECT_LT(law.state().x(), 2.0 * 0.3);  // at most s of the way to the kept values' mean
+  EXPECT_EQ(law.state().y(), 0.0);
+  EXPECT_EQ(law.trimmed(), 2u);  // y and z: every value equals its own, none trimmed
+}
+
+TEST(WmsrLaw, WithFewerValuesOnOneSideThanFItDropsAllOfThem) {
+  // Own x = 0; one neighbour above (10), three below: F = 2 drops the one above (all of them) and
+  // the two lowest below; the agent moves down, toward -1 only.
+  WmsrLaw law(1, Vec3::Zero(), wmsr(2));
+  const std::vector<NeighborView> n = {view(2, {10, 0, 0}), view(3, {-1, 0, 0}),
+                                       view(4, {-5, 0, 0}), view(5, {-9, 0, 0})};
+  law.observe(n);
+  law.step(0.02, n);
+  EXPECT_LT(law.state().x(), 0.0);
+  EXPECT_GT(law.state().x(), -1.0);
+}
+
+TEST(WmsrLaw, WithoutLiarsItStillAgrees) {
+  LockstepConfig cfg;
+  cfg.agents = LockstepLaws::random_agents(7, 11, 20.0);
+  cfg.law = wmsr(1);
+  LockstepLaws swarm(cfg);
+  EXPECT_TRUE(swarm.run_until_converged(1e-6, 200.0));
+}
+
+// Does every honest agent end inside the honest initial values' bounding box (per coordinate)?
+bool inside_honest_box(const LockstepLaws& s, double slack_m) {
+  const Positions q0 = s.honest_initial_states();
+  Vec3 lo = q0.front(), hi = q0.front();
+  for (const Vec3& p : q0) {
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  }
+  for (const Vec3& p : s.honest_states())
+    if ((p.array() < lo.array() - slack_m).any() || (p.array() > hi.array() + slack_m).any())
+      return false;
+  return true;
+}
+
+struct Attack {
+  const char* name;
+  Liar liar;
+};
+
+std::vector<Attack> attacks() {
+  const Vec3 far(1000, 1000, 1000);
+  Liar constant{7, Liar::Kind::kConstant, far, Vec3::Zero()};
+  Liar drift{7, Liar::Kind::kDrift, Vec3::Zero(), Vec3(0.5, 0.5, 0.5)};
+  Liar split{7, Liar::Kind::kSplit, far, Vec3::Zero()};
+  return {{"constant", constant}, {"drift", drift}, {"split", split}};
+}
+
+// One insider (agent 7) of a 7-agent complete graph lies for 120 s; the honest six run `law`.
+LockstepLaws attacked(LawKind law, const Liar& liar) {
+  LockstepConfig cfg;
+  cfg.agents = LockstepLaws::random_agents(7, 5, 20.0);
+  cfg.law = wmsr(1);
+  cfg.law.kind = law;
+  cfg.liar = liar;
+  LockstepLaws s(cfg);
+  while (s.time_s() < 120.0) s.step();
+  return s;
+}
+
+TEST(WmsrLaw, OneLiarOnSevenCannotDragTheHonestOutOfTheirInitialRange) {
+  for (const Attack& a : attacks()) {
+    SCOPED_TRACE(a.name);
+    const LockstepLaws s = attacked(LawKind::kWmsr, a.liar);
+    EXPECT_TRUE(inside_honest_box(s, 1e-9));
+    EXPECT_LT(disagreement(s.honest_states()), 1e-6);  // and they agree
+  }
+}
+
+TEST(WmsrLaw, TheSameLiarDragsTheLawsThatTrustEveryone) {
+  // Side by side: the laws that take every neighbour's value as given follow the liar out of the
+  // honest range (drift: 0.5 m/s for 120 s, far beyond the 20 m box).
+  for (const LawKind law : {LawKind::kLaplacian, LawKind::kEdgeFlow}) {
+    for (const Attack& a : attacks()) {
+      SCOPED_TRACE(to_string(law) + " / " + a.name);
+      const LockstepLaws s = attacked(law, a.liar);
+      EXPECT_FALSE(inside_honest_box(s, 1.0));
+    }
+  }
+}
+
+}  // namespace
+}  // namespace qswarm
