@@ -3,8 +3,12 @@
 namespace qswarm {
 
 ConvergenceJudge::ConvergenceJudge(double tolerance_m, double hold_s, double timeout_s,
-                                   FaultPlan plan)
-    : tolerance_m_(tolerance_m), hold_s_(hold_s), timeout_s_(timeout_s), plan_(std::move(plan)) {}
+                                   double max_drift_m, FaultPlan plan)
+    : tolerance_m_(tolerance_m),
+      hold_s_(hold_s),
+      timeout_s_(timeout_s),
+      max_drift_m_(max_drift_m),
+      plan_(std::move(plan)) {}
 
 std::vector<AgentId> ConvergenceJudge::missing_now(double t_s, const Presence& presence) const {
   std::vector<AgentId> out;
@@ -15,7 +19,7 @@ std::vector<AgentId> ConvergenceJudge::missing_now(double t_s, const Presence& p
 
 ConvergenceJudge::Verdict ConvergenceJudge::update(double t_s, const records::GraphSnapshot& g,
                                                    const Presence& presence) {
-  if (converged_ || !missing_.empty()) return Verdict::kNone;  // judged once
+  if (converged_ || !missing_.empty() || elsewhere_m_ >= 0.0) return Verdict::kNone;  // once
   // An agent the plan brings back (a due restart or late join) must be running before the hold
   // starts: its return is part of what the swarm agrees on.
   bool planned_back = true;
@@ -37,6 +41,12 @@ ConvergenceJudge::Verdict ConvergenceJudge::update(double t_s, const records::Gr
   if (hold_start_s_ < 0.0) hold_start_s_ = t_s;
   const double held = t_s - hold_start_s_;
   const std::vector<AgentId> missing = missing_now(t_s, presence);
+  if (missing.empty() && held >= hold_s_ && max_drift_m_ >= 0.0 &&
+      g.mean_drift_m() > max_drift_m_) {
+    elsewhere_m_ = g.mean_drift_m();
+    converged_at_s_ = hold_start_s_;
+    return Verdict::kAgreedElsewhere;
+  }
   if (missing.empty() && held >= hold_s_) {
     converged_ = true;
     converged_at_s_ = hold_start_s_;

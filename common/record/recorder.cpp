@@ -26,7 +26,8 @@ Recorder::Recorder(RunConfig rc, RunDir dir, double time_scale)
       time_scale_(time_scale),
       sinks_(dir_),
       presence_(ids_of(rc_), rc_.agent.neighbor_timeout_s, rc_.record_every()),
-      judge_(rc_.judge.tolerance_m, rc_.judge.hold_s, rc_.agent.neighbor_timeout_s, rc_.faults),
+      judge_(rc_.judge.tolerance_m, rc_.judge.hold_s, rc_.agent.neighbor_timeout_s,
+             rc_.agent.law.kind == LawKind::kEdgeFlow ? rc_.judge.tolerance_m : -1.0, rc_.faults),
       separation_(rc_.agent.avoidance.safe_distance_m),
       timeline_(rc_.faults.timeline()) {
   tally_.held = rc_.held_agents();
@@ -221,6 +222,8 @@ void Recorder::snapshot() {
                 last_->spread_m());
   if (v == ConvergenceJudge::Verdict::kConverged) {
     event("converged", 0, buf);
+  } else if (v == ConvergenceJudge::Verdict::kAgreedElsewhere) {
+    event("agreed_elsewhere", 0, elsewhere_text() + "; " + buf);
   } else {
     event("agreed_without", 0, missing_text() + " missing; " + buf);
   }
@@ -237,9 +240,19 @@ std::string Recorder::missing_text() const {
   return "agent" + std::string(judge_.missing().size() > 1 ? "s " : " ") + ids;
 }
 
+std::string Recorder::elsewhere_text() const {
+  char buf[160];
+  std::snprintf(buf, sizeof buf,
+                "agreed %.3g m from the initial average, which edge-flow keeps: forged states or "
+                "flows?",
+                judge_.agreed_elsewhere_m());
+  return buf;
+}
+
 std::string Recorder::end_reason_if_over() const {
   if (judge_.converged()) return "converged";
   if (judge_.agreed_without_some()) return "agreed without " + missing_text();
+  if (judge_.agreed_elsewhere_m() >= 0.0) return elsewhere_text();
   if (duration_reached()) return "duration";
   return "";
 }

@@ -61,6 +61,7 @@ class Recorder {
   void initial_snapshot();  // the swarm at t = 0, from q(0) and each agent's initial links
   double swarm_time_at(std::int64_t wall_ns) const;
   std::string missing_text() const;
+  std::string elsewhere_text() const;
   // Its formation slot about the centre (zero for an agent the scenario does not list).
   Vec3 offset_of(AgentId id) const;
 

@@ -46,6 +46,7 @@ records::Summary build_summary(const RunConfig& rc, const Presence& presence,
   s.set_foreign_samples(tally.foreign_samples);
   s.set_implausible_samples(tally.implausible_samples);
   for (const AgentId id : judge.missing()) s.add_missing_agents(id);
+  if (judge.agreed_elsewhere_m() >= 0.0) s.set_agreed_elsewhere_m(judge.agreed_elsewhere_m());
   s.set_convergence_time_s(judge.converged() ? judge.converged_at_s() : -1.0);
   s.set_end_reason(end.reason);
   s.set_wall_time_s(end.wall_time_s);
@@ -230,6 +231,11 @@ std::string summary_text(const records::Summary& s, const RunConfig& rc, const s
     << msg.dropped() << ", gaps " << msg.seq_gaps() << ", age p50 " << fmt("%.3f", msg.age_p50_ms())
     << " ms p99 " << fmt("%.3f", msg.age_p99_ms()) << " ms\n";
   h << "joins " << s.joins() << ", departures " << s.departures() << "\n";
+  if (s.has_agreed_elsewhere_m()) {
+    h << "MOVED: the agents agreed " << fmt("%.3g", s.agreed_elsewhere_m())
+      << " m from the initial average, which edge-flow keeps exactly: something outside the law "
+         "moved it (a participant publishing forged states or flows?)\n";
+  }
   if (s.missing_agents_size() > 0) {
     h << "MISSING: the others agreed without agent(s)";
     for (const auto id : s.missing_agents()) h << " " << id;

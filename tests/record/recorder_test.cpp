@@ -84,7 +84,7 @@ TEST(GraphMetrics, ThePapersWeightedNetworkHasItsSpectrum) {
 TEST(ConvergenceJudge, HoldsForHoldSecondsAndWaitsForThePlanAndDueAgents) {
   FaultPlan plan;
   plan.kill.push_back({2, 1.0, 3.0});  // agent 2 killed at 1 s, back at 3 s
-  ConvergenceJudge judge(0.01, 0.5, 1.0, plan);
+  ConvergenceJudge judge(0.01, 0.5, 1.0, -1.0, plan);
   Presence p({1, 2}, 1.0);
   p.on_sample(sample(1, 1, 0.0, Vec3::Zero()), 0.0);
   p.on_sample(sample(2, 1, 0.0, Vec3::Zero()), 0.0);
@@ -112,8 +112,35 @@ TEST(ConvergenceJudge, HoldsForHoldSecondsAndWaitsForThePlanAndDueAgents) {
   EXPECT_EQ(ConvergenceJudge::Verdict::kNone, judge.update(5.5, agree, p));  // once
 }
 
+TEST(ConvergenceJudge, AgreeingAwayFromTheAverageEdgeFlowKeepsIsNoConvergence) {
+  // A forger moved the mean 72 m: the agents agree, tightly, on the wrong point. Under edge-flow
+  // (max drift = the tolerance) that is its own verdict; a law without the guarantee converges.
+  Presence p({1, 2}, 1.0);
+  for (AgentId id : {1u, 2u}) p.on_sample(sample(id, 1, 0.0, Vec3::Zero()), 0.0);
+  records::GraphSnapshot moved;
+  moved.set_agents(2);
+  moved.set_disagreement_m(0.001);
+  moved.set_spread_m(0.001);
+  moved.set_mean_drift_m(72.0);
+  ConvergenceJudge edge_flow(0.01, 0.5, 1.0, 0.01, FaultPlan{});
+  EXPECT_EQ(ConvergenceJudge::Verdict::kNone, edge_flow.update(1.0, moved, p));
+  EXPECT_EQ(ConvergenceJudge::Verdict::kAgreedElsewhere, edge_flow.update(1.5, moved, p));
+  EXPECT_FALSE(edge_flow.converged());
+  EXPECT_DOUBLE_EQ(edge_flow.agreed_elsewhere_m(), 72.0);
+  EXPECT_EQ(ConvergenceJudge::Verdict::kNone, edge_flow.update(2.0, moved, p));  // once
+  ConvergenceJudge laplacian(0.01, 0.5, 1.0, -1.0, FaultPlan{});
+  laplacian.update(1.0, moved, p);
+  EXPECT_EQ(ConvergenceJudge::Verdict::kConverged, laplacian.update(1.5, moved, p));
+  // Within the tolerance (what flows in flight leave), edge-flow converges too.
+  records::GraphSnapshot close = moved;
+  close.set_mean_drift_m(0.005);
+  ConvergenceJudge honest(0.01, 0.5, 1.0, 0.01, FaultPlan{});
+  honest.update(1.0, close, p);
+  EXPECT_EQ(ConvergenceJudge::Verdict::kConverged, honest.update(1.5, close, p));
+}
+
 TEST(ConvergenceJudge, AgentsThatAgreeWithoutAnExpectedAgentHaveNotConverged) {
-  ConvergenceJudge judge(0.01, 0.5, 1.0, FaultPlan{});
+  ConvergenceJudge judge(0.01, 0.5, 1.0, -1.0, FaultPlan{});
   Presence p({1, 2, 3}, 1.0);
   for (AgentId id : {1u, 2u, 3u}) p.on_sample(sample(id, 1, 0.0, Vec3::Zero()), 0.0);
   p.on_sample(sample(3, 2, 0.1, Vec3::Zero(), Phase::kStopping), 0.1);  // agent 3 gone (or stopped)
@@ -129,7 +156,7 @@ TEST(ConvergenceJudge, AgentsThatAgreeWithoutAnExpectedAgentHaveNotConverged) {
   // An agent the plan kills without restart is not missing.
   FaultPlan plan;
   plan.kill.push_back({3, 0.05, 0.0});
-  ConvergenceJudge planned(0.01, 0.5, 1.0, plan);
+  ConvergenceJudge planned(0.01, 0.5, 1.0, -1.0, plan);
   EXPECT_EQ(ConvergenceJudge::Verdict::kNone, planned.update(1.0, agree, p));
   EXPECT_EQ(ConvergenceJudge::Verdict::kConverged, planned.update(1.5, agree, p));
 }
@@ -138,7 +165,7 @@ TEST(ConvergenceJudge, AgentsThatAgreeWithoutAnExpectedAgentHaveNotConverged) {
 // while the others still wait at their barrier. Those are not missing, and nothing is judged until
 // they run; an agent that never leaves its barrier leaves the run unconverged, not "agreed".
 TEST(ConvergenceJudge, AgentsStillAtTheirStartBarrierAreNotMissingAndHoldTheVerdict) {
-  ConvergenceJudge judge(0.01, 0.5, 1.0, FaultPlan{});
+  ConvergenceJudge judge(0.01, 0.5, 1.0, -1.0, FaultPlan{});
   Presence p({1, 2, 3}, 1.0);
   p.on_sample(sample(2, 1, 0.0, Vec3::Zero()), 0.0);
   records::GraphSnapshot agree;
@@ -195,7 +222,7 @@ TEST(SeparationMonitor, JudgesEverySampleCountsEachViolationOnceAndForgetsTheDep
 }
 
 TEST(ConvergenceJudge, AnAgentHeldOffItsSlotByAvoidanceHasArrivedOnceItHoldsStill) {
-  ConvergenceJudge judge(0.01, 0.5, 1.0, FaultPlan{});
+  ConvergenceJudge judge(0.01, 0.5, 1.0, -1.0, FaultPlan{});
   Presence p({1, 2}, 1.0);
   for (AgentId id : {1u, 2u}) p.on_sample(sample(id, 1, 0.0, Vec3::Zero()), 0.0);
   records::GraphSnapshot g;
