@@ -263,8 +263,8 @@ bool DdsStateBus::recorder_confirmed() const {
   auto& l = d.record_listener;
   if (!d.record_writer || l.matched == 0 || !l.written_since_match) return false;
   // Every matched reliable reader acknowledged every sample still in the history (zero wait).
-  if (!l.acknowledged && d.record_writer->wait_for_acknowledgments(eprosima::fastrtps::Duration_t(
-                             0, 0)) == ReturnCode_t::RETCODE_OK)
+  if (!l.acknowledged && d.record_writer->wait_for_acknowledgments(
+                             eprosima::fastrtps::Duration_t(0, 0)) == ReturnCode_t::RETCODE_OK)
     l.acknowledged = true;
   return l.acknowledged;
 }
