@@ -49,6 +49,11 @@ int main(int argc, char** argv) {
   try {
     SteadyClock clock;
     DdsOptions dopt = dds_options(*rc, "swarm-agent", f.process);
+    if (!rc->transport.keystore.empty() && claiming)
+      throw std::invalid_argument(
+          "a replica that claims its id cannot fly a secure run yet (its certificate names an id "
+          "it does not know before the claim)");
+    dopt.participant.identity = "agent-" + std::to_string(id);
     DdsParticipant participant(dopt.participant);
     // A replica claims its id before it reads or writes any state: the state reader then leaves
     // out its own samples from the start.

@@ -63,6 +63,7 @@ struct RunOptions {
   std::vector<unsigned> ignore_sigterm;  // (tests) agents started with --ignore-sigterm
   // Fault shortcuts (added to the scenario's fault plan).
   std::string law;
+  std::string secure;  // --secure KEYSTORE
   double loss = -1.0;
   std::vector<std::string> cuts, partitions, kills;
   std::string delay;
@@ -81,6 +82,7 @@ RunConfig resolve_run(const RunOptions& opt) {
   o.duration_s = opt.duration;
   o.domain_id = opt.domain;
   o.law = opt.law;
+  o.keystore = opt.secure;
   scenario::Scenario s =
       opt.scenario.empty() ? random_scenario() : read_scenario_file(opt.scenario);
   if (opt.loss >= 0) add_loss_shortcut(s, opt.loss);
@@ -119,6 +121,11 @@ RunConfig resolve_run(const RunOptions& opt) {
   return rc;
 }
 
+// Runs a Python module of the package in a child process: its exit status (2 when it could not
+// run). Defined below with exec_python.
+int run_python(const std::string& command, const std::string& module,
+               std::vector<std::string> module_args);
+
 int run(const RunOptions& opt) {
   RunConfig rc;
   try {
@@ -126,6 +133,22 @@ int run(const RunOptions& opt) {
   } catch (const ScenarioError& e) {
     std::cerr << "swarm run: " << e.what() << "\n";
     return 2;
+  }
+  // A keystore that is missing a file, expired, altered or not this scenario's stops the run here,
+  // naming the file, before any process flies.
+  if (!rc.transport.keystore.empty()) {
+    const fs::path resolved =
+        fs::temp_directory_path() / ("qswarm-keycheck-" + std::to_string(::getpid()) + ".txtpb");
+    {
+      std::ofstream f(resolved);
+      f << to_text(rc.resolved);
+    }
+    const int checked = run_python("swarm run --secure", "keys",
+                                   {"--swarm", (bin_dir() / "swarm").string(), resolved.string(),
+                                    "--check", rc.transport.keystore});
+    std::error_code ec;
+    fs::remove(resolved, ec);
+    if (checked != 0) return 2;
   }
   // Every process gets its own participant id, from a block whose ports are free on this host (so
   // hundreds of processes come up without Fast DDS shifting ports, and two runs on one domain do
@@ -216,6 +239,25 @@ int run(const RunOptions& opt) {
 // Runs a module of the Python package qswarm (python/qswarm/), whose copy the build keeps beside
 // this binary in python/, with Debian's interpreter first, where python3-matplotlib lives. Returns
 // only when it cannot be started.
+int exec_python(const std::string& command, const std::string& module,
+                std::vector<std::string> module_args);
+
+// The same in a child process: its exit status (2 when it could not run or was killed).
+int run_python(const std::string& command, const std::string& module,
+               std::vector<std::string> module_args) {
+  std::fflush(nullptr);
+  const pid_t pid = fork();
+  if (pid < 0) {
+    std::cerr << command << ": cannot fork (" << std::strerror(errno) << ")\n";
+    return 2;
+  }
+  if (pid == 0) _exit(exec_python(command, module, std::move(module_args)));
+  int status = 0;
+  while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  }
+  return WIFEXITED(status) ? WEXITSTATUS(status) : 2;
+}
+
 int exec_python(const std::string& command, const std::string& module,
                 std::vector<std::string> module_args) {
   const fs::path package_root = bin_dir() / "python";
@@ -332,6 +374,8 @@ int main(int argc, char** argv) {
   run_cmd->add_flag("--quiet", ro.quiet, "no progress line");
   run_cmd->add_flag("--stop-on-agent-exit", ro.stop_on_agent_exit,
                     "end the run when any agent exits");
+  run_cmd->add_option("--secure", ro.secure,
+                      "DDS-Security with this keystore (swarm keys SCENARIO --out DIR writes one)");
   run_cmd->add_option("--law", ro.law,
                       "update law: edge-flow, laplacian or w-msr (overrides the scenario)");
   run_cmd->add_option("--loss", ro.loss, "fault: drop each received message with this probability")
@@ -383,6 +427,14 @@ int main(int argc, char** argv) {
       ->check(CLI::ExistingFile);
   inspect_cmd->add_flag("--json", json, "machine-readable output");
 
+  std::string keys_scenario, keys_out;
+  int keys_days = 365;
+  CLI::App* keys_cmd = app.add_subcommand(
+      "keys", "a DDS-Security keystore for a scenario's agents and supervisor (openssl)");
+  keys_cmd->add_option("scenario", keys_scenario, "scenario file")->required();
+  keys_cmd->add_option("--out", keys_out, "new keystore directory")->required();
+  keys_cmd->add_option("--days", keys_days, "validity in days (default 365)")
+      ->check(CLI::Range(1, 36500));
   std::string plot_dir, plot_out;
   CLI::App* plot_cmd = app.add_subcommand("plot", "PNG figures of a run directory (matplotlib)");
   plot_cmd->add_option("run_dir", plot_dir, "run directory written by swarm run")->required();
@@ -416,6 +468,10 @@ int main(int argc, char** argv) {
   }
   if (*run_cmd) return run(ro);
   if (*plot_cmd) return plot(plot_dir, plot_out);
+  if (*keys_cmd)
+    return exec_python("swarm keys", "keys",
+                       {"--swarm", (bin_dir() / "swarm").string(), keys_scenario, "--out", keys_out,
+                        "--days", std::to_string(keys_days)});
   if (*paper_cmd) return paper(po);
   return inspect_scenario(inspect_path, json);
 }

@@ -74,6 +74,7 @@ int main(int argc, char** argv) {
   try {
     SteadyClock clock;
     DdsOptions dopt = dds_options(rc, "swarm-supervisor", opts);
+    dopt.participant.identity = "supervisor";
     dopt.state.publish = false;  // a read-only participant: it publishes nothing an agent acts on
     dopt.state.recorder = true;  // it reads what agents send it, not their state stream
     dopt.participant.test_drop_data_percent = 0;

@@ -125,6 +125,7 @@ DdsOptions dds_options(const RunConfig& rc, const std::string& participant_name,
   p.shared_memory = rc.transport.shared_memory;
   p.test_drop_data_percent = static_cast<std::uint8_t>(rc.faults.transport_drop_percent);
   p.participant_id = o.participant_id;
+  p.keystore = rc.transport.keystore;  // the caller names the identity
   // Everyone hears every announcement: N^2 per period. Every second up to 25 processes, then
   // slower with the swarm (10 s at 256); lost first announcements are repeated by the quick ones.
   p.announce_period_s = std::max(1.0, static_cast<double>(rc.agents.size()) / 25.0);

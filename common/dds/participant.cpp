@@ -81,6 +81,27 @@ DdsParticipant::DdsParticipant(const ParticipantOptions& opts) : opts_(opts) {
   discovery.leaseDuration = eprosima::fastrtps::c_TimeInfinite;
   discovery.leaseDuration_announcementperiod =
       eprosima::fastrtps::Duration_t(std::max(1.0, opts.announce_period_s));
+  if (!opts.keystore.empty()) {
+    if (!opts.discovery_server.empty())
+      throw std::invalid_argument(
+          "dds: a secure participant cannot use a Discovery Server (Fast DDS 2.9 has no secure "
+          "one)");
+    const std::string ks = "file://" + opts.keystore + "/";  // Fast DDS wants file://PATH
+    const std::string me = ks + opts.identity + "/";
+    auto& props = pqos.properties().properties();
+    const auto set = [&](const char* name, const std::string& value) {
+      props.emplace_back(name, value);
+    };
+    set("dds.sec.auth.plugin", "builtin.PKI-DH");
+    set("dds.sec.auth.builtin.PKI-DH.identity_ca", ks + "ca.cert.pem");
+    set("dds.sec.auth.builtin.PKI-DH.identity_certificate", me + "cert.pem");
+    set("dds.sec.auth.builtin.PKI-DH.private_key", me + "key.pem");
+    set("dds.sec.access.plugin", "builtin.Access-Permissions");
+    set("dds.sec.access.builtin.Access-Permissions.permissions_ca", ks + "ca.cert.pem");
+    set("dds.sec.access.builtin.Access-Permissions.governance", ks + "governance.p7s");
+    set("dds.sec.access.builtin.Access-Permissions.permissions", me + "permissions.p7s");
+    set("dds.sec.crypto.plugin", "builtin.AES-GCM-GMAC");
+  }
   if (!opts.discovery_server.empty()) {
     const auto [ip, port] = resolve_discovery_server(opts.discovery_server);
     discovery.discoveryProtocol = eprosima::fastrtps::rtps::DiscoveryProtocol_t::CLIENT;

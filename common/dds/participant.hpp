@@ -34,6 +34,11 @@ struct ParticipantOptions {
   // How often it announces itself after its first quick announcements (seconds): everyone hears
   // every announcement, so a large swarm announces less often.
   double announce_period_s = 1.0;
+  // DDS-Security: a keystore written by `swarm keys` and the identity in it this participant
+  // speaks as ("agent-3", "supervisor"). Empty keystore: a plain participant. Fast DDS 2.9 has no
+  // secure Discovery Server: the two together are refused.
+  std::string keystore;
+  std::string identity;
 };
 
 // One DomainParticipant with the project's settings: transports (one UDPv4 on the allowed

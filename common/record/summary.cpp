@@ -54,6 +54,7 @@ records::Summary build_summary(const RunConfig& rc, const Presence& presence,
   s.set_seed(static_cast<std::uint32_t>(rc.seed));
   s.set_mode(rc.agent.mode == AgentMode::kQuadcopter ? "quadcopter" : "particle");
   s.set_law(to_string(rc.agent.law.kind));
+  s.set_secure(!rc.transport.keystore.empty());
   s.set_agents_expected(static_cast<std::uint32_t>(rc.agents.size()));
   s.set_joins(tally.joins);
   s.set_departures(tally.departures);
@@ -183,8 +184,9 @@ std::string summary_text(const records::Summary& s, const RunConfig& rc, const s
   if (s.converged())
     h << "converged at t = " << fmt("%.2f", s.convergence_time_s()) << " s (simulated)\n";
   h << "agents " << final_agents << "/" << rc.agents.size() << ", " << s.mode() << " mode, "
-    << s.law() << " law, seed " << rc.seed << ", " << fmt("%.2f", s.duration_s())
-    << " s simulated in " << fmt("%.2f", s.wall_time_s()) << " s wall\n";
+    << s.law() << " law, " << (s.secure() ? "DDS-Security on" : "plain DDS") << ", seed " << rc.seed
+    << ", " << fmt("%.2f", s.duration_s()) << " s simulated in " << fmt("%.2f", s.wall_time_s())
+    << " s wall\n";
   const Vec3 avg = rc.initial_average();
   const Vec3 mean(s.final_consensus_mean(0), s.final_consensus_mean(1), s.final_consensus_mean(2));
   const records::Messages& msg = s.messages();

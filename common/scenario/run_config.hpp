@@ -65,6 +65,7 @@ struct TransportConfig {
   bool shared_memory = false;
   std::uint64_t run_id = 0;  // isolates this run on a shared DDS domain (0: the launcher draws one)
   Delivery delivery = Delivery::kNeighbours;
+  std::string keystore;  // DDS-Security keystore (an absolute path); empty: plain DDS
 };
 
 // A scenario with every default filled in and random agents resolved: what a run actually uses.

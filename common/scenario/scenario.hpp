@@ -27,6 +27,7 @@ struct ScenarioOverrides {
   std::int64_t seed = -1;  // --seed S
   double duration_s = -1;  // --duration S
   int domain_id = -1;      // --domain D
+  std::string keystore;    // --secure DIR
 };
 
 // scenario_file.cpp: text <-> message.

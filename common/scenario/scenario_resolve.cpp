@@ -1,6 +1,7 @@
 // resolve_scenario: a parsed scenario -> the RunConfig a run uses, every field checked and named.
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <map>
 #include <numbers>
 #include <set>
@@ -122,6 +123,7 @@ void apply_overrides(scenario::Scenario& s, const ScenarioOverrides& o) {
   if (o.duration_s >= 0) s.set_duration_s(o.duration_s);
   if (o.domain_id >= 0)
     s.mutable_transport()->set_domain_id(static_cast<std::uint32_t>(o.domain_id));
+  if (!o.keystore.empty()) s.mutable_transport()->set_keystore(o.keystore);
   if (!o.law.empty()) {
     if (o.law == "laplacian") {
       s.set_law(scenario::LAPLACIAN);
@@ -383,6 +385,13 @@ void resolve_transport(const scenario::Transport& t, RunConfig& rc) {
     fail("transport.interface", "an IPv4 address such as 127.0.0.1", "\"\"");
   if (t.has_shared_memory()) tc.shared_memory = t.shared_memory();
   tc.run_id = t.run_id();
+  if (!t.keystore().empty()) {
+    std::error_code ec;
+    const std::filesystem::path ks = std::filesystem::absolute(t.keystore(), ec);
+    if (ec || !std::filesystem::is_directory(ks))
+      fail("transport.keystore", "a directory written by `swarm keys`", t.keystore());
+    tc.keystore = ks.lexically_normal().string();
+  }
   // Unset: a small swarm hears everyone (it costs nothing there, and its start barrier then waits
   // for every agent, so all start together as the paper's runs do); a larger one its neighbours.
   if (t.delivery() == scenario::Transport::DELIVERY_UNSPECIFIED)
@@ -533,6 +542,7 @@ void write_back_defaults(RunConfig& rc, scenario::Scenario& s) {
   s.mutable_transport()->set_domain_id(rc.transport.domain_id);
   s.mutable_transport()->set_interface(rc.transport.interface);
   s.mutable_transport()->set_shared_memory(rc.transport.shared_memory);
+  if (!rc.transport.keystore.empty()) s.mutable_transport()->set_keystore(rc.transport.keystore);
   s.mutable_transport()->set_run_id(rc.transport.run_id);
   s.mutable_transport()->set_delivery(rc.transport.delivery == Delivery::kAll
                                           ? scenario::Transport::ALL
