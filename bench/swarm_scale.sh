@@ -15,6 +15,7 @@
 # barrier released), RSS per agent, and how the run ended.
 # Usage: bench/swarm_scale.sh [N ...]        (default: 8 32 64 128)
 # Environment: SCENARIOS="all range ring" DURATION=30 TIME_SCALE=1 RATE_HZ=50 BUILD_DIR=build
+#              SECURE=1: DDS-Security on every process (a `swarm keys` keystore per size)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 BUILD=${BUILD_DIR:-build}
@@ -55,8 +56,18 @@ for kind in "${KINDS[@]}"; do
         ;;
       *) echo "swarm_scale: unknown scenario $kind (all, range, ring)" >&2; exit 2 ;;
     esac
+    secure=()
+    if [[ ${SECURE:-0} == 1 ]]; then
+      ks="$OUT/keys-$n"  # random agents are ids 1..N whatever the scenario
+      if [[ ! -d $ks ]]; then
+        echo "random_agents { count: $n }" >"$ks.txtpb"
+        "$BUILD"/bin/swarm keys "$ks.txtpb" --out "$ks" >/dev/null
+      fi
+      secure=(--secure "$ks")
+    fi
     "$BUILD"/bin/swarm run "$scen" --agents "$n" --seed 3 --duration "$DURATION" \
-      --time-scale "$TIME_SCALE" --out "$dir" --domain "$domain" --quiet >"$dir.log" 2>&1 || true
+      --time-scale "$TIME_SCALE" --out "$dir" --domain "$domain" --quiet "${secure[@]}" \
+      >"$dir.log" 2>&1 || true
     if ! row=$(report "$dir" cpu_per_agent_pct late_ticks_pct messages.age_p50_ms \
       messages.age_p99_ms delivered_per_s cpu_us_per_delivered stats.discovery_s.max \
       stats.max_rss_kb.median end_reason 2>/dev/null); then
@@ -65,7 +76,8 @@ for kind in "${KINDS[@]}"; do
       continue
     fi
     IFS=$'\t' read -r cpu late p50 p99 per_s cpu_per disc rss end <<<"$row"
-    awk -v n="$n" -v k="$kind" -v hz="$RATE_HZ" -v ts="$TIME_SCALE" -v cpu="$cpu" -v late="$late" \
+    [[ ${SECURE:-0} == 1 ]] && kind_shown="$kind, secure" || kind_shown=$kind
+    awk -v n="$n" -v k="$kind_shown" -v hz="$RATE_HZ" -v ts="$TIME_SCALE" -v cpu="$cpu" -v late="$late" \
       -v p50="$p50" -v p99="$p99" -v s="$per_s" -v cs="$cpu_per" -v d="$disc" -v rss="$rss" \
       -v end="$end" 'BEGIN {
         printf "| %d | %s | %s | %s | %.2f | %.2f | %.1f / %.1f | %.0f | %.1f | %.2f | %.1f | %s |\n",

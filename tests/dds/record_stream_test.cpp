@@ -7,6 +7,7 @@
 #include <thread>
 
 #include "common/dds/dds_bus.hpp"
+#include "tests/dds/test_bus.hpp"
 #include "tests/swarm/domain_lease.hpp"
 #include "tests/swarm/harness.hpp"
 
@@ -16,23 +17,13 @@ namespace {
 constexpr std::uint64_t kRun = 0x5EC0;
 
 DdsOptions options(const char* name, bool recorder) {
-  DdsOptions o;
-  o.participant.domain_id = static_cast<std::uint32_t>(test::test_domain().domain());
-  o.participant.name = name;
-  o.state.max_agents = 16;
-  o.state.run_id = kRun;
-  o.state.recorder = recorder;
-  o.state.publish = !recorder;
+  DdsOptions o = test::dds_options(name, kRun, recorder);
+  o.state.hear_all_runs = false;  // this run's record stream only
   return o;
 }
 
 StateMessage sample(AgentId id, std::uint64_t seq) {
-  StateMessage m;
-  m.view.id = id;
-  m.seq = seq;
-  m.run_id = kRun;
-  m.phase = Phase::kWaiting;
-  return m;
+  return test::state_sample(id, kRun, seq, Phase::kWaiting);  // an agent at its start barrier
 }
 
 TEST(RecordStream, AnAgentIsConfirmedOnlyWhenTheRecorderAlreadyHoldsItsSample) {

@@ -12,6 +12,7 @@
 #include "common/dds/roster_filter.hpp"
 #include "common/transport/sample_gate.hpp"
 #include "swarm_statePubSubTypes.h"
+#include "tests/dds/test_bus.hpp"
 #include "tests/swarm/domain_lease.hpp"
 #include "tests/swarm/harness.hpp"
 
@@ -19,23 +20,12 @@ namespace qswarm {
 namespace {
 
 DdsOptions options(std::uint64_t run, const char* name, bool all = false) {
-  DdsOptions o;
-  o.participant.domain_id = static_cast<std::uint32_t>(test::test_domain().domain());
-  o.participant.name = name;
-  o.state.max_agents = 16;
-  o.state.run_id = run;
+  DdsOptions o = test::dds_options(name, run);
   o.state.hear_all_runs = all;
   return o;
 }
 
-StateMessage sample(AgentId id, std::uint64_t run, std::uint64_t seq) {
-  StateMessage m;
-  m.view.id = id;
-  m.seq = seq;
-  m.run_id = run;
-  m.phase = Phase::kRunning;
-  return m;
-}
+using test::state_sample;
 
 TEST(RunIsolation, ARunOnTheSameDomainIsNeverHeardAndASupervisorSaysItIsThere) {
   DdsBus run_a(options(0xA, "run-a-agent"));
@@ -47,8 +37,8 @@ TEST(RunIsolation, ARunOnTheSameDomainIsNeverHeardAndASupervisorSaysItIsThere) {
   ASSERT_TRUE(test::wait_for(
       [&] {
         ++seq;
-        run_a.publish(sample(1, 0xA, seq));
-        run_b_peer.publish(sample(2, 0xB, seq));
+        run_a.publish(state_sample(1, 0xA, seq));
+        run_b_peer.publish(state_sample(2, 0xB, seq));
         return run_b.counters().received > 5 && run_b_supervisor.counters().foreign > 5 &&
                run_b_supervisor.counters().received > 5;
       },
@@ -68,7 +58,7 @@ TEST(RunIsolation, ASampleCarryingAnotherRunsIdInsideThePartitionIsRefused) {
   std::uint64_t seq = 0;
   ASSERT_TRUE(test::wait_for(
       [&] {
-        impostor.publish(sample(3, 0xD, ++seq));  // in run C's partition, claiming run D
+        impostor.publish(state_sample(3, 0xD, ++seq));  // in run C's partition, claiming run D
         return receiver.counters().foreign > 3;
       },
       30.0));
@@ -149,7 +139,7 @@ TEST(RunIsolation, AStrangerFloodingKeysOnTheRunsPartitionCannotBlindAReader) {
         ++seq;
         for (std::size_t k = 0; k < strangers.size(); ++k)
           for (AgentId id = 0; id < 10; ++id)
-            strangers[k]->publish(sample(100 + 10 * static_cast<AgentId>(k) + id, 0xE, seq));
+            strangers[k]->publish(state_sample(100 + 10 * static_cast<AgentId>(k) + id, 0xE, seq));
         return receiver.strangers().size() + receiver.latest(0).size() >= 60;
       },
       30.0));
@@ -157,7 +147,7 @@ TEST(RunIsolation, AStrangerFloodingKeysOnTheRunsPartitionCannotBlindAReader) {
   ASSERT_TRUE(test::wait_for(
       [&] {
         ++seq;
-        for (AgentId id = 1; id <= 4; ++id) agents.publish(sample(id, 0xE, seq));
+        for (AgentId id = 1; id <= 4; ++id) agents.publish(state_sample(id, 0xE, seq));
         return receiver.latest(0).size() == 4;
       },
       30.0));

@@ -10,6 +10,7 @@
 #include <set>
 
 #include "common/dds/dds_bus.hpp"
+#include "tests/dds/test_bus.hpp"
 #include "tests/swarm/domain_lease.hpp"
 #include "tests/swarm/harness.hpp"
 
@@ -42,26 +43,14 @@ class Security : public ::testing::Test {
   // A participant of run kRun; `keystore` empty: a plain one.
   static DdsOptions options(const char* name, const fs::path& keystore, const std::string& identity,
                             bool recorder = false) {
-    DdsOptions o;
-    o.participant.domain_id = static_cast<std::uint32_t>(test::test_domain().domain());
-    o.participant.name = name;
+    DdsOptions o = test::dds_options(name, kRun, recorder);
     o.participant.keystore = keystore.string();
     o.participant.identity = identity;
-    o.state.max_agents = 16;
-    o.state.run_id = kRun;
-    o.state.recorder = recorder;
-    o.state.publish = !recorder;
-    o.state.hear_all_runs = recorder;
     return o;
   }
 
   static StateMessage sample(AgentId id, std::uint64_t seq) {
-    StateMessage m;
-    m.view.id = id;
-    m.seq = seq;
-    m.run_id = kRun;
-    m.phase = Phase::kRunning;
-    return m;
+    return test::state_sample(id, kRun, seq);
   }
 
   static std::set<AgentId> heard(DdsBus& bus) {
