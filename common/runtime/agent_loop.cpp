@@ -34,6 +34,13 @@ LifecycleConfig lifecycle_config(const RunConfig& rc, AgentId id, const AgentLoo
   // waiting agent only says it is here: 0.05 s per 8 agents (0.2 s at 32; 5 ms up to 8 agents).
   c.waiting_period_s = rc.agents.size() <= 8 ? c.announce_period_s
                                              : 0.05 * static_cast<double>(rc.agents.size()) / 8.0;
+  if (!rc.transport.keystore.empty()) {
+    // DDS-Security encrypts and signs every sample (several times the CPU of a plain one): at 5 ms
+    // the announcements of 8 agents took the CPU the authentication handshakes needed, and pairs
+    // never met before the start timeout (bench/swarm_scale.sh SECURE=1, docs/security.md).
+    c.announce_period_s *= 10.0;
+    c.waiting_period_s *= 10.0;
+  }
   c.tick_wall_s = rc.agent.steps_per_tick() / (rc.agent.physics_hz * o.time_scale);
   c.tick_origin_s = tick_origin_s;
   c.max_wall_s =
