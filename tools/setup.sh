@@ -11,7 +11,7 @@ BUILD_DIR="${1:-build}"
 PACKAGES=(cmake g++ ninja-build pkg-config git
   libeigen3-dev libgtest-dev libgmock-dev libbenchmark-dev
   libfastrtps-dev libfastcdr-dev fastddsgen fastdds-tools
-  libprotobuf-dev protobuf-compiler libspdlog-dev libcli11-dev
+  libprotobuf-dev protobuf-compiler libspdlog-dev libcli11-dev zlib1g-dev
   python3 python3-matplotlib python3-numpy
   openssl iproute2 iptables procps)
 # shellcheck disable=SC2206
