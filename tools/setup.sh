@@ -29,6 +29,21 @@ if ((${#missing[@]})); then
   DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -q --no-install-recommends "${missing[@]}"
 fi
 
+# npm packages (node/package.json, pinned by node/package-lock.json) go into node/node_modules,
+# never committed: Foxglove's MCAP reader for the tests. Installed when missing or older than the
+# lockfile. Node and npm come from Debian (nodejs, npm) when the machine has neither.
+if [[ ! -d node/node_modules || node/package-lock.json -nt node/node_modules ]]; then
+  if ! command -v npm > /dev/null; then
+    SUDO=""
+    if [[ $(id -u) -ne 0 ]]; then SUDO="sudo"; fi
+    $SUDO apt-get update -q
+    DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -q --no-install-recommends nodejs npm
+  fi
+  echo "setup: npm ci --prefix node"
+  npm ci --prefix node --no-audit --no-fund
+  touch node/node_modules
+fi
+
 # Tests and benchmarks on explicitly: a build directory configured earlier with them off (the
 # Release product build CI used to make in build-release/) keeps that in its cache otherwise.
 cmake -S . -B "$BUILD_DIR" -G Ninja -DCMAKE_BUILD_TYPE="${QSWARM_BUILD_TYPE:-RelWithDebInfo}" \
