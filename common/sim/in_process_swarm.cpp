@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <limits>
+#include <stdexcept>
 
 namespace qswarm {
 
@@ -87,6 +88,19 @@ void InProcessSwarm::crash(AgentId id) {
   note(id, "crashed");
   s.loop.reset();
   s.bus.reset();
+}
+
+void InProcessSwarm::set_liar(const Liar& liar) {
+  if (!slots_.count(liar.id)) throw std::invalid_argument("set_liar: the liar is no agent");
+  net_.set_rewrite([this, liar](const InMemoryBus& from, const InMemoryBus& to, StateMessage& m) {
+    if (&from != slots_.at(liar.id).bus.get()) return;
+    AgentId to_id = 0;  // the recorder
+    for (const auto& [id, s] : slots_)
+      if (s.bus.get() == &to) to_id = id;
+    m.view.q = liar.claim(to_id, m.view.q0, m.stamp_s);
+    // A point agent's position is its consensus state: a consistent liar says both.
+    if (m.mode == AgentMode::kParticle) m.p_W = m.view.q;
+  });
 }
 
 std::string InProcessSwarm::run_recorded(double max_wall_s) {

@@ -14,6 +14,7 @@
 #include "common/runtime/agent_loop.hpp"
 #include "common/runtime/restart_policy.hpp"
 #include "common/scenario/run_config.hpp"
+#include "common/sim/liar.hpp"
 #include "common/transport/in_memory_bus.hpp"
 
 namespace qswarm {
@@ -44,6 +45,10 @@ class InProcessSwarm {
   // The agent's process dies unplanned (a crash, a SIGKILL from outside): silently, and the
   // restart policy does not bring it back.
   void crash(AgentId id);
+  // From now on agent liar.id lies: every consensus state it sends, to its neighbours and to the
+  // recorder, is liar.claim(receiver, its q0, its stamp) (the recorder counts as id 0), and a
+  // point agent's position with it. It still runs the real runtime; only what it says changes.
+  void set_liar(const Liar& liar);
 
   double wall_s() const { return clock_.now_s(); }
   const RunConfig& config() const { return rc_; }
