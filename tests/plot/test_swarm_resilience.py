@@ -36,20 +36,20 @@ class SwarmResilienceTest(unittest.TestCase):
         cls.tmp = tempfile.TemporaryDirectory(prefix="swarm-resilience-test-")
         cls.out = os.path.join(cls.tmp.name, "a")
         # From the repository root, with the defaults: scenarios/insider_seven.txtpb, agent 7.
-        cls.run = swarm("resilience", "--out", cls.out)
+        cls.first = swarm("resilience", "--out", cls.out)
 
     @classmethod
     def tearDownClass(cls):
         cls.tmp.cleanup()
 
     def test_it_writes_the_figure_and_the_numbers(self):
-        self.assertEqual(self.run.returncode, 0, self.run.stdout + self.run.stderr)
+        self.assertEqual(self.first.returncode, 0, self.first.stdout + self.first.stderr)
         with open(os.path.join(self.out, "insider.png"), "rb") as f:
             self.assertEqual(f.read(8), b"\x89PNG\r\n\x1a\n")
-        self.assertIn(os.path.join(self.out, "numbers.csv"), self.run.stdout)
+        self.assertIn(os.path.join(self.out, "numbers.csv"), self.first.stdout)
 
     def test_its_numbers_are_the_core_tests(self):
-        self.assertEqual(self.run.returncode, 0, self.run.stderr)
+        self.assertEqual(self.first.returncode, 0, self.first.stderr)
         got = read_csv(os.path.join(self.out, "numbers.csv"))
         want = read_csv(EXPECTED)
         self.assertEqual([(r["law"], r["attack"]) for r in got],
@@ -69,21 +69,21 @@ class SwarmResilienceTest(unittest.TestCase):
                 self.assertGreater(float(r["outside_m"]), 100.0, r)
 
     def test_the_table_it_prints_is_the_one_in_the_docs(self):
-        self.assertEqual(self.run.returncode, 0, self.run.stderr)
+        self.assertEqual(self.first.returncode, 0, self.first.stderr)
         with open(DOC, encoding="utf-8") as f:
             doc = f.read()
-        rows = [line for line in self.run.stdout.splitlines() if line.startswith("|")]
+        rows = [line for line in self.first.stdout.splitlines() if line.startswith("|")]
         self.assertEqual(len(rows), 2 + 9)
         for line in rows:
             self.assertIn(line + "\n", doc)
 
     def test_the_same_scenario_gives_the_same_bytes(self):
-        self.assertEqual(self.run.returncode, 0, self.run.stderr)
+        self.assertEqual(self.first.returncode, 0, self.first.stderr)
         again = os.path.join(self.tmp.name, "b")
         r = swarm("resilience", os.path.join(SOURCE, "scenarios", "insider_seven.txtpb"),
                   "--out", again, "--liar", "7", cwd=self.tmp.name)
         self.assertEqual(r.returncode, 0, r.stderr)
-        self.assertEqual(r.stdout.replace(again, self.out), self.run.stdout)
+        self.assertEqual(r.stdout.replace(again, self.out), self.first.stdout)
         for name in ("insider.png", "numbers.csv"):
             with open(os.path.join(self.out, name), "rb") as fa, \
                     open(os.path.join(again, name), "rb") as fb:

@@ -4,8 +4,6 @@
 // that is stuck: what it can say honestly is who stayed away while the others agreed.
 #include <gtest/gtest.h>
 
-#include <unistd.h>
-
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
@@ -13,6 +11,7 @@
 
 #include "common/scenario/scenario.hpp"
 #include "common/sim/in_process_swarm.hpp"
+#include "tests/sim/recorded_run.hpp"
 
 namespace qswarm {
 namespace {
@@ -22,34 +21,6 @@ RunConfig insider_seven(const std::string& law = "") {
   ScenarioOverrides o;
   o.law = law;
   return load_scenario(std::string(QSWARM_SOURCE_DIR) + "/scenarios/insider_seven.txtpb", o);
-}
-
-RunDir fresh_run_dir(const std::string& tag) {
-  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-  const std::filesystem::path dir =
-      std::filesystem::temp_directory_path() / ("qswarm-insider-" + std::string(info->name()) +
-                                                "-" + tag + "-" + std::to_string(::getpid()));
-  std::filesystem::remove_all(dir);
-  return RunDir::claim(dir.string(), "insider", "t");
-}
-
-records::Summary summary_of(const RunDir& dir) {
-  const std::optional<records::Summary> s = dir.read_summary();
-  EXPECT_TRUE(s.has_value()) << dir.summary() << " does not read as a summary";
-  return s.value_or(records::Summary{});
-}
-
-// (kind, detail) of every event.
-std::vector<std::pair<std::string, std::string>> events_of(const RunDir& dir) {
-  std::ifstream in(dir.events());
-  std::vector<std::pair<std::string, std::string>> out;
-  std::string line;
-  std::getline(in, line);  // header
-  while (std::getline(in, line)) {
-    const auto a = line.find(','), b = line.find(',', a + 1), c = line.find(',', b + 1);
-    out.emplace_back(line.substr(a + 1, b - a - 1), line.substr(c + 1));
-  }
-  return out;
 }
 
 int count_kind(const std::vector<std::pair<std::string, std::string>>& ev, const std::string& k) {
