@@ -2,7 +2,6 @@
 // manual clock over the in-memory network: deterministic, and seconds of swarm in milliseconds.
 #include <gtest/gtest.h>
 
-
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
