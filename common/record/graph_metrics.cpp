@@ -79,11 +79,15 @@ records::GraphSnapshot measure_graph(double t_s, const std::vector<AgentId>& ids
   }
   const int n = static_cast<int>(ids.size());
   if (n == 0) return g;
+  // Only links to agents of the snapshot (running) count: one to a departed peer lapses with its
+  // neighbour timeout.
+  std::vector<AgentId> sorted = ids;
+  std::sort(sorted.begin(), sorted.end());
   std::size_t min_degree = static_cast<std::size_t>(n);
   for (int i = 0; i < n; ++i) {
     std::size_t degree = 0;
     for (const auto& [peer, w] : links_of(i))
-      degree += std::find(ids.begin(), ids.end(), peer) != ids.end() ? 1 : 0;
+      degree += std::binary_search(sorted.begin(), sorted.end(), peer) ? 1 : 0;
     min_degree = std::min(min_degree, degree);
   }
   g.set_min_degree(static_cast<std::uint32_t>(min_degree));

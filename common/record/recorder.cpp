@@ -270,8 +270,8 @@ void Recorder::judge_resilience(records::GraphSnapshot& g, const std::vector<Age
     char buf[160];
     if (short_now) {
       if (r.first_degree_short_s() < 0.0) r.set_first_degree_short_s(t_s_);
-      std::snprintf(buf, sizeof buf, "an agent reads %u neighbours; W-MSR with F = %d needs %d",
-                    g.min_degree(), f, 2 * f + 1);
+      std::snprintf(buf, sizeof buf, "an agent reads %u neighbour%s; W-MSR with F = %d needs %d",
+                    g.min_degree(), g.min_degree() == 1 ? "" : "s", f, 2 * f + 1);
     } else {
       std::snprintf(buf, sizeof buf, "every agent reads at least %d neighbours again", 2 * f + 1);
     }

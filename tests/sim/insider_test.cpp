@@ -54,7 +54,7 @@ TEST(Insider, WmsrKeepsTheHonestAgentsInTheirBoxAndTheRecordNamesWhoStayedAway) 
     // Given seven agents running W-MSR (F = 1), agent 7 lying to everyone from the start
     const RunDir dir = fresh_run_dir(to_string(liar.kind));
     InProcessSwarm swarm(insider_seven(), 1.0, dir);
-    swarm.set_liar(liar);
+    swarm.add_liar(liar);
     // When the supervisor's recorder judges the run
     const std::string reason = swarm.run_recorded(130.0);
     // Then the six honest agents agreed inside their initial bounding box
@@ -92,7 +92,7 @@ TEST(Insider, EdgeFlowFollowsTheLiarAndItsRunNeverEndsConverged) {
     // Given the same seven agents and liar, under edge-flow
     const RunDir dir = fresh_run_dir(to_string(liar.kind));
     InProcessSwarm swarm(insider_seven("edge-flow"), 1.0, dir);
-    swarm.set_liar(liar);
+    swarm.add_liar(liar);
     const std::string reason = swarm.run_recorded(130.0);
     // Then the honest agents left their initial box, following the liar
     const Honest h = honest(swarm, 7);
@@ -111,6 +111,34 @@ TEST(Insider, EdgeFlowFollowsTheLiarAndItsRunNeverEndsConverged) {
       EXPECT_EQ(reason, "duration");  // drift: always behind it; split: two camps
     }
   }
+}
+
+TEST(Insider, TwoLiarsAgainstFEqualOneDragTheOthersAndTheRecordSaysTheBoxWasLeft) {
+  // Given W-MSR tolerating F = 1, and two agents telling everyone the same far point
+  const RunDir dir = fresh_run_dir("two");
+  InProcessSwarm swarm(insider_seven(), 1.0, dir);
+  swarm.add_liar({6, Liar::Kind::kConstant, kDefaultLie});
+  swarm.add_liar({7, Liar::Kind::kConstant, kDefaultLie});
+  // When the run is judged
+  const std::string reason = swarm.run_recorded(130.0);
+  // Then one trimmed value is not enough: the honest five are dragged to the liars' point
+  Positions q, q0;
+  for (const AgentSpec& a : swarm.config().agents) {
+    if (a.id >= 6) continue;
+    q.push_back(swarm.agent(a.id)->runtime().consensus());
+    q0.push_back(a.q0());
+  }
+  EXPECT_GT(outside_box_m(q, q0), 1000.0);
+  // and everyone "agreed", but outside where W-MSR keeps agents that do not lie: not converged
+  EXPECT_NE(reason.find("outside the agents' initial bounding box, which W-MSR keeps: more than "
+                        "F = 1 liars, or too few links?"),
+            std::string::npos)
+      << reason;
+  EXPECT_EQ(swarm.supervisor()->exit_code(), 1);
+  const records::Summary s = summary_of(dir);
+  EXPECT_FALSE(s.converged());
+  EXPECT_GT(s.agreed_elsewhere_m(), 1000.0);
+  EXPECT_EQ(s.outlier_agents_size(), 0);
 }
 
 // Four agents on K4, W-MSR with F = 1: every agent reads 3 = 2F+1 neighbours, and K4 is
