@@ -1,6 +1,7 @@
 // swarm: launch a swarm of agent processes plus a supervisor (`swarm run`), analyse a scenario's
 // initial graph without flying (`swarm inspect`), draw a run (`swarm plot`), rebuild its run.mcap
-// (`swarm export`), or regenerate the paper's figures and report (`swarm paper`).
+// (`swarm export`), regenerate the paper's figures and report (`swarm paper`), or draw the three
+// laws under an insider's attacks (`swarm resilience`).
 #include <sys/wait.h>
 #include <unistd.h>
 #include <CLI/CLI.hpp>
@@ -334,6 +335,18 @@ int export_run(const std::string& run_dir, const std::string& out_flag) {
     return 2;
   }
   return 0;
+// `swarm resilience`: swarm-preview flies the scenario under every law and attack (the bare laws in
+// lockstep); python -m qswarm.resilience draws them and prints the table.
+int resilience(const std::string& scenario, const std::string& out, int liar) {
+  std::vector<std::string> args = {"--swarm",    (bin_dir() / "swarm").string(),
+                                   "--preview",  (bin_dir() / "swarm-preview").string(),
+                                   "--scenario", scenario,
+                                   "--out",      out};
+  if (liar > 0) {
+    args.emplace_back("--liar");
+    args.push_back(std::to_string(liar));
+  }
+  return exec_python("swarm resilience", "resilience", args);
 }
 
 struct PaperOptions {
@@ -509,6 +522,17 @@ int main(int argc, char** argv) {
   paper_cmd->add_option("--domain", po.domain, "DDS domain id for the runs")
       ->check(CLI::Range(0, 51))
       ->excludes(paper_from);
+  std::string res_scenario = "scenarios/insider_seven.txtpb", res_out = "docs/resilience";
+  int res_liar = 0;
+  CLI::App* res_cmd = app.add_subcommand(
+      "resilience", "the three laws under one lying insider's attacks: figure and table (docs)");
+  res_cmd
+      ->add_option("scenario", res_scenario,
+                   "scenario (default scenarios/insider_seven.txtpb: 7 agents, complete graph)")
+      ->check(CLI::ExistingFile);
+  res_cmd->add_option("--out", res_out, "figure directory (default docs/resilience)");
+  res_cmd->add_option("--liar", res_liar, "the lying agent's id (default the highest)")
+      ->check(CLI::Range(1, 1000000));
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -522,5 +546,6 @@ int main(int argc, char** argv) {
                         "--days", std::to_string(keys_days)});
   if (*paper_cmd) return paper(po);
   if (*export_cmd) return export_run(export_dir, export_out);
+  if (*res_cmd) return resilience(res_scenario, res_out, res_liar);
   return inspect_scenario(inspect_path, json);
 }

@@ -172,6 +172,7 @@ void WmsrLaw::integrate(const Tick& t) {
     const std::size_t lo = std::min(below, F);
     const std::size_t hi = scratch_.size() - std::min(above, F);
     trimmed_ += lo + (scratch_.size() - hi);
+    trimmed_total_ += lo + (scratch_.size() - hi);
     double W = 0.0;
     for (std::size_t k = lo; k < hi; ++k) W += scratch_[k].w;
     if (W <= 0.0) continue;

@@ -96,6 +96,8 @@ class UpdateLaw {
   // Recovery continues lazily: an owned neighbour first heard later is recovered then.
   virtual void recover(const std::vector<NeighborView>&) {}
   virtual int recovered_count() const { return 0; }
+  // Neighbour values the law ignored since it started (W-MSR's trimming; 0 for the others).
+  virtual std::uint64_t trimmed_total() const { return 0; }
 
  protected:
   // What a tick moves along: `coef[k]` is c for neighbours[k] (0 when not linked), `weight[k]`
@@ -145,13 +147,15 @@ class WmsrLaw final : public UpdateLaw {
   WmsrLaw(AgentId self, const Vec3& q0, LawConfig cfg)
       : UpdateLaw(self, q0, std::move(cfg)), q_(q0) {}
   Vec3 state() const override { return q_; }
-  // Neighbour values trimmed on the last tick (all coordinates together).
+  // Neighbour values trimmed on the last tick (all coordinates together), and since the start.
   std::uint64_t trimmed() const { return trimmed_; }
+  std::uint64_t trimmed_total() const override { return trimmed_total_; }
 
  private:
   void integrate(const Tick& t) override;
   Vec3 q_;
   std::uint64_t trimmed_ = 0;
+  std::uint64_t trimmed_total_ = 0;
   struct Value {
     double v;
     double w;

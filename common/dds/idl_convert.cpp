@@ -41,6 +41,7 @@ void to_idl(const StateMessage& m, qswarm_msgs::AgentState& s) {
   s.received(m.received);
   s.dropped(m.dropped);
   s.overruns(m.overruns);
+  s.trimmed(m.trimmed);
   s.faults().loss(m.faults.loss);
   s.faults().burst(m.faults.burst);
   s.faults().cut(m.faults.cut);
@@ -102,6 +103,7 @@ StateMessage from_idl(const qswarm_msgs::AgentState& s) {
   m.received = s.received();
   m.dropped = s.dropped();
   m.overruns = s.overruns();
+  m.trimmed = s.trimmed();
   m.faults = {s.faults().loss(), s.faults().burst(), s.faults().cut(), s.faults().partition(),
               s.faults().delayed()};
   m.strangers.assign(s.strangers().begin(), s.strangers().end());
