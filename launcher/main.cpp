@@ -156,7 +156,9 @@ int run(const RunOptions& opt) {
   // Every process gets its own participant id, from a block whose ports are free on this host (so
   // hundreds of processes come up without Fast DDS shifting ports, and two runs on one domain do
   // not collide); a domain without room is the user's to change.
-  const int participants = static_cast<int>(rc.agents.size()) + 1;
+  // The supervisor, the agents and, with a Discovery Server, the server (the block's last id).
+  const bool own_server = rc.transport.discovery == Discovery::kServer;
+  const int participants = static_cast<int>(rc.agents.size()) + 1 + (own_server ? 1 : 0);
   std::optional<PortReservation> ports;
   std::optional<int> base;
   try {
@@ -173,7 +175,7 @@ int run(const RunOptions& opt) {
   }
   if (!base) {
     std::cerr << "swarm run: --domain " << rc.transport.domain_id << ": no room for "
-              << rc.agents.size() + 1
+              << participants
               << " more DDS participants on this host (other runs hold its ports); choose "
                  "another --domain (0 to 51)\n";
     return 2;
@@ -195,6 +197,14 @@ int run(const RunOptions& opt) {
   spec.stop_on_agent_exit = opt.stop_on_agent_exit;
   spec.ignore_sigterm = opt.ignore_sigterm;
   spec.participant_base = *base;
+  if (own_server) {
+    spec.discovery_id = *base + participants - 1;
+    spec.discovery_ready = [domain = rc.transport.domain_id, id = spec.discovery_id,
+                            iface = rc.transport.interface] {
+      // Its ports taken: the server (the only process given this id) is listening.
+      return !participant_ports_problem(domain, id, iface).empty();
+    };
+  }
   if (!dir.write_scenario(rc.resolved)) {
     std::cerr << "swarm run: cannot write " << dir.scenario().string() << " (disk full?)\n";
     return 3;
