@@ -345,6 +345,8 @@ int export_run(const std::string& run_dir, const std::string& out_flag) {
     return 2;
   }
   return 0;
+}
+
 // `swarm resilience`: swarm-preview flies the scenario under every law and attack (the bare laws in
 // lockstep); python -m qswarm.resilience draws them and prints the table.
 int resilience(const std::string& scenario, const std::string& out, int liar) {
