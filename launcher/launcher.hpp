@@ -28,6 +28,8 @@ struct LaunchSpec {
   // The first of the run's participant ids in the port plan: the supervisor takes it, agent k (in
   // the scenario's order) the k-th after it. -1: Fast DDS picks (tests without processes).
   int participant_base = -1;
+  int view_port = -1;  // the supervisor serves the live view on this port (-1: no view)
+  std::string view_listen = "127.0.0.1";
 };
 
 // The launcher as a unit: it starts the supervisor and, once it listens, one process per agent;

@@ -277,6 +277,7 @@ std::string Recorder::finish(const std::string& end_reason, double wall_time_s) 
   summary_ = build_summary(rc_, presence_, judge_, tally_, first_full_, last_,
                            {end_reason, t_s_, wall_time_s, time_scale_});
   event("end", 0, end_reason);
+  if (RunObserver* o = sinks_.observer()) o->on_summary(summary_);
   const std::string json = to_json(summary_);
   if (!dir_.write_summary(json)) sinks_.fail(dir_.summary().string());
   sinks_.flush();
