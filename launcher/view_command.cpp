@@ -36,7 +36,7 @@ int view_command(const ViewCommandOptions& o) {
   vo.port = static_cast<std::uint16_t>(o.port);
   vo.name = "quadswarm replay of " + o.run_dir;
   vo.log = [](const std::string& s) { std::cerr << "swarm view: " << s << "\n"; };
-  ViewServer server(vo, unused, run.run_info, &playback);
+  ViewServer server(vo, unused, run.run_info, run.scene, &playback);
   try {
     server.start();
   } catch (const ViewServerError& e) {

@@ -110,7 +110,7 @@ int main(int argc, char** argv) {
       vo.port = static_cast<std::uint16_t>(view_port);
       vo.name = "quadswarm " + rc.name;
       vo.log = [logger](const std::string& s) { logger->warn("{}", s); };
-      view = std::make_unique<ViewServer>(vo, *feed, run_info_json(rc));
+      view = std::make_unique<ViewServer>(vo, *feed, run_info_json(rc), SceneSettings::of(rc));
       try {
         view->start();
       } catch (const ViewServerError& e) {

@@ -24,7 +24,8 @@ std::string quoted(const std::string& s) {
 
 }  // namespace
 
-RecordSinks::RecordSinks(const RunDir& dir) : dir_(dir) {
+RecordSinks::RecordSinks(const RunDir& dir, SceneSettings scene)
+    : dir_(dir), mcap_(std::move(scene)) {
   telemetry_.open(dir_.telemetry());
   graph_.open(dir_.graph());
   events_.open(dir_.events());
@@ -42,6 +43,7 @@ RecordSinks::RecordSinks(const RunDir& dir) : dir_(dir) {
   check(telemetry_, dir_.telemetry());
   check(graph_, dir_.graph());
   check(events_, dir_.events());
+  if (!mcap_.open(dir_.mcap()) && failed_.empty()) failed_ = dir_.mcap().string();
 }
 
 void RecordSinks::check(std::ofstream& f, const std::filesystem::path& path) {
@@ -58,6 +60,8 @@ void RecordSinks::write_record(const records::Record& r, std::int64_t published_
     if (out.HadError() && failed_.empty()) failed_ = dir_.records();
   }
   check(records_, dir_.records());
+  mcap_.write(r);
+  if (!mcap_.ok() && failed_.empty()) failed_ = dir_.mcap().string();
 }
 
 void RecordSinks::sample(const StateMessage& m, double age_ms) {
@@ -125,6 +129,12 @@ bool RecordSinks::flush() {
   check(events_, dir_.events());
   records_.flush();
   check(records_, dir_.records());
+  return ok();
+}
+
+bool RecordSinks::close() {
+  flush();
+  if (!mcap_.close() && failed_.empty()) failed_ = dir_.mcap().string();
   return ok();
 }
 

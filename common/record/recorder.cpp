@@ -24,7 +24,7 @@ Recorder::Recorder(RunConfig rc, RunDir dir, double time_scale)
     : rc_(std::move(rc)),
       dir_(std::move(dir)),
       time_scale_(time_scale),
-      sinks_(dir_),
+      sinks_(dir_, SceneSettings::of(rc_)),
       presence_(ids_of(rc_), rc_.agent.neighbor_timeout_s, rc_.record_every()),
       judge_(rc_.judge.tolerance_m, rc_.judge.hold_s, rc_.agent.neighbor_timeout_s,
              rc_.agent.law.kind == LawKind::kEdgeFlow ? rc_.judge.tolerance_m : -1.0, rc_.faults),
@@ -277,10 +277,16 @@ std::string Recorder::finish(const std::string& end_reason, double wall_time_s) 
   summary_ = build_summary(rc_, presence_, judge_, tally_, first_full_, last_,
                            {end_reason, t_s_, wall_time_s, time_scale_});
   event("end", 0, end_reason);
+  // The files end before the summary is written, so that a file that could not be completed (a
+  // full disk) is in the summary too: never "converged" over a record cut short.
+  if (!sinks_.close()) {
+    summary_.set_converged(false);
+    summary_.set_end_reason(summary_.end_reason() + "; record incomplete: could not write " +
+                            std::filesystem::path(sinks_.failed_file()).filename().string());
+  }
   if (RunObserver* o = sinks_.observer()) o->on_summary(summary_);
   const std::string json = to_json(summary_);
   if (!dir_.write_summary(json)) sinks_.fail(dir_.summary().string());
-  sinks_.flush();
   std::string text = summary_text(summary_, rc_, dir_.str());
   if (!sinks_.ok()) text += "RECORD INCOMPLETE: could not write " + sinks_.failed_file() + "\n";
   return text;

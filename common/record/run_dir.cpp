@@ -115,6 +115,7 @@ std::vector<RunDir::File> RunDir::files() {
       {kGraph, "the graph over time"},
       {kEvents, "joins, departures, fault windows, the verdict, strangers, the end"},
       {kRecords, "samples, graph snapshots and events as length-delimited Protobuf records"},
+      {kMcap, "the same records and a 3D scene as MCAP, for Foxglove or Lichtblick"},
       {kProcesses, "the pids the launcher started"},
       {kSupervisorReady, "written by the supervisor once its reader is up"},
       {kSupervisorLog, "the supervisor's log"},

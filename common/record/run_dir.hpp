@@ -47,6 +47,7 @@ class RunDir {
   std::filesystem::path graph() const { return file(kGraph); }
   std::filesystem::path events() const { return file(kEvents); }
   std::filesystem::path records() const { return file(kRecords); }
+  std::filesystem::path mcap() const { return file(kMcap); }
   std::filesystem::path processes() const { return file(kProcesses); }
   std::filesystem::path supervisor_ready() const { return file(kSupervisorReady); }
   std::filesystem::path supervisor_log() const { return file(kSupervisorLog); }
@@ -96,6 +97,7 @@ class RunDir {
   static constexpr const char* kGraph = "graph.csv";
   static constexpr const char* kEvents = "events.csv";
   static constexpr const char* kRecords = "records.pb";
+  static constexpr const char* kMcap = "run.mcap";
   static constexpr const char* kProcesses = "processes.csv";
   static constexpr const char* kSupervisorReady = "supervisor.ready";
   static constexpr const char* kSupervisorLog = "supervisor.log";

@@ -34,7 +34,9 @@ ReplayRun load_replay(const std::filesystem::path& dir) {
   if (!fs::exists(scenario, ec))
     throw ReplayError(scenario.string() + ": missing (not a run directory?)");
   try {
-    run.run_info = run_info_json(load_scenario(scenario.string()));
+    const RunConfig rc = load_scenario(scenario.string());
+    run.run_info = run_info_json(rc);
+    run.scene = SceneSettings::of(rc);
   } catch (const std::exception& e) {
     throw ReplayError(scenario.string() + ": " + e.what());
   }

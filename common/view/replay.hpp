@@ -14,6 +14,7 @@ namespace qswarm {
 // records.pb in order, and the summary when the run wrote one.
 struct ReplayRun {
   std::string run_info;  // run_info_json of scenario.txtpb
+  SceneSettings scene;   // its initial average and slots, for the scene channel
   std::vector<records::Record> records;
   std::optional<records::Summary> summary;
   std::string note;  // what is odd about the record (a partial last record, no summary), or ""

@@ -1,45 +1,29 @@
 #include "common/view/view_channels.hpp"
 
-#include <google/protobuf/descriptor.pb.h>
+#include <string>
 
-#include <set>
-
-#include "proto/records.pb.h"
+#include "common/record/channels.hpp"
 
 namespace qswarm {
-namespace {
-
-// Dependencies first, each file once, as protoc --include_imports writes them.
-void add_file(const google::protobuf::FileDescriptor* f, std::set<std::string>& seen,
-              google::protobuf::FileDescriptorSet& set) {
-  if (!seen.insert(f->name()).second) return;
-  for (int i = 0; i < f->dependency_count(); ++i) add_file(f->dependency(i), seen, set);
-  f->CopyTo(set.add_file());
-}
-
-FoxgloveChannel protobuf_channel(std::uint32_t id, const std::string& topic,
-                                 const google::protobuf::Descriptor* d) {
-  return {id, topic, "protobuf", d->full_name(), base64_encode(descriptor_set(d)), "protobuf"};
-}
-
-}  // namespace
-
-std::string descriptor_set(const google::protobuf::Descriptor* d) {
-  google::protobuf::FileDescriptorSet set;
-  std::set<std::string> seen;
-  add_file(d->file(), seen, set);
-  return set.SerializeAsString();
-}
 
 std::vector<FoxgloveChannel> view_channels() {
-  return {
-      {kViewChannel, "/qswarm/view", "json", "qswarm.view.Frame",
+  std::vector<FoxgloveChannel> out = {
+      {kViewChannel, "/swarm/view", "json", "qswarm.view.Frame",
        R"({"type":"object","description":"the quadswarm page's frames: a snapshot, then changes"})",
-       "jsonschema"},
-      protobuf_channel(kSampleChannel, "/qswarm/agent_samples", records::AgentSample::descriptor()),
-      protobuf_channel(kGraphChannel, "/qswarm/graph", records::GraphSnapshot::descriptor()),
-      protobuf_channel(kEventChannel, "/qswarm/events", records::Event::descriptor()),
-  };
+       "jsonschema"}};
+  const std::pair<ViewChannelId, Stream> streams[] = {{kSampleChannel, Stream::kAgentSamples},
+                                                      {kGraphChannel, Stream::kGraph},
+                                                      {kEventChannel, Stream::kEvents},
+                                                      {kSceneChannel, Stream::kScene}};
+  for (const auto& [id, stream] : streams) {
+    const ChannelInfo& c = channel_info(stream);
+    // Foxglove's advertise carries a binary schema (a FileDescriptorSet) in base64, text as is.
+    const bool binary = c.schema_encoding == "protobuf";
+    out.push_back(
+        {id, std::string(c.topic), std::string(c.message_encoding), std::string(c.schema_name),
+         binary ? base64_encode(c.schema) : std::string(c.schema), std::string(c.schema_encoding)});
+  }
+  return out;
 }
 
 }  // namespace qswarm

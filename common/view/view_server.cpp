@@ -129,10 +129,13 @@ class HttpSession;
 
 class ViewServer::Impl {
  public:
-  Impl(ViewServerOptions opts, ViewFeed& feed, std::string run_info, ViewPlayback* playback)
+  Impl(ViewServerOptions opts, ViewFeed& feed, std::string run_info, SceneSettings scene,
+       ViewPlayback* playback)
       : opts_(std::move(opts)),
         feed_(feed),
         model_(std::move(run_info)),
+        scene_settings_(scene),
+        scene_(std::move(scene)),
         playback_(playback),
         channels_(view_channels()),
         session_id_(std::to_string(realtime_ns())) {}
@@ -160,6 +163,8 @@ class ViewServer::Impl {
   ViewServerOptions opts_;
   ViewFeed& feed_;
   ViewModel model_;
+  SceneSettings scene_settings_;
+  SceneBuilder scene_;  // the newest sample of every agent present, for the scene channel
   ViewPlayback* playback_;
   std::vector<FoxgloveChannel> channels_;
   std::optional<tcp::acceptor> acceptor_;
@@ -581,15 +586,20 @@ void ViewServer::Impl::tick() {
   const double now = steady_s();
   bool reset = false;
   ViewBatch b = playback_ ? playback_->advance(now, reset) : feed_.take();
-  if (reset) model_.reset();
+  if (reset) {
+    model_.reset();
+    scene_ = SceneBuilder(scene_settings_);
+  }
   model_.apply(b);
 
-  bool want_view = false, want_samples = false, want_graph = false, want_events = false;
+  bool want_view = false, want_samples = false, want_graph = false, want_events = false,
+       want_scene = false;
   for (const auto& s : sessions_) {
     want_view |= s->subscribed(kViewChannel);
     want_samples |= s->subscribed(kSampleChannel);
     want_graph |= s->subscribed(kGraphChannel);
     want_events |= s->subscribed(kEventChannel);
+    want_scene |= s->subscribed(kSceneChannel);
   }
   const std::uint64_t t_ns = sim_ns(model_.time_s());
   if (want_view) {
@@ -632,6 +642,15 @@ void ViewServer::Impl::tick() {
     const std::size_t from = reset ? b.events.size() - 1 : 0;
     for (std::size_t i = from; i < b.events.size(); ++i)
       publish(kEventChannel, b.events[i], b.events[i].t_s());
+  }
+  // The scene: the batch's newest samples (a frame carries one per agent) and its events, then one
+  // SceneUpdate for its newest graph snapshot; each is the whole picture, so one a frame is enough.
+  for (const ViewSample& s : b.samples) scene_.on_sample(s.sample);
+  for (const records::Event& e : b.events) scene_.on_event(e);
+  if (want_scene && !b.graphs.empty()) {
+    const records::GraphSnapshot& g = b.graphs.back();
+    const auto payload = share(scene_.scene_json(g));
+    for (const auto& s : sessions_) s->send_channel(kSceneChannel, sim_ns(g.t_s()), payload);
   }
   const auto period = std::chrono::microseconds(
       static_cast<std::int64_t>(std::max(0.001, opts_.frame_period_s) * 1e6));
@@ -728,8 +747,9 @@ ViewServer::Impl::HttpReply ViewServer::Impl::serve_http(
 }
 
 ViewServer::ViewServer(ViewServerOptions opts, ViewFeed& feed, std::string run_info,
-                       ViewPlayback* playback)
-    : impl_(std::make_unique<Impl>(std::move(opts), feed, std::move(run_info), playback)) {}
+                       SceneSettings scene, ViewPlayback* playback)
+    : impl_(std::make_unique<Impl>(std::move(opts), feed, std::move(run_info), std::move(scene),
+                                   playback)) {}
 
 ViewServer::~ViewServer() { stop(); }
 

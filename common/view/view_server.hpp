@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "common/record/scene.hpp"
 #include "common/view/foxglove_protocol.hpp"
 #include "common/view/view_feed.hpp"
 
@@ -80,7 +81,8 @@ struct ViewServerError : std::runtime_error {
 // reaches the run.
 class ViewServer {
  public:
-  ViewServer(ViewServerOptions opts, ViewFeed& feed, std::string run_info,
+  // `scene`: where the swarm should meet and its slots, for the 3D scene channel.
+  ViewServer(ViewServerOptions opts, ViewFeed& feed, std::string run_info, SceneSettings scene,
              ViewPlayback* playback = nullptr);
   ~ViewServer();
   ViewServer(const ViewServer&) = delete;

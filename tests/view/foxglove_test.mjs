@@ -40,7 +40,7 @@ try {
   client.on('error', (e) => console.log('client error:', e.message));
   await until(() => serverInfo && channels, 10000, 'serverInfo and advertise');
   check(serverInfo.capabilities.length === 0, 'serverInfo: no capability (a read-only server)');
-  const ch = channels.find((c) => c.topic === '/qswarm/agent_samples');
+  const ch = channels.find((c) => c.topic === '/swarm/agents');
   check(ch && ch.encoding === 'protobuf' && ch.schemaEncoding === 'protobuf' &&
     ch.schemaName === 'qswarm.records.AgentSample', `agent samples advertised: ${JSON.stringify(ch && { ...ch, schema: '...' })}`);
   const set = descriptor.FileDescriptorSet.decode(Buffer.from(ch.schema, 'base64'));
@@ -60,6 +60,22 @@ try {
   check(s.s.position.length === 3 && s.s.position.every(Number.isFinite), `a sample's position ${s.s.position}`);
   check(samples.every((x) => x.t === BigInt(Math.round(x.s.stamp_s * 1e9))),
     `log times are the samples' stamps in ns (${s.t} ns for ${s.s.stamp_s} s)`);
+
+  // The 3D scene: foxglove.SceneUpdate as JSON, the whole swarm in each message.
+  const sceneCh = channels.find((c) => c.topic === '/swarm/scene');
+  check(sceneCh && sceneCh.encoding === 'json' && sceneCh.schemaName === 'foxglove.SceneUpdate',
+    'the scene channel is advertised');
+  const sceneSub = client.subscribe(sceneCh.id);
+  let scene = null;
+  const onScene = (m) => {
+    if (m.subscriptionId === sceneSub) scene = JSON.parse(new TextDecoder().decode(m.data));
+  };
+  client.on('message', onScene);
+  await until(() => scene, 10000, 'a scene update');
+  const agentsInScene = scene.entities.filter((e) => e.id.startsWith('agent/')).length;
+  check(agentsInScene === 8 && scene.entities.some((e) => e.id === 'links'),
+    `the scene draws 8 agents and the links (${scene.entities.length} entities)`);
+  client.unsubscribe(sceneSub);
 
   // foxglove.sdk.v1 (newer Foxglove) is accepted too.
   const sdk = new WebSocket(wsUrl, ['foxglove.sdk.v1']);

@@ -57,7 +57,7 @@ try {
   client.on('advertise', (c) => { channels = c; });
   client.on('error', (e) => console.log('client error:', e.message));
   await until(() => channels, 10000, 'advertise');
-  const viewCh = channels.find((c) => c.topic === '/qswarm/view');
+  const viewCh = channels.find((c) => c.topic === '/swarm/view');
   const sub = client.subscribe(viewCh.id);
   const decoder = new TextDecoder();
   client.on('message', (m) => {

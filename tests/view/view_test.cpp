@@ -116,15 +116,37 @@ TEST(FoxgloveProtocol, MessageFrameIsOpcodeSubscriptionTimeThenPayload) {
   EXPECT_EQ(base64_encode("foobar"), "Zm9vYmFy");
 }
 
-TEST(FoxgloveProtocol, AdvertisesProtobufSchemasAsDescriptorSetsWithTheirImports) {
+TEST(FoxgloveProtocol, AdvertisesTheCataloguesSchemasProtobufInBase64) {
+  const std::vector<FoxgloveChannel> channels = view_channels();
+  ASSERT_EQ(channels.size(), 5u);
+  const FoxgloveChannel& c = channels[1];
+  ASSERT_EQ(c.id, kSampleChannel);
+  // The schema as advertised, decoded back: a FileDescriptorSet.
+  std::string bytes;
+  {
+    static const std::string kAlphabet =
+        "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    std::uint32_t acc = 0;
+    int bits = 0;
+    for (const char ch : c.schema) {
+      if (ch == '=') break;
+      acc = (acc << 6) | static_cast<std::uint32_t>(kAlphabet.find(ch));
+      bits += 6;
+      if (bits >= 8) {
+        bits -= 8;
+        bytes += static_cast<char>((acc >> bits) & 0xff);
+      }
+    }
+  }
   google::protobuf::FileDescriptorSet set;
-  ASSERT_TRUE(set.ParseFromString(descriptor_set(records::AgentSample::descriptor())));
+  ASSERT_TRUE(set.ParseFromString(bytes));
   // records.proto imports struct.proto and scenario.proto: dependencies first, the type's file
   // last, as protoc --include_imports writes them.
   ASSERT_GE(set.file_size(), 3);
   EXPECT_EQ(set.file(set.file_size() - 1).name(), "records.proto");
-  const std::string adv = advertise_json(view_channels());
-  EXPECT_NE(adv.find("\"topic\":\"/qswarm/agent_samples\""), std::string::npos);
+  const std::string adv = advertise_json(channels);
+  EXPECT_NE(adv.find("\"topic\":\"/swarm/agents\""), std::string::npos);
+  EXPECT_NE(adv.find("\"schemaName\":\"foxglove.SceneUpdate\""), std::string::npos);
   EXPECT_NE(adv.find("\"schemaName\":\"qswarm.records.AgentSample\""), std::string::npos);
   EXPECT_NE(adv.find("\"schemaEncoding\":\"protobuf\""), std::string::npos);
 }
@@ -254,7 +276,7 @@ class ReplayTest : public ::testing::Test {
   void TearDown() override { std::filesystem::remove_all(dir_); }
   // Ten simulated seconds: samples at 10 Hz per agent, a graph every 0.1 s, events.
   void record(bool with_summary) {
-    RecordSinks sinks{RunDir(dir_.string())};
+    RecordSinks sinks{RunDir(dir_.string()), SceneSettings{}};
     for (int k = 0; k <= 100; ++k) {
       const double t = 0.1 * k;
       for (std::uint32_t id = 1; id <= 2; ++id) {
@@ -492,7 +514,7 @@ class ViewServerTest : public ::testing::Test {
 
 TEST_F(ViewServerTest, ServesThePageAndOnlyItsFilesOverHttp) {
   ViewFeed feed;
-  ViewServer server(options(), feed, "{}");
+  ViewServer server(options(), feed, "{}", SceneSettings{});
   server.start();
   int status = 0;
   EXPECT_NE(http_get(server.port(), "/", &status).find("quadswarm live view"), std::string::npos);
@@ -509,7 +531,7 @@ TEST_F(ViewServerTest, ServesThePageAndOnlyItsFilesOverHttp) {
 
 TEST_F(ViewServerTest, APageGetsASnapshotThenFramesAndTheEnd) {
   ViewFeed feed;
-  ViewServer server(options(), feed, R"({"name":"t"})");
+  ViewServer server(options(), feed, R"({"name":"t"})", SceneSettings{});
   server.start();
   Client c(server.port());
   const std::string info = c.read();
@@ -538,13 +560,14 @@ TEST_F(ViewServerTest, APageGetsASnapshotThenFramesAndTheEnd) {
 
 TEST_F(ViewServerTest, ProtobufChannelsCarryTheRecordsMessages) {
   ViewFeed feed;
-  ViewServer server(options(), feed, "{}");
+  ViewServer server(options(), feed, "{}", SceneSettings{});
   server.start();
   Client c(server.port(), "chat, foxglove.sdk.v1");
   c.read();
   c.read();
-  c.send(R"({"op":"subscribe","subscriptions":[{"id":9,"channelId":2}]})");
+  c.send(R"({"op":"subscribe","subscriptions":[{"id":9,"channelId":2},{"id":10,"channelId":5}]})");
   feed_swarm(feed, 3, 1.5);
+  std::string scene;
   std::set<std::uint32_t> ids;
   for (int k = 0; k < 50 && ids.size() < 3; ++k) {
     bool bin = false;
@@ -554,20 +577,27 @@ TEST_F(ViewServerTest, ProtobufChannelsCarryTheRecordsMessages) {
     std::memcpy(&sub, m.data() + 1, 4);
     std::uint64_t t_ns = 0;
     std::memcpy(&t_ns, m.data() + 5, 8);
-    EXPECT_EQ(sub, 9u);
     EXPECT_EQ(t_ns, 1'500'000'000u);  // the record's simulated time
+    if (sub == 10) {                  // the 3D scene of the snapshot
+      scene = m.substr(13);
+      continue;
+    }
+    EXPECT_EQ(sub, 9u);
     records::AgentSample s;
     ASSERT_TRUE(s.ParseFromString(m.substr(13)));
     ids.insert(s.id());
   }
   EXPECT_EQ(ids, (std::set<std::uint32_t>{1, 2, 3}));
+  if (scene.empty()) scene = c.await_view("entities");
+  EXPECT_NE(scene.find("\"agent/3\""), std::string::npos) << scene.substr(0, 300);
+  EXPECT_NE(scene.find("\"links\""), std::string::npos);
 }
 
 TEST_F(ViewServerTest, AClientThatNeverReadsLosesFramesNotTheOthers) {
   ViewServerOptions o = options();
   o.max_queue_frames = 8;
   ViewFeed feed;
-  ViewServer server(o, feed, "{}");
+  ViewServer server(o, feed, "{}", SceneSettings{});
   server.start();
   // The stuck client: a real WebSocket that subscribes, then never reads again (its receive
   // buffer kept small, so the server's socket fills soon).
@@ -612,7 +642,7 @@ TEST_F(ViewServerTest, MalformedOversizedAndFloodingClientsAreRefusedAndCounted)
   o.client_messages_per_s = 20;
   o.strikes = 30;
   ViewFeed feed;
-  ViewServer server(o, feed, "{}");
+  ViewServer server(o, feed, "{}", SceneSettings{});
   server.start();
   Client good(server.port());
   good.read();
@@ -657,7 +687,7 @@ TEST_F(ViewServerTest, ManyConnectionsAreCappedAndTheServerStaysUsable) {
   ViewServerOptions o = options();
   o.max_connections = 16;
   ViewFeed feed;
-  ViewServer server(o, feed, "{}");
+  ViewServer server(o, feed, "{}", SceneSettings{});
   server.start();
   asio::io_context ioc;
   std::vector<tcp::socket> held;
@@ -678,11 +708,11 @@ TEST_F(ViewServerTest, ManyConnectionsAreCappedAndTheServerStaysUsable) {
 
 TEST_F(ViewServerTest, APortInUseIsRefusedWithTheReason) {
   ViewFeed feed;
-  ViewServer first(options(), feed, "{}");
+  ViewServer first(options(), feed, "{}", SceneSettings{});
   first.start();
   ViewServerOptions o = options();
   o.port = first.port();
-  ViewServer second(o, feed, "{}");
+  ViewServer second(o, feed, "{}", SceneSettings{});
   try {
     second.start();
     FAIL() << "a second server listened on a port in use";
@@ -700,7 +730,7 @@ TEST_F(ViewServerTest, AReplayIsControlledFromThePage) {
   for (int k = 0; k <= 100; ++k) run.records.push_back(graph_record(0.1 * k, 2, 1.0 + k));
   ReplayPlayback playback(run, 1.0);
   ViewFeed unused;
-  ViewServer server(options(), unused, run.run_info, &playback);
+  ViewServer server(options(), unused, run.run_info, SceneSettings{}, &playback);
   server.start();
   Client c(server.port());
   c.read();

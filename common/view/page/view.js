@@ -1,5 +1,5 @@
 // The quadswarm live view: a Foxglove WebSocket client (sub-protocol foxglove.websocket.v1) that
-// subscribes to the server's /qswarm/view channel, whose JSON messages are a snapshot of the run
+// subscribes to the server's /swarm/view channel, whose JSON messages are a snapshot of the run
 // and then, up to 20 times a second, what changed. It draws the swarm with three.js and the graph's
 // metrics with uPlot, both served by the view server from npm's packages (no CDN).
 import * as THREE from '/lib/three.module.min.js';
@@ -446,7 +446,7 @@ function connect() {
     if (typeof ev.data === 'string') {
       const msg = JSON.parse(ev.data);
       if (msg.op === 'advertise') {
-        const ch = msg.channels.find((c) => c.topic === '/qswarm/view');
+        const ch = msg.channels.find((c) => c.topic === '/swarm/view');
         if (ch && viewChannel === null) {
           viewChannel = ch.id;
           ws.send(JSON.stringify({ op: 'subscribe', subscriptions: [{ id: 1, channelId: ch.id }] }));
