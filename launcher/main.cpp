@@ -179,8 +179,9 @@ int run(const RunOptions& opt) {
                  "another --domain (0 to 51)\n";
     return 2;
   }
-  if (opt.view_port > 0) {
-    // Said now, before anything is flown; the supervisor checks again when it listens.
+  if (opt.view_port >= 0) {
+    // Said now, before anything is flown (port 0: the address alone); the supervisor checks again
+    // when it listens.
     if (const std::string why =
             probe_listen(opt.view_listen, static_cast<std::uint16_t>(opt.view_port));
         !why.empty()) {

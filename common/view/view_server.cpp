@@ -297,6 +297,13 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
         server_.log_once("oversized", "view: a client sent a frame above " +
                                           std::to_string(server_.opts_.max_message_bytes) +
                                           " bytes; its session was closed");
+      } else if (ec.category() == websocket::make_error_code(websocket::error::closed).category() &&
+                 ec != websocket::error::closed) {
+        // A frame that breaks the WebSocket protocol (bad opcode, unmasked, text that is not
+        // UTF-8, ...): Beast closes the session; we count it.
+        ++server_.counts_.malformed;
+        server_.log_once("protocol", "view: a client broke the WebSocket protocol (" +
+                                         ec.message() + "); its session was closed");
       }
       close_session();
       return;
@@ -523,7 +530,16 @@ void ViewServer::Impl::start() {
   });
   started_ = true;
   thread_ = std::thread([this] {
-    ioc_.run();
+    // A handler that throws (out of memory) loses its connection, never the supervisor: the loop
+    // goes on with the others.
+    while (true) {
+      try {
+        ioc_.run();
+        break;
+      } catch (const std::exception& e) {
+        log(std::string("view: a handler failed: ") + e.what());
+      }
+    }
     std::lock_guard<std::mutex> lock(done_mu_);
     done_ = true;
     done_cv_.notify_all();

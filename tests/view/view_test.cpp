@@ -656,6 +656,12 @@ TEST_F(ViewServerTest, MalformedOversizedAndFloodingClientsAreRefusedAndCounted)
     EXPECT_TRUE(eventually([&] { return server.counts().malformed == 3; }));
   }
   {
+    // Text that is not UTF-8 breaks the WebSocket protocol itself: the session ends, counted.
+    Client broken(server.port());
+    broken.send("{\"op\":\"\xff\xfe\"}");
+    EXPECT_TRUE(eventually([&] { return server.counts().malformed == 4; }));
+  }
+  {
     Client big(server.port());
     big.send(std::string(5000, ' ') + "{}");
     EXPECT_TRUE(eventually([&] { return server.counts().oversized == 1; }));
