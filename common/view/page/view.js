@@ -29,7 +29,7 @@ let dirty = true, chartsDirty = true;
 
 // ---- 3D ----
 const container = $('scene');
-const renderer = new THREE.WebGLRenderer({ antialias: true, preserveDrawingBuffer: true });
+const renderer = new THREE.WebGLRenderer({ antialias: false });
 renderer.setPixelRatio(Math.min(window.devicePixelRatio, 2));
 container.appendChild(renderer.domElement);
 const scene = new THREE.Scene();
@@ -55,10 +55,10 @@ function instanced(geometry, color) {
 // body's x axis (its heading).
 const armX = instanced(new THREE.BoxGeometry(1.0, 0.08, 0.05), 0xffffff);
 const armY = instanced(new THREE.BoxGeometry(0.08, 1.0, 0.05), 0xffffff);
-const hub = instanced(new THREE.SphereGeometry(0.16, 12, 8), 0xffffff);
+const hub = instanced(new THREE.SphereGeometry(0.16, 8, 6), 0xffffff);
 const noseGeom = new THREE.ConeGeometry(0.1, 0.45, 10).rotateZ(-Math.PI / 2).translate(0.6, 0, 0);
 const nose = instanced(noseGeom, 0xff7043);
-const slotMesh = instanced(new THREE.SphereGeometry(0.22, 10, 6), 0x9ccc65);
+const slotMesh = instanced(new THREE.SphereGeometry(0.22, 6, 4), 0x9ccc65);
 slotMesh.material.wireframe = true;
 const stateMesh = instanced(new THREE.OctahedronGeometry(0.12), 0xce93d8);  // consensus states
 
@@ -405,7 +405,7 @@ let lastCharts = 0;
 function animate(now) {
   requestAnimationFrame(animate);
   if (!run) return;
-  if (chartsDirty && now - lastCharts > 200) {  // charts at 5 Hz: their redraw is the page's cost
+  if (chartsDirty && now - lastCharts > 500) {  // charts at 2 Hz: their redraw is the page's cost
     updateCharts();
     chartsDirty = false;
     lastCharts = now;
