@@ -7,6 +7,8 @@
 #include <fstream>
 #include <stdexcept>
 
+#include "common/mcap/file_check.hpp"
+
 namespace qswarm {
 namespace {
 
@@ -17,6 +19,14 @@ std::string num(double v) {
 }
 
 bool planned_kill_status(int status) { return WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL; }
+
+// run.mcap ends with a footer only when the supervisor closed it: a supervisor killed mid-run
+// leaves it cut short, and the record must say so ("" when it is whole).
+std::string mcap_problem(const RunDir& dir) {
+  const mcap::FileCheck c = mcap::check_file(dir.mcap());
+  if (c.complete) return "";
+  return "record incomplete: " + dir.mcap().filename().string() + ": " + c.problem;
+}
 
 }  // namespace
 
@@ -188,11 +198,14 @@ Launcher::Outcome Launcher::conclude(double wall_time_s) {
     // launcher says why.
     std::string reason = "supervisor " + describe_status(sup);
     if (!end_.empty() && end_ != kFinished) reason = end_ + "; " + reason;
+    if (const std::string p = mcap_problem(dir); !p.empty()) reason += "; " + p;
     out.lines.push_back(reason + "; the summary says so");
     out.exit_code = dir.write_fallback_summary(spec_.rc, reason, wall_time_s) ? 1 : 3;
     return out;
   }
   if (WIFEXITED(sup) && WEXITSTATUS(sup) == 3) {
+    // The supervisor named the first file it could not write; run.mcap cut short is named too.
+    if (const std::string p = mcap_problem(dir); !p.empty()) out.lines.push_back(p);
     out.lines.push_back("the run record is incomplete (see above); run directory " + dir.str());
     out.exit_code = 3;
     return out;
@@ -200,6 +213,7 @@ Launcher::Outcome Launcher::conclude(double wall_time_s) {
   // Every agent still running at teardown ends by writing its stats; one that did not (killed after
   // the grace period, a full disk) leaves the record incomplete.
   std::vector<std::string> missing;
+  if (const std::string p = mcap_problem(dir); !p.empty()) missing.push_back(p);
   for (const AgentId id : at_teardown_) {
     if (std::filesystem::exists(dir.agent_stats(id))) continue;
     missing.push_back("record incomplete: agent " + std::to_string(id) + " wrote no " +

@@ -1,6 +1,6 @@
 // swarm: launch a swarm of agent processes plus a supervisor (`swarm run`), analyse a scenario's
-// initial graph without flying (`swarm inspect`), draw a run (`swarm plot`), or regenerate the
-// paper's figures and report (`swarm paper`).
+// initial graph without flying (`swarm inspect`), draw a run (`swarm plot`), rebuild its run.mcap
+// (`swarm export`), or regenerate the paper's figures and report (`swarm paper`).
 #include <sys/wait.h>
 #include <unistd.h>
 #include <CLI/CLI.hpp>
@@ -18,6 +18,8 @@
 #include <random>
 
 #include "common/app/cli_checks.hpp"
+#include "common/mcap/file_check.hpp"
+#include "common/record/mcap_export.hpp"
 #include "common/record/run_dir.hpp"
 #include "common/scenario/fault_flags.hpp"
 #include "common/scenario/scenario.hpp"
@@ -317,6 +319,46 @@ int plot(const std::string& run_dir, const std::string& out) {
   return exec_python("swarm plot", "plot", args);
 }
 
+// `swarm export --mcap RUN_DIR [--out FILE]`: run.mcap rebuilt from records.pb, for runs recorded
+// before run.mcap existed and for a run.mcap cut short (a supervisor killed mid-run). 0 written; 2
+// bad input (not a run directory, --out in no directory, a records.pb cut mid-record: its whole
+// records are exported and the message says where it was cut); 3 the file could not be written.
+int export_run(const std::string& run_dir, const std::string& out_flag) {
+  const RunDir dir(run_dir);
+  const fs::path out = out_flag.empty() ? dir.mcap() : fs::path(out_flag);
+  const fs::path parent = fs::absolute(out).parent_path();
+  if (!out_flag.empty() && !fs::is_directory(parent)) {
+    std::cerr << "swarm export: --out " << out_flag << ": " << parent.string()
+              << " is not a directory\n";
+    return 2;
+  }
+  const bool replacing = out == dir.mcap() && fs::exists(out);
+  const mcap::FileCheck before = replacing ? mcap::check_file(out) : mcap::FileCheck{};
+  ExportResult r;
+  try {
+    r = export_mcap(dir, out);
+  } catch (const ExportError& e) {
+    std::cerr << "swarm export: " << e.what() << "\n";
+    return 2;
+  }
+  if (!r.write_error.empty()) {
+    std::cerr << "swarm export: could not write " << r.write_error << "\n";
+    return 3;
+  }
+  if (replacing && !before.complete)
+    std::cout << "swarm export: " << out.string() << " was incomplete (" << before.problem
+              << "); rebuilt from " << dir.records().filename().string() << "\n";
+  const auto n = [&](Stream s) { return r.messages[static_cast<std::size_t>(s)]; };
+  std::cout << "swarm export: " << r.records << " records -> " << out.string() << " ("
+            << n(Stream::kAgentSamples) << " samples, " << n(Stream::kGraph) << " graph snapshots, "
+            << n(Stream::kEvents) << " events, " << n(Stream::kScene) << " scenes)\n";
+  if (!r.partial.empty()) {
+    std::cerr << "swarm export: " << r.partial << ": exported those, not the rest\n";
+    return 2;
+  }
+  return 0;
+}
+
 struct PaperOptions {
   std::string out = "docs/paper";
   std::string runs;  // where the runs go (default runs/TIMESTAMP-paper)
@@ -480,6 +522,12 @@ int main(int argc, char** argv) {
   CLI::App* plot_cmd = app.add_subcommand("plot", "PNG figures of a run directory (matplotlib)");
   plot_cmd->add_option("run_dir", plot_dir, "run directory written by swarm run")->required();
   plot_cmd->add_option("--out", plot_out, "figure directory (default RUN_DIR/plots)");
+  std::string export_dir, export_out;
+  CLI::App* export_cmd = app.add_subcommand(
+      "export", "rebuild a run's run.mcap (Foxglove, Lichtblick) from its records.pb");
+  export_cmd->add_option("--mcap", export_dir, "the run directory whose records.pb to export")
+      ->required();
+  export_cmd->add_option("--out", export_out, "the MCAP file to write (default RUN_DIR/run.mcap)");
   PaperOptions po;
   CLI::App* paper_cmd = app.add_subcommand(
       "paper", "fly the paper's scenarios and write its figures and a report (docs/paper)");
@@ -514,6 +562,7 @@ int main(int argc, char** argv) {
                        {"--swarm", (bin_dir() / "swarm").string(), keys_scenario, "--out", keys_out,
                         "--days", std::to_string(keys_days)});
   if (*paper_cmd) return paper(po);
+  if (*export_cmd) return export_run(export_dir, export_out);
   if (*view_cmd) return view_command(vo);
   return inspect_scenario(inspect_path, json);
 }

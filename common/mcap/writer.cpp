@@ -96,6 +96,9 @@ bool Writer::write(std::uint16_t channel_id, std::uint64_t log_time_ns, std::str
     fail("message on unknown channel " + std::to_string(channel_id));
     return false;
   }
+  // A chunk that became due with the previous message is written out before this one is added:
+  // the caller can ask chunk_due() first and put its own files in step with run.mcap.
+  if (chunk_due() && !write_chunk()) return false;
   ChannelState& c = channels_[channel_id - 1];
   Bytes m;
   m.u8(static_cast<std::uint8_t>(Op::kMessage)).u64(2 + 4 + 8 + 8 + data.size());
@@ -114,10 +117,12 @@ bool Writer::write(std::uint16_t channel_id, std::uint64_t log_time_ns, std::str
   end_ns_ = std::max(end_ns_, log_time_ns);
   ++message_count_;
   ++c.messages;
-  if (chunk_.size() >= options_.chunk_bytes ||
-      chunk_end_ns_ - chunk_start_ns_ >= options_.chunk_span_ns)
-    return write_chunk();
   return true;
+}
+
+bool Writer::chunk_due() const {
+  return chunk_has_messages_ && (chunk_.size() >= options_.chunk_bytes ||
+                                 chunk_end_ns_ - chunk_start_ns_ >= options_.chunk_span_ns);
 }
 
 bool Writer::write_chunk() {

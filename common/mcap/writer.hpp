@@ -14,9 +14,9 @@ namespace qswarm::mcap {
 struct WriterOptions {
   std::string profile;                // the Header's profile ("" : none of the well-known ones)
   std::string library = "quadswarm";  // the Header's library
-  // A chunk is written out once it holds this many bytes, or once its messages span this much log
-  // time: a process killed mid-run loses at most the open chunk, and viewers seek by chunk.
-  std::uint64_t chunk_bytes = 512 * 1024;
+  // A chunk is written out (at the next message) once it holds this many bytes or its messages span
+  // this much log time: a process killed mid-run loses at most the open chunk; viewers seek by it.
+  std::uint64_t chunk_bytes = std::uint64_t{512} * 1024;
   std::uint64_t chunk_span_ns = 2'000'000'000;
 };
 
@@ -46,7 +46,11 @@ class Writer {
                             std::string_view message_encoding,
                             const std::map<std::string, std::string>& metadata = {});
   // A message at log_time_ns (publish time the same); sequence numbers count per channel from 0.
+  // The open chunk, if due (chunk_due()), is written out first.
   bool write(std::uint16_t channel_id, std::uint64_t log_time_ns, std::string_view data);
+  // Whether the open chunk holds chunk_bytes or spans chunk_span_ns: the next write() or flush()
+  // writes it out.
+  bool chunk_due() const;
   // Writes the open chunk out (so that everything so far survives a kill) and flushes.
   bool flush();
   // Writes the rest of the file (chunk, DataEnd, summary, Footer, magic) and closes it. Returns

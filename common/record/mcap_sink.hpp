@@ -26,6 +26,8 @@ class McapSink {
   // Writes the summary and the footer: the file is complete only after this returned true.
   bool close();
 
+  // Whether the next write() will first write out a chunk (see mcap::Writer::chunk_due).
+  bool chunk_due() const { return writer_.chunk_due(); }
   bool ok() const { return writer_.ok(); }
   const std::string& error() const { return writer_.error(); }
   // Messages written per stream (Stream's order).

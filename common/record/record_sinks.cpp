@@ -60,6 +60,12 @@ void RecordSinks::write_record(const records::Record& r, std::int64_t published_
     if (out.HadError() && failed_.empty()) failed_ = dir_.records();
   }
   check(records_, dir_.records());
+  // records.pb reaches the disk before each chunk of run.mcap does: a supervisor killed mid-run
+  // leaves in records.pb at least what run.mcap holds, so `swarm export` can rebuild it.
+  if (mcap_.chunk_due()) {
+    records_.flush();
+    check(records_, dir_.records());
+  }
   mcap_.write(r);
   if (!mcap_.ok() && failed_.empty()) failed_ = dir_.mcap().string();
 }

@@ -29,9 +29,9 @@ struct SceneSettings {
 // connected) is the full picture. Entities:
 //   agent/ID         a sphere at its position, an arrow along its body x axis (its heading, for
 //                    quadcopters) and its id as text
-//   links            the snapshot's edges as one line list between the agents' positions, coloured
-//                    by weight from blue (lightest) to red (heaviest) (metadata: t_s, lambda2,
-//                    edges, disagreement_m)
+//   links            the snapshot's edges between the agents' positions, in five classes of weight
+//                    from blue (the lightest fifth) to red (the heaviest), each class one line list
+//                    (metadata: t_s, lambda2, edges, disagreement_m, weight_min, weight_max)
 //   agreement        the mean of the agents' consensus states (green)
 //   initial_average  the ideal agreement point (white, translucent)
 //   slot/ID          with a formation: the agent's slot, the agreement point plus its offset

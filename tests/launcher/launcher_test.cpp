@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "common/mcap/writer.hpp"
 #include "common/scenario/proto_util.hpp"
 #include "common/scenario/scenario.hpp"
 #include "launcher/launcher.hpp"
@@ -221,6 +222,8 @@ TEST(Launcher, ARunStoppedAtTheWallLimitSaysSoAndASummaryCutShortIsReplaced) {
       s.set_converged(true);
       s.set_end_reason("interrupted");
       ASSERT_TRUE(spec.dir.write_summary(to_json(s)));
+      mcap::Writer w;  // a supervisor that wrote its summary had ended run.mcap first
+      ASSERT_TRUE(w.open(spec.dir.mcap()) && w.close());
     }
     l.stop();
     for (AgentId id = 1; id <= 3; ++id) std::ofstream(spec.dir.agent_stats(id)) << "{}";
@@ -230,6 +233,46 @@ TEST(Launcher, ARunStoppedAtTheWallLimitSaysSoAndASummaryCutShortIsReplaced) {
     EXPECT_FALSE(s.converged()) << cut_short;
     EXPECT_NE(s.end_reason().find("did not finish in time"), std::string::npos) << s.end_reason();
     EXPECT_FALSE(std::filesystem::exists(spec.dir.summary().string() + ".tmp"));
+    std::filesystem::remove_all(spec.dir.path());
+  }
+}
+
+// run.mcap ends with a footer only when the supervisor closed it. A summary that says converged
+// over a run.mcap cut short (or missing) is amended, and the run exits 3 naming the file; a
+// supervisor that died leaves a summary that names it too.
+TEST(Launcher, ARunMcapCutShortMakesTheRecordIncompleteNamingIt) {
+  for (const bool supervisor_died : {false, true}) {
+    FakeProcesses procs;
+    ManualClock clock;
+    const LaunchSpec spec = spec_for("");
+    Launcher l(spec, procs, clock, [] { return true; });
+    l.start();
+    {
+      mcap::Writer w;
+      ASSERT_TRUE(w.open(spec.dir.mcap()) && w.close());
+    }
+    std::filesystem::resize_file(spec.dir.mcap(), 40);  // as a supervisor killed mid-run leaves it
+    if (!supervisor_died) {
+      records::Summary s;
+      s.set_converged(true);
+      s.set_end_reason("converged");
+      ASSERT_TRUE(spec.dir.write_summary(to_json(s)));
+    }
+    procs.exit_child("supervisor", 0, supervisor_died ? signalled(SIGKILL) : exited(0));
+    ASSERT_TRUE(l.poll(false).has_value());
+    l.stop();
+    for (AgentId id = 1; id <= 3; ++id) std::ofstream(spec.dir.agent_stats(id)) << "{}";
+    const Launcher::Outcome out = l.conclude(clock.now_s());
+    EXPECT_EQ(out.exit_code, supervisor_died ? 1 : 3);
+    const records::Summary s = read_summary(spec.dir);
+    EXPECT_FALSE(s.converged());
+    EXPECT_NE(s.end_reason().find("record incomplete: run.mcap: no footer"), std::string::npos)
+        << s.end_reason();
+    std::string said;
+    for (const std::string& line : out.lines) said += line + "\n";
+    if (!supervisor_died) {
+      EXPECT_NE(said.find("run.mcap"), std::string::npos) << said;
+    }
     std::filesystem::remove_all(spec.dir.path());
   }
 }

@@ -278,11 +278,16 @@ TEST(McapWriter, AChunkClosesOnceItSpansTheTimeOrHoldsTheBytesAndOnFlush) {
   w.write(c, 0, "a");
   w.write(c, 999, "b");
   EXPECT_EQ(w.chunk_count(), 0u);
-  w.write(c, 1000, "c");  // spans 1000 ns: out
+  EXPECT_FALSE(w.chunk_due());
+  w.write(c, 1000, "c");  // spans 1000 ns: due, written out with the next message
+  EXPECT_TRUE(w.chunk_due());
+  EXPECT_EQ(w.chunk_count(), 0u);
+  w.write(c, 1001, std::string(250, 'x'));  // holds 200 bytes: due
   EXPECT_EQ(w.chunk_count(), 1u);
-  w.write(c, 1001, std::string(250, 'x'));  // 200 bytes: out
-  EXPECT_EQ(w.chunk_count(), 2u);
+  EXPECT_TRUE(w.chunk_due());
   w.write(c, 1002, "d");
+  EXPECT_EQ(w.chunk_count(), 2u);
+  EXPECT_FALSE(w.chunk_due());
   ASSERT_TRUE(w.flush());
   EXPECT_EQ(w.chunk_count(), 3u);
   ASSERT_TRUE(w.flush());  // nothing open: no empty chunk

@@ -153,17 +153,22 @@ TEST(Scene, DrawsAgentsLinksTheAgreementPointTheIdealAndTheSlots) {
   EXPECT_NEAR(field(o, "w").number_value(), std::sqrt(0.5), 1e-6);
   EXPECT_EQ(field(field(a2, "texts").list_value().values(0), "text").string_value(), "2");
 
-  // Links between positions; the heavier edge is redder than the lighter.
-  const pb::Value& line = field(e["links"], "lines").list_value().values(0);
-  EXPECT_EQ(field(line, "type").number_value(), 2.0);  // LINE_LIST
-  const auto& points = field(line, "points").list_value();
-  ASSERT_EQ(points.values_size(), 4);
-  EXPECT_EQ(vec3(points.values(0)), Vec3(0, 0, 10));
-  EXPECT_EQ(vec3(points.values(3)), Vec3(0, 4, 10));
-  const auto& colours = field(line, "colors").list_value();
-  ASSERT_EQ(colours.values_size(), 4);
-  EXPECT_LT(field(colours.values(0), "r").number_value(),
-            field(colours.values(2), "r").number_value());
+  // Links between positions, one line list per class of weight; the heavier edge is redder.
+  const auto& lines = field(e["links"], "lines").list_value();
+  ASSERT_EQ(lines.values_size(), 2);  // 0.5 and 4.0: the lightest and the heaviest class
+  const auto segment = [&](int line) {
+    const pb::Value& l = lines.values(line);
+    EXPECT_EQ(field(l, "type").number_value(), 2.0);  // LINE_LIST
+    const auto& points = field(l, "points").list_value();
+    const auto& indices = field(l, "indices").list_value();
+    EXPECT_EQ(indices.values_size(), 2);
+    return std::pair{vec3(points.values(static_cast<int>(indices.values(0).number_value()))),
+                     vec3(points.values(static_cast<int>(indices.values(1).number_value())))};
+  };
+  EXPECT_EQ(segment(0), std::pair(Vec3(0, 0, 10), Vec3(4, 0, 10)));  // 1-2, weight 0.5
+  EXPECT_EQ(segment(1), std::pair(Vec3(4, 0, 10), Vec3(0, 4, 10)));  // 2-3, weight 4
+  EXPECT_LT(field(field(lines.values(0), "color"), "r").number_value(),
+            field(field(lines.values(1), "color"), "r").number_value());
 
   // The agreement point is the mean of the consensus states; slots are about it.
   const Vec3 mean(1, 2, 1);
@@ -187,6 +192,7 @@ TEST(Scene, AnAgentWithoutAFinitePositionAndItsEdgesAreLeftOut) {
   EXPECT_EQ(field(e["agent/3"], "arrows").list_value().values_size(), 0);  // a particle
   const pb::Value& line = field(e["links"], "lines").list_value().values(0);
   EXPECT_EQ(field(line, "points").list_value().values_size(), 2);  // only 1-3
+  EXPECT_EQ(field(line, "indices").list_value().values_size(), 2);
   // The mean of 1's and 3's consensus states (2's position is not finite).
   const pb::Value& agreement = field(e["agreement"], "spheres").list_value().values(0);
   EXPECT_EQ(vec3(field(field(agreement, "pose"), "position")), Vec3(1, 0, 0));

@@ -13,33 +13,13 @@
 #include "common/scenario/scenario.hpp"
 #include "common/sim/in_process_swarm.hpp"
 #include "tests/mcap/validate.hpp"
+#include "tests/sim/six_agents.hpp"
 
 namespace qswarm {
 namespace {
 
 namespace fs = std::filesystem;
 using test::validate_mcap;
-
-// Six point agents on the complete graph (scenarios/faults_six.txtpb), and a formation of four
-// quadcopters so that the scene has headings and slots.
-const char* kSix = R"(
-name: "six"
-agents { id: 1 position { x: 4 y: 17 z: 24 } }
-agents { id: 2 position { x: 18 y: 10 z: 32 } }
-agents { id: 3 position { x: 15 y: 10 z: 26 } }
-agents { id: 4 position { x: 4 y: 2 z: 35 } }
-agents { id: 5 position { x: 30 y: 5 z: 3 } }
-agents { id: 6 position { x: 13 y: 10 z: 0 } }
-mode: PARTICLE
-law: EDGE_FLOW
-weight { policy: UNWEIGHTED }
-topology { policy: PROXIMITY threshold_m: 1000 }
-convergence { tolerance_m: 1e-6 hold_s: 1 }
-duration_s: 30
-seed: 3
-)";
-
-RunConfig six() { return resolve_scenario(parse_scenario_text(kSix, "six")); }
 
 fs::path scratch(const std::string& name) {
   const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
