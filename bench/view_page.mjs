@@ -27,7 +27,7 @@ const browser = await puppeteer.launch({ executablePath: '/usr/bin/chromium', he
 const page = await browser.newPage();
 await page.setViewport({ width: 1400, height: 820 });
 await page.goto(url);
-await sleep(5000);
+await sleep(3000);  // the page loads and gets its snapshot
 const cdp = await page.createCDPSession();
 await cdp.send('Performance.enable');
 const metric = async () => Object.fromEntries((await cdp.send('Performance.getMetrics')).metrics

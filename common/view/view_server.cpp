@@ -75,7 +75,8 @@ std::string ViewCounts::json() const {
       {"oversized", oversized},
       {"flooded", flooded},
       {"refused_ops", refused_ops},
-      {"closed_for_abuse", closed_for_abuse}};
+      {"closed_for_abuse", closed_for_abuse},
+      {"refused_hosts", refused_hosts}};
   w.raw("{");
   bool first = true;
   for (const auto& [k, v] : fields) {
@@ -119,7 +120,7 @@ std::shared_ptr<const std::string> share(std::string s) {
 struct Counters {
   std::atomic<std::uint64_t> connections{0}, refused_connections{0}, http_requests{0}, not_found{0},
       sessions{0}, open_sessions{0}, refused_upgrades{0}, frames_sent{0}, frames_dropped{0},
-      malformed{0}, oversized{0}, flooded{0}, refused_ops{0}, closed_for_abuse{0};
+      malformed{0}, oversized{0}, flooded{0}, refused_ops{0}, closed_for_abuse{0}, refused_hosts{0};
 };
 
 }  // namespace
@@ -175,6 +176,7 @@ class ViewServer::Impl {
   bool done_ = false;
   std::string session_id_;
   Counters counts_;
+  bool loopback_ = true;  // listening on a loopback address (set by start())
   std::atomic<std::size_t> open_connections_{0};
   std::list<std::shared_ptr<WsSession>> sessions_;
   std::list<std::weak_ptr<HttpSession>> http_;  // to close idle keep-alive connections at stop
@@ -193,6 +195,25 @@ class ViewServer::Impl {
   }
   void accept();
   void tick();
+  // Whether a request's Host header names this server: an IP address (any: a user who listens
+  // elsewhere reaches it by address) or localhost, with or without a port. A server listening on
+  // loopback answers nothing else; one listening elsewhere also answers names (a user's hostname).
+  bool host_allowed(const std::string& host) const {
+    std::string h = host;
+    if (!h.empty() && h.front() == '[') {  // [v6]:port
+      const std::size_t close = h.find(']');
+      if (close == std::string::npos) return false;
+      h = h.substr(1, close - 1);
+    } else if (const std::size_t colon = h.find(':');
+               colon != std::string::npos && h.find(':', colon + 1) == std::string::npos) {
+      h = h.substr(0, colon);
+    }
+    if (h == "localhost") return true;
+    beast::error_code ec;
+    asio::ip::make_address(h, ec);
+    if (!ec) return true;
+    return !loopback_;
+  }
   void remove(WsSession* s);
   using HttpReply = std::variant<http::response<http::string_body>, http::response<http::file_body>,
                                  http::response<http::empty_body>>;
@@ -451,6 +472,21 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
     }
     ++server_.counts_.http_requests;
     http::request<http::empty_body> req = parser_->release();
+    if (!server_.host_allowed(std::string(req[http::field::host]))) {
+      // DNS rebinding: a page of some site whose name now points at 127.0.0.1 would read the view
+      // through the user's browser; its requests name that site, not this host.
+      ++server_.counts_.refused_hosts;
+      server_.log_once("host", "view: refused a request for host '" +
+                                   std::string(req[http::field::host]).substr(0, 80) +
+                                   "' (not this host's address or localhost)");
+      http::response<http::string_body> res{http::status::forbidden, req.version()};
+      res.set(http::field::content_type, "text/plain");
+      res.body() = "this view answers to its address or localhost only\n";
+      res.prepare_payload();
+      res.keep_alive(false);
+      respond(ViewServer::Impl::HttpReply(std::move(res)));
+      return;
+    }
     if (websocket::is_upgrade(req)) {
       const std::string proto =
           choose_subprotocol(std::string(req[http::field::sec_websocket_protocol]));
@@ -523,6 +559,7 @@ void ViewServer::Impl::start() {
                           ": " + ec.message());
   }
   port_ = acceptor_->local_endpoint().port();
+  loopback_ = addr.is_loopback();
   accept();
   timer_->expires_after(std::chrono::milliseconds(0));
   timer_->async_wait([this](beast::error_code e) {
@@ -810,6 +847,7 @@ ViewCounts ViewServer::Impl::counts() const {
   c.flooded = k.flooded;
   c.refused_ops = k.refused_ops;
   c.closed_for_abuse = k.closed_for_abuse;
+  c.refused_hosts = k.refused_hosts;
   return c;
 }
 

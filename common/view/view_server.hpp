@@ -55,6 +55,7 @@ struct ViewCounts {
   std::uint64_t flooded = 0;         // client frames beyond the rate
   std::uint64_t refused_ops = 0;     // ops we do not serve, bad subscriptions, binary frames
   std::uint64_t closed_for_abuse = 0;
+  std::uint64_t refused_hosts = 0;  // a Host header that names another site (DNS rebinding)
   std::string json() const;
 };
 

@@ -42,6 +42,35 @@ refused(['run', '--agents', '2', '--out', out, '--domain', domain, '--view', Str
 check(!fs.existsSync(out), 'nothing was flown for it (no run directory)');
 blocker.close();
 
+// ---- Ctrl-C during a run with a view and a client that never reads ----
+{
+  const dirC = freshDir('view-interrupted');
+  const run = spawn(swarm, ['run', '--agents', '8', '--seed', '4', '--quiet', '--duration', '120',
+    '--time-scale', '0.5', '--out', dirC, '--domain', domain, '--view', '0'], { stdio: 'ignore' });
+  const exited = new Promise((r) => run.on('exit', (c, sig) => r(sig ? 128 : c)));
+  const urlFile = path.join(dirC, 'view.url');
+  await until(() => fs.existsSync(urlFile) && fs.readFileSync(urlFile, 'utf8').trim(), 60000, 'view.url');
+  const url = fs.readFileSync(urlFile, 'utf8').trim();
+  const stuck = new WebSocket(url.replace('http', 'ws'), ['foxglove.websocket.v1']);
+  await until(() => stuck.readyState === 1, 5000, 'a client');
+  stuck.send(JSON.stringify({ op: 'subscribe', subscriptions: [1, 2, 3, 4, 5].map((c) => ({ id: c, channelId: c })) }));
+  await until(() => fs.existsSync(path.join(dirC, 'telemetry.csv')) &&
+    fs.readFileSync(path.join(dirC, 'telemetry.csv'), 'utf8').split('\n').length > 50, 60000, 'the swarm flying');
+  stuck._socket.pause();
+  run.kill('SIGINT');
+  const code = await exited;
+  const summary = JSON.parse(fs.readFileSync(path.join(dirC, 'summary.json'), 'utf8'));
+  check(code === 1 && summary.end_reason === 'interrupted',
+    `Ctrl-C with a view open: exit ${code}, end_reason ${summary.end_reason}`);
+  const pids = fs.readFileSync(path.join(dirC, 'processes.csv'), 'utf8').trim().split('\n').slice(1)
+    .map((l) => Number(l.split(',').pop()));
+  const alive = pids.filter((p) => { try { process.kill(p, 0); return true; } catch { return false; } });
+  check(pids.length === 9 && alive.length === 0, `no process left of ${pids.length} (${alive.join(',')})`);
+  const log = fs.readFileSync(path.join(dirC, 'supervisor.log'), 'utf8');
+  check(/live view: \{"connections"/.test(log), 'the view counts are in supervisor.log');
+  stuck.terminate();
+}
+
 // ---- the replay ----
 const view = spawn(swarm, ['view', dir, '--port', '0', '--speed', '2'], { stdio: ['ignore', 'pipe', 'pipe'] });
 let said = '';

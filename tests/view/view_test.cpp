@@ -474,13 +474,14 @@ bool eventually(const std::function<bool()>& pred, double timeout_s = 10.0) {
   return pred();
 }
 
-std::string http_get(std::uint16_t port, const std::string& target, int* status = nullptr) {
+std::string http_get(std::uint16_t port, const std::string& target, int* status = nullptr,
+                     const std::string& host = "127.0.0.1") {
   asio::io_context ioc;
   beast::tcp_stream s(ioc);
   tcp::resolver r(ioc);
   s.connect(r.resolve("127.0.0.1", std::to_string(port)));
   http::request<http::empty_body> req{http::verb::get, target, 11};
-  req.set(http::field::host, "127.0.0.1");
+  req.set(http::field::host, host);
   http::write(s, req);
   beast::flat_buffer b;
   http::response<http::string_body> res;
@@ -527,6 +528,17 @@ TEST_F(ViewServerTest, ServesThePageAndOnlyItsFilesOverHttp) {
     EXPECT_EQ(status, 404) << t;
   }
   EXPECT_NE(http_get(server.port(), "/stats", &status).find("\"not_found\":5"), std::string::npos);
+  // A site's name that points at this host (DNS rebinding) is refused; addresses and localhost
+  // are served.
+  for (const char* host : {"localhost", "127.0.0.1:8765", "[::1]:8765", "localhost:1"}) {
+    http_get(server.port(), "/", &status, host);
+    EXPECT_EQ(status, 200) << host;
+  }
+  for (const char* host : {"evil.example", "evil.example:8765", "127.0.0.1.evil.example", "[::1"}) {
+    http_get(server.port(), "/", &status, host);
+    EXPECT_EQ(status, 403) << host;
+  }
+  EXPECT_EQ(server.counts().refused_hosts, 4u);
 }
 
 TEST_F(ViewServerTest, APageGetsASnapshotThenFramesAndTheEnd) {
