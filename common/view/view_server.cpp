@@ -232,7 +232,7 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
         tokens_(server.opts_.client_messages_per_s * 5.0),
         last_s_(steady_s()) {}
 
-  void run(http::request<http::empty_body> req) {
+  void run(const http::request<http::empty_body>& req) {
     ws_.set_option(websocket::stream_base::timeout::suggested(beast::role_type::server));
     const std::string proto = subprotocol_;
     ws_.set_option(websocket::stream_base::decorator([proto](websocket::response_type& res) {
@@ -510,7 +510,7 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
       stream_.socket().set_option(asio::socket_base::send_buffer_size(64 * 1024), ignored);
       auto ws = std::make_shared<WsSession>(server_, stream_.release_socket(), proto);
       server_.sessions_.push_back(ws);
-      ws->run(std::move(req));
+      ws->run(req);
       return;
     }
     respond(server_.serve_http(std::string(req.target()), req));
