@@ -335,6 +335,9 @@ function setReplay(r) {
   scrub.max = r.duration;
   if (!scrubbing) scrub.value = r.t;
   $('play').innerHTML = r.playing ? '&#9646;&#9646;' : '&#9654;';
+  const speed = $('speed');
+  if (![...speed.options].some((o) => Number(o.value) === r.speed)) speed.add(new Option(`${r.speed}x`, r.speed));
+  speed.value = String(r.speed);
   $('replay-t').textContent = `${r.t.toFixed(1)} / ${r.duration.toFixed(1)} s`;
   $('replay-note').textContent = r.note || '';
 }
