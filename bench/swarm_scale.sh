@@ -17,6 +17,8 @@
 # Usage: bench/swarm_scale.sh [N ...]        (default: 8 32 64 128)
 # Environment: SCENARIOS="all range ring" DURATION=30 TIME_SCALE=1 RATE_HZ=50 BUILD_DIR=build
 #              SECURE=1: DDS-Security on every process (a `swarm keys` keystore per size)
+#              DISCOVERY=simple|server: transport.discovery (unset: the scenario's default, a
+#              Discovery Server above 32 plain agents)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 BUILD=${BUILD_DIR:-build}
@@ -57,6 +59,9 @@ for kind in "${KINDS[@]}"; do
         ;;
       *) echo "swarm_scale: unknown scenario $kind (all, range, ring)" >&2; exit 2 ;;
     esac
+    if [[ -n ${DISCOVERY:-} ]]; then
+      echo "transport { discovery: ${DISCOVERY^^} }" >>"$scen"
+    fi
     secure=()
     if [[ ${SECURE:-0} == 1 ]]; then
       ks="$OUT/keys-$n"  # random agents are ids 1..N whatever the scenario
@@ -90,6 +95,7 @@ for kind in "${KINDS[@]}"; do
     fi
     IFS=$'\t' read -r cpu late p50 p99 per_s cpu_per disc rss end <<<"$row"
     [[ ${SECURE:-0} == 1 ]] && kind_shown="$kind, secure" || kind_shown=$kind
+    [[ -n ${DISCOVERY:-} ]] && kind_shown="$kind_shown, ${DISCOVERY,,}"
     awk -v n="$n" -v k="$kind_shown" -v hz="$RATE_HZ" -v ts="$TIME_SCALE" -v cpu="$cpu" -v late="$late" \
       -v p50="$p50" -v p99="$p99" -v s="$per_s" -v cs="$cpu_per" -v d="$disc" -v rss="$rss" \
       -v sup="$sup_cpu" -v end="$end" 'BEGIN {

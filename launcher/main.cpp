@@ -1,6 +1,7 @@
 // swarm: launch a swarm of agent processes plus a supervisor (`swarm run`), analyse a scenario's
 // initial graph without flying (`swarm inspect`), draw a run (`swarm plot`), rebuild its run.mcap
-// (`swarm export`), or regenerate the paper's figures and report (`swarm paper`).
+// (`swarm export`), regenerate the paper's figures and report (`swarm paper`), or draw the three
+// laws under an insider's attacks (`swarm resilience`).
 #include <sys/wait.h>
 #include <unistd.h>
 #include <CLI/CLI.hpp>
@@ -159,7 +160,9 @@ int run(const RunOptions& opt) {
   // Every process gets its own participant id, from a block whose ports are free on this host (so
   // hundreds of processes come up without Fast DDS shifting ports, and two runs on one domain do
   // not collide); a domain without room is the user's to change.
-  const int participants = static_cast<int>(rc.agents.size()) + 1;
+  // The supervisor, the agents and, with a Discovery Server, the server (the block's last id).
+  const bool own_server = rc.transport.discovery == Discovery::kServer;
+  const int participants = static_cast<int>(rc.agents.size()) + 1 + (own_server ? 1 : 0);
   std::optional<PortReservation> ports;
   std::optional<int> base;
   try {
@@ -176,7 +179,7 @@ int run(const RunOptions& opt) {
   }
   if (!base) {
     std::cerr << "swarm run: --domain " << rc.transport.domain_id << ": no room for "
-              << rc.agents.size() + 1
+              << participants
               << " more DDS participants on this host (other runs hold its ports); choose "
                  "another --domain (0 to 51)\n";
     return 2;
@@ -209,6 +212,14 @@ int run(const RunOptions& opt) {
   spec.stop_on_agent_exit = opt.stop_on_agent_exit;
   spec.ignore_sigterm = opt.ignore_sigterm;
   spec.participant_base = *base;
+  if (own_server) {
+    spec.discovery_id = *base + participants - 1;
+    spec.discovery_ready = [domain = rc.transport.domain_id, id = spec.discovery_id,
+                            iface = rc.transport.interface] {
+      // Its ports taken: the server (the only process given this id) is listening.
+      return !participant_ports_problem(domain, id, iface).empty();
+    };
+  }
   spec.view_port = opt.view_port;
   spec.view_listen = opt.view_listen;
   if (!dir.write_scenario(rc.resolved)) {
@@ -357,6 +368,20 @@ int export_run(const std::string& run_dir, const std::string& out_flag) {
     return 2;
   }
   return 0;
+}
+
+// `swarm resilience`: swarm-preview flies the scenario under every law and attack (the bare laws in
+// lockstep); python -m qswarm.resilience draws them and prints the table.
+int resilience(const std::string& scenario, const std::string& out, int liar) {
+  std::vector<std::string> args = {"--swarm",    (bin_dir() / "swarm").string(),
+                                   "--preview",  (bin_dir() / "swarm-preview").string(),
+                                   "--scenario", scenario,
+                                   "--out",      out};
+  if (liar > 0) {
+    args.emplace_back("--liar");
+    args.push_back(std::to_string(liar));
+  }
+  return exec_python("swarm resilience", "resilience", args);
 }
 
 struct PaperOptions {
@@ -550,6 +575,17 @@ int main(int argc, char** argv) {
   paper_cmd->add_option("--domain", po.domain, "DDS domain id for the runs")
       ->check(CLI::Range(0, 51))
       ->excludes(paper_from);
+  std::string res_scenario = "scenarios/insider_seven.txtpb", res_out = "docs/resilience";
+  int res_liar = 0;
+  CLI::App* res_cmd = app.add_subcommand(
+      "resilience", "the three laws under one lying insider's attacks: figure and table (docs)");
+  res_cmd
+      ->add_option("scenario", res_scenario,
+                   "scenario (default scenarios/insider_seven.txtpb: 7 agents, complete graph)")
+      ->check(CLI::ExistingFile);
+  res_cmd->add_option("--out", res_out, "figure directory (default docs/resilience)");
+  res_cmd->add_option("--liar", res_liar, "the lying agent's id (default the highest)")
+      ->check(CLI::Range(1, 1000000));
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -563,6 +599,7 @@ int main(int argc, char** argv) {
                         "--days", std::to_string(keys_days)});
   if (*paper_cmd) return paper(po);
   if (*export_cmd) return export_run(export_dir, export_out);
+  if (*res_cmd) return resilience(res_scenario, res_out, res_liar);
   if (*view_cmd) return view_command(vo);
   return inspect_scenario(inspect_path, json);
 }

@@ -36,7 +36,7 @@ RecordSinks::RecordSinks(const RunDir& dir, SceneSettings scene)
   telemetry_ << "stamp_s,id,seq,phase,mode,qx,qy,qz,px,py,pz,vx,vy,vz,qw,qxr,qyr,qzr,w1,w2,w3,w4,"
                 "total_weight,links,age_ms\n";
   graph_ << "t_s,agents,edges,lambda2,components,disagreement_m,mean_drift_m,min_separation_m,"
-            "spread_m,edge_list\n";
+            "spread_m,edge_list,min_degree,robust,trimmed_disagreement_m\n";
   events_ << "t_s,kind,agent,detail\n";
   telemetry_ << std::setprecision(10);
   graph_ << std::setprecision(10);
@@ -96,6 +96,7 @@ void RecordSinks::sample(const StateMessage& m, double age_ms) {
   s->add_orientation(o.z());
   for (int i = 0; i < 4; ++i) s->add_rotors(m.rotors_radps[i]);
   s->set_mode(static_cast<std::uint32_t>(m.mode));
+  s->set_trimmed(m.trimmed);
   write_record(r, m.wall_ns);
 }
 
@@ -105,7 +106,9 @@ void RecordSinks::graph(const records::GraphSnapshot& g) {
     list << (list.tellp() > 0 ? ";" : "") << e.a() << '-' << e.b() << ':' << e.weight();
   graph_ << g.t_s() << ',' << g.agents() << ',' << g.edges_size() << ',' << g.lambda2() << ','
          << g.components() << ',' << g.disagreement_m() << ',' << g.mean_drift_m() << ','
-         << g.min_separation_m() << ',' << g.spread_m() << ",\"" << list.str() << "\"\n";
+         << g.min_separation_m() << ',' << g.spread_m() << ",\"" << list.str() << "\","
+         << g.min_degree() << ',' << (g.has_robust() ? int(g.robust()) : -1) << ','
+         << g.trimmed_disagreement_m() << '\n';
   check(graph_, dir_.graph());
   records::Record r;
   *r.mutable_graph() = g;

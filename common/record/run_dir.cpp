@@ -120,6 +120,7 @@ std::vector<RunDir::File> RunDir::files() {
       {kSupervisorReady, "written by the supervisor once its reader is up"},
       {kSupervisorLog, "the supervisor's log"},
       {kSupervisorOut, "the supervisor's stdout, with --quiet"},
+      {kDiscoveryOut, "the run's Discovery Server's output (transport.discovery SERVER)"},
       {kPlots, "swarm plot's figures (a directory; not written by the run)"},
       {"agent-N.log", "an agent's log"},
       {"agent-N.out",

@@ -52,6 +52,7 @@ class RunDir {
   std::filesystem::path supervisor_ready() const { return file(kSupervisorReady); }
   std::filesystem::path supervisor_log() const { return file(kSupervisorLog); }
   std::filesystem::path supervisor_out() const { return file(kSupervisorOut); }
+  std::filesystem::path discovery_out() const { return file(kDiscoveryOut); }
   std::filesystem::path plots() const { return file(kPlots); }
   std::filesystem::path agent_log(AgentId id) const;
   // The agent's process output: its first life's, or the k-th restart's.
@@ -102,6 +103,7 @@ class RunDir {
   static constexpr const char* kSupervisorReady = "supervisor.ready";
   static constexpr const char* kSupervisorLog = "supervisor.log";
   static constexpr const char* kSupervisorOut = "supervisor.out";
+  static constexpr const char* kDiscoveryOut = "discovery.out";
   static constexpr const char* kPlots = "plots";
 
  private:

@@ -30,6 +30,8 @@ struct RunTally {
   std::vector<double> detect_s;  // planned kill -> departure seen
   // Fault counters per agent incarnation (an incarnation's counters only grow).
   std::map<std::pair<AgentId, std::int64_t>, FaultCounters> fault_counts;
+  // Law W_MSR: its condition over the run (trimmed is summed from the agents' last samples).
+  std::optional<records::ResilienceOverTime> resilience;
 };
 
 struct RunEnd {

@@ -103,6 +103,56 @@ TEST(Launcher, StartsNoAgentWhenTheSupervisorNeverListens) {
   EXPECT_EQ(procs.children().size(), 1u);
 }
 
+TEST(Launcher, ARunsOwnDiscoveryServerStartsFirstAndEveryParticipantIsToldItsAddress) {
+  FakeProcesses procs;
+  ManualClock clock;
+  LaunchSpec spec = spec_for("transport { domain_id: 3 }");
+  spec.participant_base = 10;
+  spec.discovery_id = 14;  // the block's last id: supervisor 10, agents 11..13
+  int polls = 0;
+  spec.discovery_ready = [&] { return ++polls > 3; };  // listening after a few polls
+  Launcher l(spec, procs, clock, [] { return true; });
+  l.start();
+  ASSERT_EQ(procs.children().size(), 5u);
+  EXPECT_EQ(procs.children()[0].role, "discovery");
+  EXPECT_EQ(procs.children()[1].role, "supervisor");
+  // Discovery port of id 14 on domain 3: 7400 + 1100 x 3 + 10 + 2 x 14.
+  const std::string address = "127.0.0.1:10738";
+  EXPECT_TRUE(has(procs.argv_[0], "14"));     // --participant-id
+  EXPECT_TRUE(has(procs.argv_[0], "10738"));  // --port
+  for (std::size_t i = 1; i < procs.argv_.size(); ++i)
+    EXPECT_TRUE(has(procs.argv_[i], address)) << procs.children()[i].role;
+  // The supervisor is found by its role, not its place.
+  procs.exit_child("supervisor", 0, exited(0));
+  EXPECT_EQ(l.poll(false), std::string(Launcher::kFinished));
+}
+
+TEST(Launcher, ADiscoveryServerThatNeverListensStartsNothingElse) {
+  FakeProcesses procs;
+  ManualClock clock;
+  LaunchSpec spec = spec_for("");
+  spec.participant_base = 0;
+  spec.discovery_id = 4;
+  spec.discovery_ready = [] { return false; };
+  Launcher l(spec, procs, clock, [] { return true; });
+  EXPECT_THROW(l.start(), std::runtime_error);
+  EXPECT_EQ(procs.children().size(), 1u);
+}
+
+TEST(Launcher, ADiscoveryServerThatCrashesMidRunIsACrashTheRecordMustShow) {
+  FakeProcesses procs;
+  ManualClock clock;
+  LaunchSpec spec = spec_for("");
+  spec.participant_base = 0;
+  spec.discovery_id = 4;
+  Launcher l(spec, procs, clock, [] { return true; });
+  l.start();
+  procs.exit_child("discovery", 0, signalled(SIGSEGV));
+  EXPECT_FALSE(l.poll(false));  // the matched participants fly on
+  ASSERT_EQ(l.problems().size(), 1u);
+  EXPECT_NE(l.problems()[0].find("Discovery Server"), std::string::npos) << l.problems()[0];
+}
+
 TEST(Launcher, AnUnmarkedSigkillIsNotThePlansEvenWithKillsPlanned) {
   FakeProcesses procs;
   ManualClock clock;

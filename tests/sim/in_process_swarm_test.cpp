@@ -2,8 +2,6 @@
 // manual clock over the in-memory network: deterministic, and seconds of swarm in milliseconds.
 #include <gtest/gtest.h>
 
-#include <unistd.h>
-
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -14,6 +12,7 @@
 #include "common/sim/in_process_swarm.hpp"
 #include "common/transport/in_memory_bus.hpp"
 #include "tests/sim/six_agents.hpp"
+#include "tests/sim/recorded_run.hpp"
 
 namespace qswarm {
 namespace {
@@ -133,31 +132,9 @@ TEST(InProcessSwarm, ARunReplaysExactly) {
   for (size_t i = 0; i < a.size(); ++i) EXPECT_EQ(a[i], b[i]);
 }
 
-// A fresh run directory per test and process (ctest runs tests at once).
-RunDir fresh_run_dir() {
-  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-  const std::filesystem::path dir =
-      std::filesystem::temp_directory_path() /
-      ("qswarm-in-process-" + std::string(info->name()) + "-" + std::to_string(::getpid()));
-  std::filesystem::remove_all(dir);
-  return RunDir::claim(dir.string(), "six", "t");
-}
-
-records::Summary summary_of(const RunDir& dir) {
-  const std::optional<records::Summary> s = dir.read_summary();
-  EXPECT_TRUE(s.has_value()) << dir.summary() << " does not read as a summary";
-  return s.value_or(records::Summary{});
-}
-
 std::vector<std::string> event_kinds(const RunDir& dir) {
-  std::ifstream in(dir.events());
   std::vector<std::string> kinds;
-  std::string line;
-  std::getline(in, line);  // header
-  while (std::getline(in, line)) {
-    const auto a = line.find(','), b = line.find(',', a + 1);
-    kinds.push_back(line.substr(a + 1, b - a - 1));
-  }
+  for (const auto& [kind, detail] : events_of(dir)) kinds.push_back(kind);
   return kinds;
 }
 

@@ -188,6 +188,26 @@ TEST(SwarmRun, TwelveSeededRandomAgentsConvergeToTheirInitialAverage) {
   EXPECT_LT(s.average_drift_m(), 1e-3);
 }
 
+// transport.discovery SERVER: the launcher starts the run's own Discovery Server first, on ports of
+// the run's block, every participant discovers through it, and it stops with the run.
+TEST(SwarmRun, ASwarmDiscoveringThroughItsOwnServerConvergesAndTheServerStopsWithIt) {
+  const auto dir = fresh_dir("discovery-server");
+  const auto scen = dir.parent_path() / "discovery-server.txtpb";
+  // The six agents of the fault runs (complete graph), discovering through a server.
+  std::ofstream(scen) << read_file(scenario("faults_six")) << "transport { discovery: SERVER }\n";
+  const Result r = run({bin("swarm"), "run", scen.string(), "--out", dir.string(), "--domain",
+                        test_domain().str(), "--time-scale", "2", "--quiet"},
+                       240.0);
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_TRUE(read_summary(dir).converged());
+  const pid_t server = pid_of(dir, "discovery", 0);
+  ASSERT_GT(server, 0) << read_file(dir / "processes.csv");
+  EXPECT_FALSE(process_alive(server));
+  EXPECT_NE(read_file(dir / "discovery.out").find("6 participants"), std::string::npos)
+      << read_file(dir / "discovery.out");
+  EXPECT_NE(read_file(dir / "scenario.txtpb").find("discovery: SERVER"), std::string::npos);
+}
+
 // scenarios/formation_grid16.txtpb: 16 quadcopter processes agree on a centre (the average of their
 // estimates, position minus slot) and fly to a 4 x 4 grid, 3 m apart, about it, over 8 m radio
 // links, with collision avoidance (on by default for quadcopters).
