@@ -56,6 +56,10 @@ std::vector<std::string> Launcher::supervisor_argv() const {
                                 "--time-scale",
                                 num(spec_.time_scale)};
   if (spec_.progress) a.push_back("--progress");
+  if (spec_.view_port >= 0) {
+    a.insert(a.end(),
+             {"--view", std::to_string(spec_.view_port), "--view-listen", spec_.view_listen});
+  }
   if (spec_.participant_base >= 0) {
     a.push_back("--participant-id");
     a.push_back(std::to_string(spec_.participant_base));

@@ -34,6 +34,8 @@ struct LaunchSpec {
   // Whether the run's Discovery Server listens (its ports are taken); unset: as soon as started.
   std::function<bool()> discovery_ready;
   double discovery_ready_timeout_s = 20.0;
+  int view_port = -1;  // the supervisor serves the live view on this port (-1: no view)
+  std::string view_listen = "127.0.0.1";
 };
 
 // The launcher as a unit: it starts the supervisor and, once it listens, one process per agent;

@@ -26,9 +26,11 @@
 #include "common/scenario/scenario.hpp"
 #include "common/sim/paper_maneuvers.hpp"
 #include "common/transport/port_plan.hpp"
+#include "common/view/view_server.hpp"
 #include "launcher/inspect.hpp"
 #include "launcher/launcher.hpp"
 #include "launcher/process_group.hpp"
+#include "launcher/view_command.hpp"
 
 namespace fs = std::filesystem;
 using namespace qswarm;
@@ -72,6 +74,8 @@ struct RunOptions {
   std::string delay;
   int transport_loss = -1;
   int random_cuts = 0;
+  int view_port = -1;  // --view [PORT]
+  std::string view_listen = "127.0.0.1";
 };
 
 // The scenario file (or random agents) with the command line's overrides and fault shortcuts.
@@ -180,6 +184,17 @@ int run(const RunOptions& opt) {
                  "another --domain (0 to 51)\n";
     return 2;
   }
+  if (opt.view_port >= 0) {
+    // Said now, before anything is flown (port 0: the address alone); the supervisor checks again
+    // when it listens.
+    if (const std::string why =
+            probe_listen(opt.view_listen, static_cast<std::uint16_t>(opt.view_port));
+        !why.empty()) {
+      std::cerr << "swarm run: --view " << opt.view_port << " (--view-listen " << opt.view_listen
+                << "): " << why << "\n";
+      return 2;
+    }
+  }
   RunDir dir;
   try {
     dir = RunDir::claim(opt.out, rc.name, run_timestamp());
@@ -205,6 +220,8 @@ int run(const RunOptions& opt) {
       return !participant_ports_problem(domain, id, iface).empty();
     };
   }
+  spec.view_port = opt.view_port;
+  spec.view_listen = opt.view_listen;
   if (!dir.write_scenario(rc.resolved)) {
     std::cerr << "swarm run: cannot write " << dir.scenario().string() << " (disk full?)\n";
     return 3;
@@ -232,6 +249,12 @@ int run(const RunOptions& opt) {
     launcher.stop();
     dir.write_fallback_summary(rc, e.what(), clock.now_s());
     return 1;
+  }
+  if (opt.view_port >= 0 && opt.quiet) {
+    // Without the live line the supervisor's own announcement goes to supervisor.out.
+    std::ifstream url(dir.path() / "view.url");
+    std::string line;
+    if (std::getline(url, line)) std::cout << "swarm run: live view on " << line << std::endl;
   }
   std::optional<std::string> why;
   while (!(why = launcher.poll(g_signal != 0))) clock.sleep_until(clock.now_s() + 0.02);
@@ -439,6 +462,15 @@ int main(int argc, char** argv) {
   run_cmd->add_option("--grace", ro.grace_s, "seconds between SIGTERM and SIGKILL at teardown")
       ->check(finite_range(0.0, 600.0));
   run_cmd->add_flag("--quiet", ro.quiet, "no progress line");
+  run_cmd
+      ->add_option("--view", ro.view_port,
+                   "serve the live view on http://127.0.0.1:PORT/ (default 8765; 0: any free "
+                   "port; give it after SCENARIO)")
+      ->expected(0, 1)
+      ->default_str("8765")
+      ->check(CLI::Range(0, 65535));
+  run_cmd->add_option("--view-listen", ro.view_listen,
+                      "address the live view listens on (default 127.0.0.1: this host only)");
   run_cmd->add_flag("--stop-on-agent-exit", ro.stop_on_agent_exit,
                     "end the run when any agent exits");
   run_cmd->add_option("--secure", ro.secure,
@@ -484,6 +516,15 @@ int main(int argc, char** argv) {
   run_cmd
       ->add_option("--test-ignore-sigterm", ro.ignore_sigterm, "(tests) agents that ignore SIGTERM")
       ->group("");
+
+  ViewCommandOptions vo;
+  CLI::App* view_cmd = app.add_subcommand(
+      "view", "replay a recorded run in the live view (browser page, Foxglove WebSocket)");
+  view_cmd->add_option("run_dir", vo.run_dir, "run directory written by swarm run")->required();
+  view_cmd->add_option("--speed", vo.speed, "simulated seconds per wall second (default 1)");
+  view_cmd->add_option("--port", vo.port, "port (default 8765; 0: any free port)")
+      ->check(CLI::Range(0, 65535));
+  view_cmd->add_option("--listen", vo.listen, "address (default 127.0.0.1: this host only)");
 
   std::string inspect_path;
   bool json = false;
@@ -559,5 +600,6 @@ int main(int argc, char** argv) {
   if (*paper_cmd) return paper(po);
   if (*export_cmd) return export_run(export_dir, export_out);
   if (*res_cmd) return resilience(res_scenario, res_out, res_liar);
+  if (*view_cmd) return view_command(vo);
   return inspect_scenario(inspect_path, json);
 }

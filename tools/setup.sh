@@ -11,7 +11,7 @@ BUILD_DIR="${1:-build}"
 PACKAGES=(cmake g++ ninja-build pkg-config git
   libeigen3-dev libgtest-dev libgmock-dev libbenchmark-dev
   libfastrtps-dev libfastcdr-dev fastddsgen fastdds-tools
-  libprotobuf-dev protobuf-compiler libspdlog-dev libcli11-dev zlib1g-dev
+  libprotobuf-dev protobuf-compiler libspdlog-dev libcli11-dev zlib1g-dev libboost-dev
   python3 python3-matplotlib python3-numpy
   openssl iproute2 iptables procps)
 # shellcheck disable=SC2206
@@ -30,8 +30,9 @@ if ((${#missing[@]})); then
 fi
 
 # npm packages (node/package.json, pinned by node/package-lock.json) go into node/node_modules,
-# never committed: Foxglove's MCAP reader for the tests. Installed when missing or older than the
-# lockfile. Node and npm come from Debian (nodejs, npm) when the machine has neither.
+# never committed: the live view's page libraries (three, uplot), which the view server serves, and
+# the tests' clients (Foxglove's MCAP reader and WebSocket client, protobufjs, puppeteer-core).
+# Installed when missing or older than the lockfile. Node and npm come from Debian (nodejs, npm) when the machine has neither.
 if [[ ! -d node/node_modules || node/package-lock.json -nt node/node_modules ]]; then
   if ! command -v npm > /dev/null; then
     SUDO=""

@@ -50,7 +50,8 @@ void RecordSinks::check(std::ofstream& f, const std::filesystem::path& path) {
   if (!f && failed_.empty()) failed_ = path.string();
 }
 
-void RecordSinks::write_record(const records::Record& r) {
+void RecordSinks::write_record(const records::Record& r, std::int64_t published_wall_ns) {
+  if (observer_) observer_->on_record(r, published_wall_ns);
   {
     google::protobuf::io::OstreamOutputStream raw(&records_);
     google::protobuf::io::CodedOutputStream out(&raw);
@@ -96,7 +97,7 @@ void RecordSinks::sample(const StateMessage& m, double age_ms) {
   for (int i = 0; i < 4; ++i) s->add_rotors(m.rotors_radps[i]);
   s->set_mode(static_cast<std::uint32_t>(m.mode));
   s->set_trimmed(m.trimmed);
-  write_record(r);
+  write_record(r, m.wall_ns);
 }
 
 void RecordSinks::graph(const records::GraphSnapshot& g) {

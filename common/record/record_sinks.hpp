@@ -6,6 +6,7 @@
 #include "common/core/math.hpp"
 #include "common/record/mcap_sink.hpp"
 #include "common/record/run_dir.hpp"
+#include "common/record/run_observer.hpp"
 #include "common/transport/state_message.hpp"
 #include "proto/records.pb.h"
 
@@ -32,16 +33,20 @@ class RecordSinks {
   void fail(const std::string& path) {
     if (failed_.empty()) failed_ = path;
   }
+  // Shows every record to `observer` as it is written (nullptr: none). Not owned.
+  void set_observer(RunObserver* observer) { observer_ = observer; }
+  RunObserver* observer() const { return observer_; }
   // The first file that failed ("" if none).
   const std::string& failed_file() const { return failed_; }
 
  private:
-  void write_record(const records::Record& r);
+  void write_record(const records::Record& r, std::int64_t published_wall_ns = 0);
   void check(std::ofstream& f, const std::filesystem::path& path);
   RunDir dir_;
   std::ofstream telemetry_, graph_, events_, records_;
   McapSink mcap_;
   std::string failed_;
+  RunObserver* observer_ = nullptr;
 };
 
 }  // namespace qswarm

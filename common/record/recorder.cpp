@@ -380,6 +380,7 @@ std::string Recorder::finish(const std::string& end_reason, double wall_time_s) 
     summary_.set_end_reason(summary_.end_reason() + "; record incomplete: could not write " +
                             std::filesystem::path(sinks_.failed_file()).filename().string());
   }
+  if (RunObserver* o = sinks_.observer()) o->on_summary(summary_);
   const std::string json = to_json(summary_);
   if (!dir_.write_summary(json)) sinks_.fail(dir_.summary().string());
   std::string text = summary_text(summary_, rc_, dir_.str());

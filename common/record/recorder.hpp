@@ -38,6 +38,10 @@ class Recorder {
   // of ms.
   void tick(std::int64_t now_wall_ns);
 
+  // Shows the record to `observer` as it is written, and the summary at the end (nullptr: none).
+  // Not owned; it must outlive the recorder or be unset first.
+  void set_observer(RunObserver* observer) { sinks_.set_observer(observer); }
+
   double time_s() const { return t_s_; }
   bool converged() const { return judge_.converged(); }
   // Why the run is over ("converged", "agreed without agent 5", "duration"), or "" while it goes
