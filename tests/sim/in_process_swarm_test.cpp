@@ -11,8 +11,8 @@
 #include "common/scenario/scenario.hpp"
 #include "common/sim/in_process_swarm.hpp"
 #include "common/transport/in_memory_bus.hpp"
-#include "tests/sim/six_agents.hpp"
 #include "tests/sim/recorded_run.hpp"
+#include "tests/sim/six_agents.hpp"
 
 namespace qswarm {
 namespace {
