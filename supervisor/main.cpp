@@ -92,6 +92,7 @@ int main(int argc, char** argv) {
     std::string reason;
     while (true) {
       const SupervisorLoop::Poll p = sup.poll(g_stop);
+      for (const std::string& w : p.warnings) logger->warn("{}", w);
       if (p.progress) {
         std::printf("%s\n", p.progress->c_str());
         std::fflush(stdout);

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstdint>
+#include <map>
 #include <memory>
 #include <set>
 #include <string>
@@ -29,8 +30,14 @@ struct StateBusOptions {
   // sample takes a slot in the reader), so a stranger publishing many keys on the run's partition
   // cannot fill the reader and blind it. Empty: any id.
   std::vector<AgentId> roster;
-  // The agent this process flies: its reader does not read its own samples (0: none).
+  // The agent this process flies: its reader does not read its own samples (0: none), and its
+  // writers publish into that agent's partition (agent_partition) too, which binds them to it.
   AgentId self = 0;
+  // Under DDS-Security (a keystore), take a sample keyed K only from a writer bound to K
+  // (WriterRegistry): a participant's certificate then says which agent it may speak as. Off for
+  // an identity that many participants share (a compose replica's member identity), whose
+  // permissions can name no single agent.
+  bool bound_writers = true;
 };
 
 // The DDS partitions of a run: the agents' state stream, and the record stream to the supervisor.
@@ -69,6 +76,7 @@ class DdsStateBus final : public NeighborBus {
   // Ids outside the roster whose samples the roster filter dropped (the first 64 of them; their
   // samples are counted in counters().dropped too).
   std::set<AgentId> strangers() const override;
+  std::map<AgentId, std::uint8_t> suspects() const override;
 
   struct Impl;
 

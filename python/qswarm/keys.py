@@ -13,8 +13,16 @@ signs every identity and, as S/MIME (detached, text), the governance and every p
                                   encrypted, read and write access controlled, no stranger admitted
   DIR/<name>/cert.pem, key.pem    one identity per agent id (agent-ID) and one for the supervisor
   DIR/<name>/permissions.xml, .p7s
-      agent-ID     publish and read the state stream, publish the record stream, claim ids
+      agent-ID     publish state and record samples only as agent ID (below), read the state
+                   stream, claim ids
       supervisor   read the record stream only
+
+An agent publishes into a partition of its own id beside its stream's partition (".../a3",
+common/transport/interest.hpp); agent-ID's permissions let it publish state only into the run's
+partition, its own ".../aID" and partitions that name no agent (".../q...", any name not
+starting with "a"), and record samples only into the record partition and its ".../aID". Readers
+take a sample keyed ID only from a writer in ".../aID" (common/dds/writer_registry.hpp), so the
+holder of agent 3's key cannot publish as agent 5.
 
 Keys are written with mode 0600 and never copied into a run directory.
 
@@ -93,13 +101,36 @@ def rule(kind, topics, partitions):
     return (f"        <{kind}><topics>{t}</topics><partitions>{p}</partitions></{kind}>\n")
 
 
+# A run's partition: "qswarm-run-" and the run id's 16 hex digits, exactly (fnmatch patterns, as
+# Fast DDS matches them: a '*' here would also match "qswarm-run-X/a5").
+HEX16 = "[0-9a-f]" * 16
+RUN = "qswarm-run-" + HEX16
+RECORD = "qswarm-record-" + HEX16
+
+
+def allow_rule(*rules):
+    # Fast DDS checks a writer against the first allow_rule naming its topic, with the partitions
+    # of every <publish> in that rule: one rule per topic keeps each topic's partitions its own.
+    domains = (f"<domains><id_range><min>{DOMAINS[0]}</min><max>{DOMAINS[1]}</max></id_range>"
+               "</domains>")
+    return f"      <allow_rule>\n        {domains}\n{''.join(rules)}      </allow_rule>\n"
+
+
+def agent_rules(agent_id):
+    mine = f"a{agent_id}"
+    return (allow_rule(rule("publish", ["qswarm/agent_state"],
+                            [RUN, f"{RUN}/{mine}", f"{RUN}/[!a]*"]),
+                       rule("subscribe", ["qswarm/agent_state", "qswarm/id_claim"],
+                            ["qswarm-run-*"])) +
+            allow_rule(rule("publish", ["qswarm/record"], [RECORD, f"{RECORD}/{mine}"])) +
+            allow_rule(rule("publish", ["qswarm/id_claim"], [RUN])))
+
+
 def permissions_xml(name, not_before, not_after):
     if name == "supervisor":
-        rules = rule("subscribe", ["qswarm/record"], ["qswarm-record-*"])
+        rules = allow_rule(rule("subscribe", ["qswarm/record"], ["qswarm-record-*"]))
     else:
-        rules = (rule("publish", ["qswarm/agent_state", "qswarm/id_claim"], ["qswarm-run-*"]) +
-                 rule("publish", ["qswarm/record"], ["qswarm-record-*"]) +
-                 rule("subscribe", ["qswarm/agent_state", "qswarm/id_claim"], ["qswarm-run-*"]))
+        rules = agent_rules(int(name.split("-", 1)[1]))
     stamp = "%Y-%m-%dT%H:%M:%S"
     return f"""<?xml version="1.0" encoding="UTF-8"?>
 <dds xmlns:xsi="http://www.w3.org/2001/XMLSchema-instance"
@@ -111,10 +142,7 @@ def permissions_xml(name, not_before, not_after):
         <not_before>{not_before.strftime(stamp)}</not_before>
         <not_after>{not_after.strftime(stamp)}</not_after>
       </validity>
-      <allow_rule>
-        <domains><id_range><min>{DOMAINS[0]}</min><max>{DOMAINS[1]}</max></id_range></domains>
-{rules}      </allow_rule>
-      <default>DENY</default>
+{rules}      <default>DENY</default>
     </grant>
   </permissions>
 </dds>
