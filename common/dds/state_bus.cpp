@@ -61,7 +61,7 @@ struct DdsStateBus::Impl : public dds::DataReaderListener {
   dds::DataReader* reader = nullptr;
 
   const WriterRegistry* writers = nullptr;
-  bool bind = false;  // StateBusOptions::bound_writers, on a secure participant
+  bool bind = false;  // a secure participant: samples only from writers bound to their key
   std::array<std::uint8_t, 12> own_prefix{};  // our participant's GUID prefix
 
   mutable std::mutex mu;  // the gate, and what follows
@@ -180,7 +180,7 @@ DdsStateBus::DdsStateBus(DdsParticipant& participant, const StateBusOptions& opt
   d.gate = SampleGate(opts.run_id);
   d.participant = participant.get();
   d.writers = &participant.writers();
-  d.bind = participant.secure() && opts.bound_writers;
+  d.bind = participant.secure();
   std::memcpy(d.own_prefix.data(), d.participant->guid().guidPrefix.value, d.own_prefix.size());
   d.type.register_type(d.participant);
   d.topic = d.participant->create_topic("qswarm/agent_state", d.type.get_type_name(),

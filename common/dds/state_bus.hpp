@@ -32,12 +32,10 @@ struct StateBusOptions {
   std::vector<AgentId> roster;
   // The agent this process flies: its reader does not read its own samples (0: none), and its
   // writers publish into that agent's partition (agent_partition) too, which binds them to it.
+  // Under DDS-Security the reader takes a sample keyed K only from a writer bound to K
+  // (WriterRegistry): with per-agent permissions a certificate then says which agent it speaks
+  // as (a compose keystore's shared member identity may name any: docs/security.md).
   AgentId self = 0;
-  // Under DDS-Security (a keystore), take a sample keyed K only from a writer bound to K
-  // (WriterRegistry): a participant's certificate then says which agent it may speak as. Off for
-  // an identity that many participants share (a compose replica's member identity), whose
-  // permissions can name no single agent.
-  bool bound_writers = true;
 };
 
 // The DDS partitions of a run: the agents' state stream, and the record stream to the supervisor.

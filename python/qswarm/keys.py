@@ -1,6 +1,6 @@
 """swarm keys: a DDS-Security keystore for a scenario, and the check a secure run makes first.
 
-Usage: python3 -m qswarm.keys --swarm BIN SCENARIO --out DIR [--days N]
+Usage: python3 -m qswarm.keys --swarm BIN SCENARIO --out DIR [--days N] [--compose]
        python3 -m qswarm.keys --swarm BIN SCENARIO --check DIR
 (the C++ `swarm keys` subcommand execs this; `swarm run --secure DIR` runs the check)
 
@@ -23,6 +23,12 @@ partition, its own ".../aID" and partitions that name no agent (".../q...", any 
 starting with "a"), and record samples only into the record partition and its ".../aID". Readers
 take a sample keyed ID only from a writer in ".../aID" (common/dds/writer_registry.hpp), so the
 holder of agent 3's key cannot publish as agent 5.
+
+With --compose, for compose replicas that claim their ids at start (and so cannot be handed a
+certificate for one in advance), it writes one `member` identity that every replica shares,
+instead of agent-ID: a member may publish as any agent and claim ids, and a participant without
+a certificate of this authority is kept out. The scenario's ids are not used; the supervisor's
+identity is as above. `swarm run --secure` refuses such a keystore.
 
 Keys are written with mode 0600 and never copied into a run directory.
 
@@ -126,9 +132,19 @@ def agent_rules(agent_id):
             allow_rule(rule("publish", ["qswarm/id_claim"], [RUN])))
 
 
+def member_rules():
+    # Any agent's partitions: replicas learn their id only when they claim it.
+    return allow_rule(rule("publish", ["qswarm/agent_state", "qswarm/id_claim"], ["qswarm-run-*"]),
+                      rule("publish", ["qswarm/record"], ["qswarm-record-*"]),
+                      rule("subscribe", ["qswarm/agent_state", "qswarm/id_claim"],
+                           ["qswarm-run-*"]))
+
+
 def permissions_xml(name, not_before, not_after):
     if name == "supervisor":
         rules = allow_rule(rule("subscribe", ["qswarm/record"], ["qswarm-record-*"]))
+    elif name == MEMBER:
+        rules = member_rules()
     else:
         rules = agent_rules(int(name.split("-", 1)[1]))
     stamp = "%Y-%m-%dT%H:%M:%S"
@@ -161,11 +177,18 @@ def sign(ca_dir, xml_path, p7s_path):
             "-inkey", os.path.join(ca_dir, "private", "ca.key.pem"))
 
 
+MEMBER = "member"
+
+
 def identity_names(ids):
     return [f"agent-{i}" for i in ids] + ["supervisor"]
 
 
-def generate(out, ids, days):
+def is_compose(keystore):
+    return os.path.isdir(os.path.join(keystore, MEMBER))
+
+
+def generate(out, ids, days, compose=False):
     if os.path.exists(out) and os.listdir(out):
         raise KeystoreError(out, "exists and is not empty (a keystore is never overwritten)")
     parent = os.path.dirname(os.path.abspath(out))
@@ -188,7 +211,7 @@ def generate(out, ids, days):
         not_after = now + datetime.timedelta(days=days)
         # Fast DDS reads the permissions' times as local time: a day's margin for any time zone.
         now -= datetime.timedelta(days=1)
-        for name in identity_names(ids):
+        for name in [MEMBER, "supervisor"] if compose else identity_names(ids):
             d = os.path.join(work, name)
             os.makedirs(d, mode=0o700)
             key = os.path.join(d, "key.pem")
@@ -221,6 +244,10 @@ def generate(out, ids, days):
 def check(keystore, ids):
     """Raises KeystoreError naming the first file that is missing, not signed by the keystore's
     authority, or not valid now."""
+    if is_compose(keystore):
+        raise KeystoreError(keystore, "a compose keystore (one member identity for replicas that "
+                            "claim their ids); a secure run needs one identity per agent "
+                            "(swarm keys SCENARIO --out DIR)")
     ca = os.path.join(keystore, "ca.cert.pem")
     need = [ca, os.path.join(keystore, "governance.p7s")]
     for name in identity_names(ids):
@@ -264,10 +291,15 @@ def main(argv=None):
     ap.add_argument("--out", help="write a new keystore here")
     ap.add_argument("--check", help="check this keystore against the scenario")
     ap.add_argument("--days", type=int, default=365, help="validity in days (default 365)")
+    ap.add_argument("--compose", action="store_true",
+                    help="one member identity for compose replicas instead of one per agent")
     try:
         a = ap.parse_args(argv)
     except SystemExit as e:
         return 0 if e.code == 0 else 2
+    if a.compose and a.check:
+        print(f"{PROG}: --compose goes with --out", file=sys.stderr)
+        return 2
     if bool(a.out) == bool(a.check):
         print(f"{PROG}: give --out DIR or --check DIR", file=sys.stderr)
         return 2
@@ -279,7 +311,10 @@ def main(argv=None):
         return 2
     try:
         ids = [int(agent["id"]) for agent in inspect(a.swarm, a.scenario)["agents"]]
-        if a.out:
+        if a.out and a.compose:
+            generate(a.out, ids, a.days, compose=True)
+            print(f"{PROG}: compose keystore (a member identity and the supervisor) in {a.out}")
+        elif a.out:
             generate(a.out, ids, a.days)
             print(f"{PROG}: keystore for {len(ids)} agents and the supervisor in {a.out}")
         else:

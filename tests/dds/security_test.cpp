@@ -205,8 +205,17 @@ TEST_F(Security, ABadKeystoreStopsTheRunBeforeAnythingFliesNamingTheFile) {
   r = secure_run(tampered, "tampered");
   EXPECT_EQ(r.code, 2) << r.output;
   EXPECT_NE(r.output.find("agent-2/permissions.p7s"), std::string::npos) << r.output;
+  // A compose keystore (one member identity, for replicas that claim their ids).
+  const fs::path compose = runs / "compose-keys";
+  const test::Result k = test::run(
+      {test::bin("swarm"), "keys", test::scenario("demo"), "--compose", "--out", compose.string()},
+      60.0);
+  ASSERT_EQ(k.code, 0) << k.output;
+  r = secure_run(compose, "compose");
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_NE(r.output.find("a compose keystore"), std::string::npos) << r.output;
   // Nothing flew: no run directory holds a record.
-  for (const char* name : {"missing", "partial", "tampered"})
+  for (const char* name : {"missing", "partial", "tampered", "compose"})
     EXPECT_FALSE(fs::exists(runs / name / "summary.json")) << name;
 }
 
