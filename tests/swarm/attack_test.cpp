@@ -71,10 +71,11 @@ struct Attacker {
   std::string log;
 };
 
-std::vector<std::string> run_argv(const fs::path& dir, const std::vector<std::string>& extra) {
+std::vector<std::string> run_argv(const fs::path& dir, const std::vector<std::string>& extra,
+                                  const std::string& duration_s = "60") {
   std::vector<std::string> a = {bin("swarm"), "run",      scenario("faults_six"), "--out",
                                 dir.string(), "--domain", test_domain().str(),    "--quiet",
-                                "--duration", "60"};
+                                "--duration", duration_s};
   a.insert(a.end(), extra.begin(), extra.end());
   return a;
 }
@@ -148,6 +149,30 @@ TEST(Attack, APlainRunUnderTheForgedFlowRelayNamesItAndDoesNotConverge) {
   EXPECT_EQ(events, 2);  // two_writers and sequence_jump, once each
   // The relay was refused: the agreement did not move.
   EXPECT_LT(s.average_drift_m(), 1e-6) << drift_line(s);
+}
+
+// The same relay sending four copies of each real sample outpaces agent 1 and takes it over: a
+// plain run cannot prevent that. The swarm follows the forged flows about 42 m away, and either
+// agrees there (edge-flow's own check: "agreed X m from the initial average", which the law keeps)
+// or, jostled by the relay, never agrees to 1e-8 m before the duration. Either way it is not
+// converged, the two writers are named, and the summary says how far the mean moved.
+TEST(Attack, AnOutpacingRelayMovesAPlainRunAndTheRecordSaysHowFar) {
+  const fs::path dir = fresh_dir("attack-relay4");
+  Attacker attacker("attack-relay4", dir,
+                    {"--mode", "relay", "--victim", "1", "--streams", "state", "--copies", "4"});
+  const Result r = run(run_argv(dir, {}, "20"), 240.0);
+  attacker.finish();
+  ASSERT_EQ(r.code, 1) << r.output;
+  const records::Summary s = read_summary(dir);
+  RecordProperty("drift", drift_line(s));
+  EXPECT_FALSE(s.converged());
+  EXPECT_GE(noticed(s, 1, "two_writers").size(), 3u);
+  EXPECT_GT(s.average_drift_m(), 1.0) << drift_line(s);
+  if (s.has_agreed_elsewhere_m()) {
+    EXPECT_EQ(s.end_reason().rfind("agreed ", 0), 0u) << s.end_reason();
+  } else {
+    EXPECT_EQ(s.end_reason(), "duration");
+  }
 }
 
 // (b) Impersonation: agent 3's samples, shifted 50 m, with a newer start time, at four times the
