@@ -2,6 +2,7 @@
 // tick, and what the supervisor spends analysing an N-agent graph.
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -116,6 +117,33 @@ void BM_SpectralAnalysis(benchmark::State& state) {
   state.SetComplexityN(n);
 }
 BENCHMARK(BM_SpectralAnalysis)->RangeMultiplier(2)->Range(4, 256)->Complexity();
+
+// W-MSR's exhaustive (F+1, F+1)-robustness check (F = 1) on n agents, as the recorder runs it once
+// per distinct graph: a circulant graph where each agent links to the `reach` nearest on each
+// side of a ring (reach n/2: the complete graph). Sparse graphs that hold the condition are the
+// slow case: fewer sets satisfy it alone, so more pairs are tried.
+void BM_RobustnessCheck(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  const int reach = static_cast<int>(state.range(1));
+  std::vector<Edge> edges;
+  for (int i = 0; i < n; ++i)
+    for (int j = i + 1; j < n; ++j)
+      if (std::min(j - i, n - (j - i)) <= reach) edges.push_back({i, j, 1.0});
+  bool robust = false;
+  for (auto _ : state) {
+    robust = is_rs_robust(n, edges, 2, 2);
+    benchmark::DoNotOptimize(robust);
+  }
+  state.SetLabel(robust ? "robust" : "not robust");
+}
+BENCHMARK(BM_RobustnessCheck)
+    ->Args({7, 3})
+    ->Args({10, 2})
+    ->Args({10, 5})
+    ->Args({14, 2})
+    ->Args({14, 3})
+    ->Args({14, 7})
+    ->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 }  // namespace qswarm

@@ -12,10 +12,13 @@
 #          agent handles follows its degree, not N.
 # Reports per run: CPU per agent, late ticks, sample age p50/p99 at the supervisor, samples the
 # agents accepted per second, agent CPU per accepted sample, discovery time (until the last agent's
-# barrier released), RSS per agent, and how the run ended.
+# barrier released), RSS per agent, the supervisor's CPU (sampled from /proc every 0.2 s while it
+# runs: its user + system time at the last sample over the run's wall time), and how the run ended.
 # Usage: bench/swarm_scale.sh [N ...]        (default: 8 32 64 128)
 # Environment: SCENARIOS="all range ring" DURATION=30 TIME_SCALE=1 RATE_HZ=50 BUILD_DIR=build
 #              SECURE=1: DDS-Security on every process (a `swarm keys` keystore per size)
+#              DISCOVERY=simple|server: transport.discovery (unset: the scenario's default, a
+#              Discovery Server above 32 plain agents)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 BUILD=${BUILD_DIR:-build}
@@ -29,8 +32,8 @@ RATE_HZ=${RATE_HZ:-50}
 OUT=$BUILD/bench-runs
 mkdir -p "$OUT"
 report() { PYTHONPATH=python /usr/bin/python3 -m qswarm.report "$@"; }
-printf "| agents | scenario | consensus [Hz] | time scale | CPU per agent [%% of a core] | late ticks [%%] | sample age p50 / p99 [ms] | accepted samples [1/s] | CPU per accepted sample [us] | discovery max [s] | RSS per agent [MB] | end |\n"
-printf "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n"
+printf "| agents | scenario | consensus [Hz] | time scale | CPU per agent [%% of a core] | late ticks [%%] | sample age p50 / p99 [ms] | accepted samples [1/s] | CPU per accepted sample [us] | discovery max [s] | RSS per agent [MB] | supervisor CPU [%% of a core] | end |\n"
+printf "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n"
 domain=${DOMAIN:-12}  # one run at a time: each reuses the domain the last one left
 for kind in "${KINDS[@]}"; do
   for n in "${SIZES[@]}"; do
@@ -56,6 +59,9 @@ for kind in "${KINDS[@]}"; do
         ;;
       *) echo "swarm_scale: unknown scenario $kind (all, range, ring)" >&2; exit 2 ;;
     esac
+    if [[ -n ${DISCOVERY:-} ]]; then
+      echo "transport { discovery: ${DISCOVERY^^} }" >>"$scen"
+    fi
     secure=()
     if [[ ${SECURE:-0} == 1 ]]; then
       ks="$OUT/keys-$n"  # random agents are ids 1..N whatever the scenario
@@ -67,7 +73,19 @@ for kind in "${KINDS[@]}"; do
     fi
     "$BUILD"/bin/swarm run "$scen" --agents "$n" --seed 3 --duration "$DURATION" \
       --time-scale "$TIME_SCALE" --out "$dir" --domain "$domain" --quiet "${secure[@]}" \
-      >"$dir.log" 2>&1 || true
+      >"$dir.log" 2>&1 &
+    launcher=$!
+    sup_ticks=0 sup_pid="" started=$(date +%s.%N)
+    while kill -0 "$launcher" 2>/dev/null; do
+      [[ -n $sup_pid ]] || sup_pid=$(awk -F, '$1 == "supervisor" { print $3 }' "$dir/processes.csv" 2>/dev/null || true)
+      if [[ -n $sup_pid ]] && t=$(awk '{ print $14 + $15 }' "/proc/$sup_pid/stat" 2>/dev/null); then
+        sup_ticks=$t
+      fi
+      sleep 0.2
+    done
+    wait "$launcher" || true
+    sup_cpu=$(awk -v t="$sup_ticks" -v hz="$(getconf CLK_TCK)" -v s="$started" -v e="$(date +%s.%N)" \
+      'BEGIN { printf "%.1f", 100 * t / hz / (e - s) }')
     if ! row=$(report "$dir" cpu_per_agent_pct late_ticks_pct messages.age_p50_ms \
       messages.age_p99_ms delivered_per_s cpu_us_per_delivered stats.discovery_s.max \
       stats.max_rss_kb.median end_reason 2>/dev/null); then
@@ -77,10 +95,11 @@ for kind in "${KINDS[@]}"; do
     fi
     IFS=$'\t' read -r cpu late p50 p99 per_s cpu_per disc rss end <<<"$row"
     [[ ${SECURE:-0} == 1 ]] && kind_shown="$kind, secure" || kind_shown=$kind
+    [[ -n ${DISCOVERY:-} ]] && kind_shown="$kind_shown, ${DISCOVERY,,}"
     awk -v n="$n" -v k="$kind_shown" -v hz="$RATE_HZ" -v ts="$TIME_SCALE" -v cpu="$cpu" -v late="$late" \
       -v p50="$p50" -v p99="$p99" -v s="$per_s" -v cs="$cpu_per" -v d="$disc" -v rss="$rss" \
-      -v end="$end" 'BEGIN {
-        printf "| %d | %s | %s | %s | %.2f | %.2f | %.1f / %.1f | %.0f | %.1f | %.2f | %.1f | %s |\n",
-          n, k, hz, ts, cpu, late, p50, p99, s, cs, d, rss / 1024, end }'
+      -v sup="$sup_cpu" -v end="$end" 'BEGIN {
+        printf "| %d | %s | %s | %s | %.2f | %.2f | %.1f / %.1f | %.0f | %.1f | %.2f | %.1f | %s | %s |\n",
+          n, k, hz, ts, cpu, late, p50, p99, s, cs, d, rss / 1024, sup, end }'
   done
 done

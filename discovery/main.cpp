@@ -1,5 +1,6 @@
-// swarm-discovery: the Fast DDS Discovery Server the compose swarm's participants find each other
-// through (docker/docker-compose.yml). Runs until SIGINT/SIGTERM.
+// swarm-discovery: a Fast DDS Discovery Server that a swarm's participants find each other through:
+// the compose swarm's (docker/docker-compose.yml) and a large local run's (`swarm run` starts one
+// for transport.discovery SERVER). Runs until SIGINT/SIGTERM.
 #include <CLI/CLI.hpp>
 
 #include <atomic>
@@ -22,10 +23,15 @@ int main(int argc, char** argv) {
   std::string listen;
   unsigned port = 11811;
   unsigned domain = 0;
+  int participant_id = -1;
   app.add_option("--listen", listen,
                  "IPv4 address or host name to listen on (default: this host's name)");
   app.add_option("--port", port, "UDP port")->check(CLI::Range(1, 65535));
   app.add_option("--domain", domain, "DDS domain id")->check(CLI::Range(0, 51));
+  app.add_option("--participant-id", participant_id,
+                 "its participant id in the port plan (swarm run's own server; its ports are "
+                 "taken exactly, a taken one is an error)")
+      ->check(CLI::Range(0, 544));
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -39,7 +45,8 @@ int main(int argc, char** argv) {
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
   try {
-    qswarm::DiscoveryServer server(domain, listen, static_cast<std::uint16_t>(port));
+    qswarm::DiscoveryServer server(domain, listen, static_cast<std::uint16_t>(port),
+                                   participant_id);
     std::printf("swarm-discovery: serving domain %u on %s:%u\n", domain, server.address().c_str(),
                 port);
     std::fflush(stdout);

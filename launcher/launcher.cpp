@@ -3,9 +3,13 @@
 #include <signal.h>
 #include <sys/wait.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <fstream>
 #include <stdexcept>
+
+#include "common/mcap/file_check.hpp"
+#include "common/transport/port_plan.hpp"
 
 namespace qswarm {
 namespace {
@@ -18,6 +22,14 @@ std::string num(double v) {
 
 bool planned_kill_status(int status) { return WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL; }
 
+// run.mcap ends with a footer only when the supervisor closed it: a supervisor killed mid-run
+// leaves it cut short, and the record must say so ("" when it is whole).
+std::string mcap_problem(const RunDir& dir) {
+  const mcap::FileCheck c = mcap::check_file(dir.mcap());
+  if (c.complete) return "";
+  return "record incomplete: " + dir.mcap().filename().string() + ": " + c.problem;
+}
+
 }  // namespace
 
 Launcher::Launcher(LaunchSpec spec, ChildProcesses& procs, Clock& clock,
@@ -29,7 +41,10 @@ Launcher::Launcher(LaunchSpec spec, ChildProcesses& procs, Clock& clock,
       restarts_(spec_.rc.faults) {}
 
 double Launcher::wall_limit_s() const {
-  return spec_.rc.judge.duration_s / spec_.time_scale + 120.0;
+  // The flight, and room for the start: never shorter than the agents' own start timeout (a large
+  // swarm's grows with it), so a slow start ends with the agents' verdict, not the launcher's.
+  return spec_.rc.judge.duration_s / spec_.time_scale +
+         std::max(120.0, spec_.rc.start_timeout_s() + 30.0);
 }
 
 std::vector<std::string> Launcher::supervisor_argv() const {
@@ -41,11 +56,44 @@ std::vector<std::string> Launcher::supervisor_argv() const {
                                 "--time-scale",
                                 num(spec_.time_scale)};
   if (spec_.progress) a.push_back("--progress");
+  if (spec_.view_port >= 0) {
+    a.insert(a.end(),
+             {"--view", std::to_string(spec_.view_port), "--view-listen", spec_.view_listen});
+  }
   if (spec_.participant_base >= 0) {
     a.push_back("--participant-id");
     a.push_back(std::to_string(spec_.participant_base));
   }
+  if (spec_.discovery_id >= 0) {
+    a.push_back("--discovery-server");
+    a.push_back(discovery_address());
+  }
   return a;
+}
+
+std::string Launcher::discovery_address() const {
+  if (spec_.discovery_id < 0) return "";
+  return spec_.rc.transport.interface + ":" +
+         std::to_string(PortPlan::discovery_port(spec_.rc.transport.domain_id, spec_.discovery_id));
+}
+
+std::vector<std::string> Launcher::discovery_argv() const {
+  return {
+      spec_.bin_dir + "/swarm-discovery",
+      "--listen",
+      spec_.rc.transport.interface,
+      "--port",
+      std::to_string(PortPlan::discovery_port(spec_.rc.transport.domain_id, spec_.discovery_id)),
+      "--domain",
+      std::to_string(spec_.rc.transport.domain_id),
+      "--participant-id",
+      std::to_string(spec_.discovery_id)};
+}
+
+const ChildProcesses::Child& Launcher::supervisor() const {
+  for (const auto& c : procs_.children())
+    if (c.role == "supervisor") return c;
+  throw std::logic_error("launcher: no supervisor started");
 }
 
 std::vector<std::string> Launcher::agent_argv(AgentId id, double join_at_s, bool restart) const {
@@ -64,6 +112,10 @@ std::vector<std::string> Launcher::agent_argv(AgentId id, double join_at_s, bool
   }
   if (restart) a.push_back("--restart");
   a.push_back("--wait-supervisor");
+  if (spec_.discovery_id >= 0) {
+    a.push_back("--discovery-server");
+    a.push_back(discovery_address());
+  }
   if (spec_.participant_base >= 0) {
     // Its own place in the port plan, the same for every life (a dead process frees its ports).
     int index = 0;
@@ -77,19 +129,40 @@ std::vector<std::string> Launcher::agent_argv(AgentId id, double join_at_s, bool
   return a;
 }
 
+void Launcher::start_discovery() {
+  procs_.spawn("discovery", 0, discovery_argv(), spec_.dir.discovery_out().string());
+  const double ready_by = clock_.now_s() + spec_.discovery_ready_timeout_s;
+  const auto ready = [&] { return !spec_.discovery_ready || spec_.discovery_ready(); };
+  while (!ready() && clock_.now_s() < ready_by && procs_.children().back().running) {
+    procs_.reap();
+    clock_.sleep_until(clock_.now_s() + 0.005);
+  }
+  procs_.reap();
+  const ChildProcesses::Child server = procs_.children().back();
+  if (!server.running || !ready()) {
+    throw std::runtime_error(
+        "the Discovery Server did not come up (" +
+        (server.running ? "not listening after " + num(spec_.discovery_ready_timeout_s) + " s"
+                        : describe_status(server.status)) +
+        "); see " + spec_.dir.discovery_out().string());
+  }
+}
+
 void Launcher::start() {
   started_s_ = clock_.now_s();
+  // The run's Discovery Server first: every participant finds the others through it.
+  if (spec_.discovery_id >= 0) start_discovery();
   // Its errors reach the user even when its output goes to a file (that file may be what failed).
   procs_.spawn("supervisor", 0, supervisor_argv(),
                spec_.progress ? "" : spec_.dir.supervisor_out().string(), true);
   // The supervisor's reader first, so that it records the start.
   const double ready_by = clock_.now_s() + spec_.supervisor_ready_timeout_s;
-  while (!supervisor_ready_() && clock_.now_s() < ready_by && procs_.children().front().running) {
+  while (!supervisor_ready_() && clock_.now_s() < ready_by && supervisor().running) {
     procs_.reap();
     clock_.sleep_until(clock_.now_s() + 0.005);
   }
   procs_.reap();
-  const ChildProcesses::Child sup = procs_.children().front();
+  const ChildProcesses::Child sup = supervisor();
   if (!sup.running || !supervisor_ready_()) {
     // Without a recorder there is no run: start no agent.
     throw std::runtime_error(
@@ -106,7 +179,9 @@ void Launcher::start() {
 }
 
 void Launcher::note_abnormal(const ChildProcesses::Child& c, bool at_teardown) {
-  const std::string who = c.role == "agent" ? "agent " + std::to_string(c.id) : c.role;
+  const std::string who = c.role == "agent"       ? "agent " + std::to_string(c.id)
+                          : c.role == "discovery" ? std::string("the Discovery Server")
+                                                  : c.role;
   problems_.push_back(who + " " + describe_status(c.status) +
                       (at_teardown ? " at teardown" : " during the run"));
 }
@@ -143,9 +218,14 @@ std::optional<std::string> Launcher::next_end(bool interrupted) {
     if (c.role == "agent") {
       std::fprintf(stderr, "swarm run: agent %u %s\n", c.id, describe_status(c.status).c_str());
       on_agent_exit(c);
+    } else if (c.role == "discovery") {
+      // Participants already matched keep flying; one that starts later (a restart) finds nobody.
+      std::fprintf(stderr, "swarm run: the Discovery Server %s\n",
+                   describe_status(c.status).c_str());
+      note_abnormal(c, false);
     }
   }
-  if (!procs_.children().front().running) return why_.empty() ? std::string(kFinished) : why_;
+  if (!supervisor().running) return why_.empty() ? std::string(kFinished) : why_;
   if (interrupted) return "interrupted";
   if (!why_.empty()) return why_;
   if (clock_.now_s() - started_s_ > wall_limit_s()) return std::string(kLate);
@@ -173,7 +253,7 @@ int Launcher::stop() {
   return killed;
 }
 
-int Launcher::supervisor_status() const { return procs_.children().front().status; }
+int Launcher::supervisor_status() const { return supervisor().status; }
 
 Launcher::Outcome Launcher::conclude(double wall_time_s) {
   Outcome out;
@@ -184,11 +264,14 @@ Launcher::Outcome Launcher::conclude(double wall_time_s) {
     // launcher says why.
     std::string reason = "supervisor " + describe_status(sup);
     if (!end_.empty() && end_ != kFinished) reason = end_ + "; " + reason;
+    if (const std::string p = mcap_problem(dir); !p.empty()) reason += "; " + p;
     out.lines.push_back(reason + "; the summary says so");
     out.exit_code = dir.write_fallback_summary(spec_.rc, reason, wall_time_s) ? 1 : 3;
     return out;
   }
   if (WIFEXITED(sup) && WEXITSTATUS(sup) == 3) {
+    // The supervisor named the first file it could not write; run.mcap cut short is named too.
+    if (const std::string p = mcap_problem(dir); !p.empty()) out.lines.push_back(p);
     out.lines.push_back("the run record is incomplete (see above); run directory " + dir.str());
     out.exit_code = 3;
     return out;
@@ -196,6 +279,7 @@ Launcher::Outcome Launcher::conclude(double wall_time_s) {
   // Every agent still running at teardown ends by writing its stats; one that did not (killed after
   // the grace period, a full disk) leaves the record incomplete.
   std::vector<std::string> missing;
+  if (const std::string p = mcap_problem(dir); !p.empty()) missing.push_back(p);
   for (const AgentId id : at_teardown_) {
     if (std::filesystem::exists(dir.agent_stats(id))) continue;
     missing.push_back("record incomplete: agent " + std::to_string(id) + " wrote no " +

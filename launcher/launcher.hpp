@@ -28,6 +28,14 @@ struct LaunchSpec {
   // The first of the run's participant ids in the port plan: the supervisor takes it, agent k (in
   // the scenario's order) the k-th after it. -1: Fast DDS picks (tests without processes).
   int participant_base = -1;
+  // The participant id of the run's own Discovery Server (transport.discovery SERVER; the launcher
+  // starts `swarm-discovery` on that id's ports before anything else), or -1 for simple discovery.
+  int discovery_id = -1;
+  // Whether the run's Discovery Server listens (its ports are taken); unset: as soon as started.
+  std::function<bool()> discovery_ready;
+  double discovery_ready_timeout_s = 20.0;
+  int view_port = -1;  // the supervisor serves the live view on this port (-1: no view)
+  std::string view_listen = "127.0.0.1";
 };
 
 // The launcher as a unit: it starts the supervisor and, once it listens, one process per agent;
@@ -66,12 +74,17 @@ class Launcher {
   double wall_limit_s() const;
   std::vector<std::string> agent_argv(AgentId id, double join_at_s, bool restart) const;
   std::vector<std::string> supervisor_argv() const;
+  std::vector<std::string> discovery_argv() const;
+  // "HOST:PORT" of the run's Discovery Server, "" without one.
+  std::string discovery_address() const;
 
  private:
   static constexpr const char* kLate = "the supervisor did not finish in time";
   std::optional<std::string> next_end(bool interrupted);
   void on_agent_exit(const ChildProcesses::Child& c);
   void note_abnormal(const ChildProcesses::Child& c, bool at_teardown);
+  const ChildProcesses::Child& supervisor() const;
+  void start_discovery();
 
   LaunchSpec spec_;
   ChildProcesses& procs_;

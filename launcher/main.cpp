@@ -1,6 +1,7 @@
 // swarm: launch a swarm of agent processes plus a supervisor (`swarm run`), analyse a scenario's
-// initial graph without flying (`swarm inspect`), draw a run (`swarm plot`), or regenerate the
-// paper's figures and report (`swarm paper`).
+// initial graph without flying (`swarm inspect`), draw a run (`swarm plot`), rebuild its run.mcap
+// (`swarm export`), regenerate the paper's figures and report (`swarm paper`), or draw the three
+// laws under an insider's attacks (`swarm resilience`).
 #include <sys/wait.h>
 #include <unistd.h>
 #include <CLI/CLI.hpp>
@@ -18,14 +19,18 @@
 #include <random>
 
 #include "common/app/cli_checks.hpp"
+#include "common/mcap/file_check.hpp"
+#include "common/record/mcap_export.hpp"
 #include "common/record/run_dir.hpp"
 #include "common/scenario/fault_flags.hpp"
 #include "common/scenario/scenario.hpp"
 #include "common/sim/paper_maneuvers.hpp"
 #include "common/transport/port_plan.hpp"
+#include "common/view/view_server.hpp"
 #include "launcher/inspect.hpp"
 #include "launcher/launcher.hpp"
 #include "launcher/process_group.hpp"
+#include "launcher/view_command.hpp"
 
 namespace fs = std::filesystem;
 using namespace qswarm;
@@ -69,6 +74,8 @@ struct RunOptions {
   std::string delay;
   int transport_loss = -1;
   int random_cuts = 0;
+  int view_port = -1;  // --view [PORT]
+  std::string view_listen = "127.0.0.1";
 };
 
 // The scenario file (or random agents) with the command line's overrides and fault shortcuts.
@@ -153,7 +160,9 @@ int run(const RunOptions& opt) {
   // Every process gets its own participant id, from a block whose ports are free on this host (so
   // hundreds of processes come up without Fast DDS shifting ports, and two runs on one domain do
   // not collide); a domain without room is the user's to change.
-  const int participants = static_cast<int>(rc.agents.size()) + 1;
+  // The supervisor, the agents and, with a Discovery Server, the server (the block's last id).
+  const bool own_server = rc.transport.discovery == Discovery::kServer;
+  const int participants = static_cast<int>(rc.agents.size()) + 1 + (own_server ? 1 : 0);
   std::optional<PortReservation> ports;
   std::optional<int> base;
   try {
@@ -170,10 +179,21 @@ int run(const RunOptions& opt) {
   }
   if (!base) {
     std::cerr << "swarm run: --domain " << rc.transport.domain_id << ": no room for "
-              << rc.agents.size() + 1
+              << participants
               << " more DDS participants on this host (other runs hold its ports); choose "
                  "another --domain (0 to 51)\n";
     return 2;
+  }
+  if (opt.view_port >= 0) {
+    // Said now, before anything is flown (port 0: the address alone); the supervisor checks again
+    // when it listens.
+    if (const std::string why =
+            probe_listen(opt.view_listen, static_cast<std::uint16_t>(opt.view_port));
+        !why.empty()) {
+      std::cerr << "swarm run: --view " << opt.view_port << " (--view-listen " << opt.view_listen
+                << "): " << why << "\n";
+      return 2;
+    }
   }
   RunDir dir;
   try {
@@ -192,6 +212,16 @@ int run(const RunOptions& opt) {
   spec.stop_on_agent_exit = opt.stop_on_agent_exit;
   spec.ignore_sigterm = opt.ignore_sigterm;
   spec.participant_base = *base;
+  if (own_server) {
+    spec.discovery_id = *base + participants - 1;
+    spec.discovery_ready = [domain = rc.transport.domain_id, id = spec.discovery_id,
+                            iface = rc.transport.interface] {
+      // Its ports taken: the server (the only process given this id) is listening.
+      return !participant_ports_problem(domain, id, iface).empty();
+    };
+  }
+  spec.view_port = opt.view_port;
+  spec.view_listen = opt.view_listen;
   if (!dir.write_scenario(rc.resolved)) {
     std::cerr << "swarm run: cannot write " << dir.scenario().string() << " (disk full?)\n";
     return 3;
@@ -219,6 +249,12 @@ int run(const RunOptions& opt) {
     launcher.stop();
     dir.write_fallback_summary(rc, e.what(), clock.now_s());
     return 1;
+  }
+  if (opt.view_port >= 0 && opt.quiet) {
+    // Without the live line the supervisor's own announcement goes to supervisor.out.
+    std::ifstream url(dir.path() / "view.url");
+    std::string line;
+    if (std::getline(url, line)) std::cout << "swarm run: live view on " << line << std::endl;
   }
   std::optional<std::string> why;
   while (!(why = launcher.poll(g_signal != 0))) clock.sleep_until(clock.now_s() + 0.02);
@@ -292,6 +328,60 @@ int plot(const std::string& run_dir, const std::string& out) {
     args.push_back(out);
   }
   return exec_python("swarm plot", "plot", args);
+}
+
+// `swarm export --mcap RUN_DIR [--out FILE]`: run.mcap rebuilt from records.pb, for runs recorded
+// before run.mcap existed and for a run.mcap cut short (a supervisor killed mid-run). 0 written; 2
+// bad input (not a run directory, --out in no directory, a records.pb cut mid-record: its whole
+// records are exported and the message says where it was cut); 3 the file could not be written.
+int export_run(const std::string& run_dir, const std::string& out_flag) {
+  const RunDir dir(run_dir);
+  const fs::path out = out_flag.empty() ? dir.mcap() : fs::path(out_flag);
+  const fs::path parent = fs::absolute(out).parent_path();
+  if (!out_flag.empty() && !fs::is_directory(parent)) {
+    std::cerr << "swarm export: --out " << out_flag << ": " << parent.string()
+              << " is not a directory\n";
+    return 2;
+  }
+  const bool replacing = out == dir.mcap() && fs::exists(out);
+  const mcap::FileCheck before = replacing ? mcap::check_file(out) : mcap::FileCheck{};
+  ExportResult r;
+  try {
+    r = export_mcap(dir, out);
+  } catch (const ExportError& e) {
+    std::cerr << "swarm export: " << e.what() << "\n";
+    return 2;
+  }
+  if (!r.write_error.empty()) {
+    std::cerr << "swarm export: could not write " << r.write_error << "\n";
+    return 3;
+  }
+  if (replacing && !before.complete)
+    std::cout << "swarm export: " << out.string() << " was incomplete (" << before.problem
+              << "); rebuilt from " << dir.records().filename().string() << "\n";
+  const auto n = [&](Stream s) { return r.messages[static_cast<std::size_t>(s)]; };
+  std::cout << "swarm export: " << r.records << " records -> " << out.string() << " ("
+            << n(Stream::kAgentSamples) << " samples, " << n(Stream::kGraph) << " graph snapshots, "
+            << n(Stream::kEvents) << " events, " << n(Stream::kScene) << " scenes)\n";
+  if (!r.partial.empty()) {
+    std::cerr << "swarm export: " << r.partial << ": exported those, not the rest\n";
+    return 2;
+  }
+  return 0;
+}
+
+// `swarm resilience`: swarm-preview flies the scenario under every law and attack (the bare laws in
+// lockstep); python -m qswarm.resilience draws them and prints the table.
+int resilience(const std::string& scenario, const std::string& out, int liar) {
+  std::vector<std::string> args = {"--swarm",    (bin_dir() / "swarm").string(),
+                                   "--preview",  (bin_dir() / "swarm-preview").string(),
+                                   "--scenario", scenario,
+                                   "--out",      out};
+  if (liar > 0) {
+    args.emplace_back("--liar");
+    args.push_back(std::to_string(liar));
+  }
+  return exec_python("swarm resilience", "resilience", args);
 }
 
 struct PaperOptions {
@@ -374,6 +464,15 @@ int main(int argc, char** argv) {
   run_cmd->add_option("--grace", ro.grace_s, "seconds between SIGTERM and SIGKILL at teardown")
       ->check(finite_range(0.0, 600.0));
   run_cmd->add_flag("--quiet", ro.quiet, "no progress line");
+  run_cmd
+      ->add_option("--view", ro.view_port,
+                   "serve the live view on http://127.0.0.1:PORT/ (default 8765; 0: any free "
+                   "port; give it after SCENARIO)")
+      ->expected(0, 1)
+      ->default_str("8765")
+      ->check(CLI::Range(0, 65535));
+  run_cmd->add_option("--view-listen", ro.view_listen,
+                      "address the live view listens on (default 127.0.0.1: this host only)");
   run_cmd->add_flag("--stop-on-agent-exit", ro.stop_on_agent_exit,
                     "end the run when any agent exits");
   run_cmd->add_option("--secure", ro.secure,
@@ -420,6 +519,15 @@ int main(int argc, char** argv) {
       ->add_option("--test-ignore-sigterm", ro.ignore_sigterm, "(tests) agents that ignore SIGTERM")
       ->group("");
 
+  ViewCommandOptions vo;
+  CLI::App* view_cmd = app.add_subcommand(
+      "view", "replay a recorded run in the live view (browser page, Foxglove WebSocket)");
+  view_cmd->add_option("run_dir", vo.run_dir, "run directory written by swarm run")->required();
+  view_cmd->add_option("--speed", vo.speed, "simulated seconds per wall second (default 1)");
+  view_cmd->add_option("--port", vo.port, "port (default 8765; 0: any free port)")
+      ->check(CLI::Range(0, 65535));
+  view_cmd->add_option("--listen", vo.listen, "address (default 127.0.0.1: this host only)");
+
   std::string inspect_path;
   bool json = false;
   CLI::App* inspect_cmd =
@@ -445,6 +553,12 @@ int main(int argc, char** argv) {
   CLI::App* plot_cmd = app.add_subcommand("plot", "PNG figures of a run directory (matplotlib)");
   plot_cmd->add_option("run_dir", plot_dir, "run directory written by swarm run")->required();
   plot_cmd->add_option("--out", plot_out, "figure directory (default RUN_DIR/plots)");
+  std::string export_dir, export_out;
+  CLI::App* export_cmd = app.add_subcommand(
+      "export", "rebuild a run's run.mcap (Foxglove, Lichtblick) from its records.pb");
+  export_cmd->add_option("--mcap", export_dir, "the run directory whose records.pb to export")
+      ->required();
+  export_cmd->add_option("--out", export_out, "the MCAP file to write (default RUN_DIR/run.mcap)");
   PaperOptions po;
   CLI::App* paper_cmd = app.add_subcommand(
       "paper", "fly the paper's scenarios and write its figures and a report (docs/paper)");
@@ -467,6 +581,17 @@ int main(int argc, char** argv) {
   paper_cmd->add_option("--domain", po.domain, "DDS domain id for the runs")
       ->check(CLI::Range(0, 51))
       ->excludes(paper_from);
+  std::string res_scenario = "scenarios/insider_seven.txtpb", res_out = "docs/resilience";
+  int res_liar = 0;
+  CLI::App* res_cmd = app.add_subcommand(
+      "resilience", "the three laws under one lying insider's attacks: figure and table (docs)");
+  res_cmd
+      ->add_option("scenario", res_scenario,
+                   "scenario (default scenarios/insider_seven.txtpb: 7 agents, complete graph)")
+      ->check(CLI::ExistingFile);
+  res_cmd->add_option("--out", res_out, "figure directory (default docs/resilience)");
+  res_cmd->add_option("--liar", res_liar, "the lying agent's id (default the highest)")
+      ->check(CLI::Range(1, 1000000));
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -482,5 +607,8 @@ int main(int argc, char** argv) {
     return exec_python("swarm keys", "keys", args);
   }
   if (*paper_cmd) return paper(po);
+  if (*export_cmd) return export_run(export_dir, export_out);
+  if (*res_cmd) return resilience(res_scenario, res_out, res_liar);
+  if (*view_cmd) return view_command(vo);
   return inspect_scenario(inspect_path, json);
 }

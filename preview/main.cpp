@@ -4,10 +4,11 @@
 // where the agents met. Without a SCENARIO it flies scenarios/demo.txtpb, the paper's time-varying
 // weighted rendezvous (section 2.7.2), and compares with the paper's point.
 //
-// usage: swarm-preview [SCENARIO] [--law L] [--duration S] [--csv FILE]
+// usage: swarm-preview [SCENARIO] [--law L] [--duration S] [--csv FILE] [--liar ID:KIND[:X,Y,Z]]
 // Exit status: 0 when the agents' mean is within 1e-6 m of the reference (the paper's point for
-// the demo, the initial average for a SCENARIO); 1 when it is not; 2 for bad input (a flag, or a
-// scenario field, named); 3 when the CSV could not be written completely.
+// the demo, the initial average for a SCENARIO), or with --liar when the honest agents met inside
+// their initial bounding box; 1 when not; 2 for bad input (a flag, or a scenario field, named); 3
+// when the CSV could not be written completely.
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -18,6 +19,7 @@
 
 #include "common/core/graph.hpp"
 #include "common/scenario/scenario.hpp"
+#include "common/sim/liar.hpp"
 #include "common/sim/lockstep_laws.hpp"
 
 namespace fs = std::filesystem;
@@ -26,14 +28,24 @@ using namespace qswarm;
 namespace {
 
 constexpr char kUsage[] =
-    "usage: swarm-preview [SCENARIO] [--law L] [--duration S] [--csv FILE]\n"
+    "usage: swarm-preview [SCENARIO] [--law L] [--duration S] [--csv FILE] [--liar "
+    "ID:KIND[:X,Y,Z]]\n"
     "  SCENARIO       a scenario file (default scenarios/demo.txtpb, the paper's time-varying\n"
     "                 rendezvous, from the current directory or the build tree)\n"
     "  --law L        the agreement law: edge-flow, laplacian or w-msr (overrides the scenario's)\n"
     "  --duration S   simulated seconds before giving up (overrides the scenario's duration_s);\n"
     "                 the flight ends earlier once the disagreement is below the scenario's\n"
     "                 convergence.tolerance_m\n"
-    "  --csv FILE     every agent's consensus state at every tick: t_s,id,qx,qy,qz\n";
+    "  --csv FILE     every agent's consensus state at every tick: t_s,id,qx,qy,qz (with --liar,\n"
+    "                 every honest agent's)\n"
+    "  --liar ID:KIND[:X,Y,Z]  agent ID lies to its neighbours every tick, running no law: KIND\n"
+    "                 constant (claims X,Y,Z, default 1000,1000,1000), drift (its start plus "
+    "X,Y,Z\n"
+    "                 m/s times t, default 0.5,0.5,0.5) or split (+X,Y,Z to even ids, minus to "
+    "odd\n"
+    "                 ones). The flight lasts the whole duration; it succeeds when the honest "
+    "agents\n"
+    "                 meet inside their initial bounding box\n";
 
 // Paper, section 2.7.2: the time-varying rendezvous meets at q* = (15.25, 10.25, 31).
 const Vec3 kPaperPoint(15.25, 10.25, 31.0);
@@ -43,6 +55,7 @@ struct Options {
   std::string scenario;  // empty: the demo
   ScenarioOverrides overrides;
   std::string csv;
+  std::optional<Liar> liar;
 };
 
 // What the preview flies, from the run as a scenario resolves it. RunConfig's fields are read here
@@ -102,7 +115,7 @@ std::optional<int> parse(int argc, char** argv, Options& opt) {
       std::printf("%s", kUsage);
       return 0;
     }
-    if ((a == "--law" || a == "--duration" || a == "--csv") && !has_value) {
+    if ((a == "--law" || a == "--duration" || a == "--csv" || a == "--liar") && !has_value) {
       std::fprintf(stderr, "swarm-preview: %s needs a value (try --help)\n", a.c_str());
       return 2;
     }
@@ -112,6 +125,12 @@ std::optional<int> parse(int argc, char** argv, Options& opt) {
       opt.overrides.duration_s = parse_seconds(a, argv[++i]);
     } else if (a == "--csv") {
       opt.csv = argv[++i];
+    } else if (a == "--liar") {
+      try {
+        opt.liar = parse_liar(argv[++i]);
+      } catch (const std::invalid_argument& e) {
+        throw ScenarioError(std::string("--liar: ") + e.what());
+      }
     } else if (a.starts_with("-") || !opt.scenario.empty()) {
       std::fprintf(stderr, "swarm-preview: unknown argument '%s' (try --help)\n", a.c_str());
       return 2;
@@ -125,9 +144,51 @@ std::optional<int> parse(int argc, char** argv, Options& opt) {
 void write_states(std::ofstream& csv, const LockstepLaws& swarm) {
   const Positions q = swarm.states();
   for (int i = 0; i < swarm.size(); ++i) {
+    if (swarm.is_liar(i)) continue;  // what it claims is not a state: the honest ones are
     csv << swarm.time_s() << ',' << swarm.law(i).id() << ',' << q[i].x() << ',' << q[i].y() << ','
         << q[i].z() << '\n';
   }
+}
+
+// With a liar every measure is of the honest agents: a liar's claim is not a state.
+struct Measure {
+  double disagreement_m = 0.0;
+  double outside_m = 0.0;  // farthest honest agent outside the honest initial bounding box
+};
+Measure measure(const LockstepLaws& swarm) {
+  const Positions q = swarm.honest_states();
+  return {disagreement(q), outside_box_m(q, swarm.honest_initial_states())};
+}
+
+void print_agents(const LockstepLaws& swarm) {
+  if (swarm.size() > 16) {
+    std::printf("  (%d agents, not listed)\n", swarm.size());
+    return;
+  }
+  const Positions q = swarm.states();
+  for (int i = 0; i < swarm.size(); ++i) {
+    std::printf("  agent %u at (%.4f, %.4f, %.4f)%s\n", static_cast<unsigned>(swarm.law(i).id()),
+                q[i].x(), q[i].y(), q[i].z(),
+                swarm.is_liar(i) ? " (the liar's own law, which nobody heard)" : "");
+  }
+}
+
+// The verdict under a liar: did the honest agents meet inside their initial box? 0 yes, 1 no.
+int judge_honest(const LockstepLaws& swarm, const Liar& liar, double tolerance_m) {
+  const Measure m = measure(swarm);
+  const Vec3 mean = average(swarm.honest_states());
+  std::printf("agent %u lied (%s) for %.2f s\nhonest mean (%.6f, %.6f, %.6f)\n",
+              static_cast<unsigned>(liar.id), to_string(liar.kind).c_str(), swarm.time_s(),
+              mean.x(), mean.y(), mean.z());
+  std::printf(
+      "honest disagreement %.3e m, farthest honest agent %.3e m outside the honest initial "
+      "bounding box\n",
+      m.disagreement_m, m.outside_m);
+  const bool met = m.disagreement_m < tolerance_m && m.outside_m < tolerance_m;
+  std::printf("%s\n", met ? "the honest agents met inside their initial bounding box"
+                          : "the liar kept the honest agents apart or dragged them out of their "
+                            "initial bounding box");
+  return met ? 0 : 1;
 }
 
 }  // namespace
@@ -140,11 +201,15 @@ int main(int argc, char** argv) {
     if (const std::optional<int> done = parse(argc, argv, opt)) return *done;
     demo = opt.scenario.empty();
     rc = load_scenario(demo ? find_demo() : opt.scenario, opt.overrides);
+    if (opt.liar && !rc.spec(opt.liar->id))
+      throw ScenarioError("--liar: agent " + std::to_string(opt.liar->id) +
+                          " is not one of the scenario's agents");
   } catch (const ScenarioError& e) {
     std::fprintf(stderr, "swarm-preview: %s\n", e.what());
     return 2;
   }
-  const Flight flight = plan_flight(rc);
+  Flight flight = plan_flight(rc);
+  flight.lockstep.liar = opt.liar;
   if (flight.lockstep.law.topology.policy == TopologyPolicy::kRange) {
     // Under RANGE the agents link by their physical distance, which the bare laws do not have.
     std::fprintf(stderr,
@@ -165,6 +230,7 @@ int main(int argc, char** argv) {
   }
 
   const LawConfig& law = flight.lockstep.law;
+  const bool liar = opt.liar.has_value();
   std::printf("%s\n", flight.title.c_str());
   std::printf("%d agents, %s law, %g Hz, %s weights, %s topology", swarm.size(),
               to_string(law.kind).c_str(), flight.lockstep.consensus_rate_hz,
@@ -173,7 +239,12 @@ int main(int argc, char** argv) {
     std::printf(" (threshold %g m)", law.topology.threshold_m);
   }
   std::printf(", gain %g\nthe bare laws in lockstep: no DDS, dynamics or faults\n", law.gain);
-  std::printf("%8s %6s %10s %14s\n", "t [s]", "edges", "lambda2", "disagree [m]");
+  if (liar) {
+    std::printf("%8s %6s %10s %14s %14s\n", "t [s]", "edges", "lambda2", "honest dis [m]",
+                "outside [m]");
+  } else {
+    std::printf("%8s %6s %10s %14s\n", "t [s]", "edges", "lambda2", "disagree [m]");
+  }
   // A row at the start, every 5 s and whenever the graph changes.
   double next_print = 0.0;
   std::size_t edges_before = swarm.edges().size();
@@ -184,37 +255,43 @@ int main(int argc, char** argv) {
     const bool periodic = swarm.time_s() >= next_print;
     if (periodic || edges.size() != edges_before) {
       const Spectrum s = analyze(laplacian(swarm.size(), edges));
-      std::printf("%8.2f %6zu %10.4f %14.6f\n", swarm.time_s(), edges.size(), s.lambda2,
-                  disagreement(swarm.states()));
+      if (liar) {
+        const Measure m = measure(swarm);
+        std::printf("%8.2f %6zu %10.4f %14.6g %14.6g\n", swarm.time_s(), edges.size(), s.lambda2,
+                    m.disagreement_m, m.outside_m);
+      } else {
+        std::printf("%8.2f %6zu %10.4f %14.6f\n", swarm.time_s(), edges.size(), s.lambda2,
+                    disagreement(swarm.states()));
+      }
       if (periodic) next_print += 5.0;
       edges_before = edges.size();
     }
-    if (swarm.time_s() >= flight.duration_s || disagreement(swarm.states()) < flight.tolerance_m) {
+    // A liar can drag agents that already agree: its flight lasts the whole duration.
+    if (swarm.time_s() >= flight.duration_s ||
+        (!liar && disagreement(swarm.states()) < flight.tolerance_m)) {
       break;
     }
     swarm.step();
   }
-  const double left_m = disagreement(swarm.states());
-  if (left_m < flight.tolerance_m) {
-    std::printf("\nmet after %.2f s (disagreement %.2e m, tolerance %g m)\n", swarm.time_s(),
-                left_m, flight.tolerance_m);
+  int status = 0;
+  if (liar) {
+    std::printf("\n");
+    print_agents(swarm);
+    status = judge_honest(swarm, *opt.liar, flight.tolerance_m);
   } else {
-    std::printf("\nnot met after %.2f s (disagreement %.2e m, tolerance %g m)\n", swarm.time_s(),
-                left_m, flight.tolerance_m);
+    const double left_m = disagreement(swarm.states());
+    std::printf("\n%s after %.2f s (disagreement %.2e m, tolerance %g m)\n",
+                left_m < flight.tolerance_m ? "met" : "not met", swarm.time_s(), left_m,
+                flight.tolerance_m);
+    print_agents(swarm);
+    const Vec3 met = average(swarm.states());
+    const Vec3 reference = demo ? kPaperPoint : initial_average;
+    const char* label = demo ? "paper q* " : "initial average";
+    std::printf("mean     (%.6f, %.6f, %.6f)\n%s (%.6f, %.6f, %.6f)\n|mean - %s| = %.3e m\n",
+                met.x(), met.y(), met.z(), label, reference.x(), reference.y(), reference.z(),
+                demo ? "q*" : "initial average", (met - reference).norm());
+    status = (met - reference).norm() < kMeanTolerance_m ? 0 : 1;
   }
-  const bool many = swarm.size() > 16;
-  for (int i = 0; i < swarm.size() && !many; ++i) {
-    const Vec3 q = swarm.states()[i];
-    std::printf("  agent %u at (%.4f, %.4f, %.4f)\n", static_cast<unsigned>(swarm.law(i).id()),
-                q.x(), q.y(), q.z());
-  }
-  if (many) std::printf("  (%d agents, not listed)\n", swarm.size());
-  const Vec3 met = average(swarm.states());
-  const Vec3 reference = demo ? kPaperPoint : initial_average;
-  const char* label = demo ? "paper q* " : "initial average";
-  std::printf("mean     (%.6f, %.6f, %.6f)\n%s (%.6f, %.6f, %.6f)\n|mean - %s| = %.3e m\n", met.x(),
-              met.y(), met.z(), label, reference.x(), reference.y(), reference.z(),
-              demo ? "q*" : "initial average", (met - reference).norm());
   if (csv.is_open()) {
     csv.close();
     if (!csv) {
@@ -223,5 +300,5 @@ int main(int argc, char** argv) {
       return 3;
     }
   }
-  return (met - reference).norm() < kMeanTolerance_m ? 0 : 1;
+  return status;
 }

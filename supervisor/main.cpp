@@ -9,11 +9,15 @@
 #include <atomic>
 #include <csignal>
 #include <cstdio>
+#include <fstream>
+#include <memory>
 
 #include "common/app/cli_checks.hpp"
 #include "common/app/process_setup.hpp"
 #include "common/record/run_dir.hpp"
 #include "common/record/supervisor_loop.hpp"
+#include "common/view/view_model.hpp"
+#include "common/view/view_server.hpp"
 
 namespace {
 std::atomic<bool> g_stop{false};
@@ -39,6 +43,15 @@ int main(int argc, char** argv) {
                  "per agent)")
       ->check(finite_range(0.0, 3600.0));
   app.add_flag("--progress", progress, "print a live progress line");
+  int view_port = -1;
+  std::string view_listen = "127.0.0.1";
+  app.add_option("--view", view_port,
+                 "serve the live view (page and Foxglove WebSocket) on this port; 0: any free port")
+      ->envname("QSWARM_VIEW")
+      ->check(CLI::Range(0, 65535));
+  app.add_option("--view-listen", view_listen,
+                 "address the live view listens on (default 127.0.0.1: this host only)")
+      ->envname("QSWARM_VIEW_LISTEN");
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -91,7 +104,33 @@ int main(int argc, char** argv) {
     so.time_scale = opts.time_scale;
     so.start_timeout_s = start_timeout_s;
     so.progress = progress;
+    // The live view, only when asked for: without it the record path has no observer, no thread
+    // and no copies. Its server runs on its own thread; the recorder hands it records through
+    // the feed's bounded buffers. Declared before the loop, so that they outlive it.
+    std::unique_ptr<ViewFeed> feed;
+    std::unique_ptr<ViewServer> view;
     SupervisorLoop sup(rc, dir, so, bus, clock);
+    if (view_port >= 0) {
+      feed = std::make_unique<ViewFeed>();
+      ViewServerOptions vo;
+      vo.address = view_listen;
+      vo.port = static_cast<std::uint16_t>(view_port);
+      vo.name = "quadswarm " + rc.name;
+      vo.log = [logger](const std::string& s) { logger->warn("{}", s); };
+      view = std::make_unique<ViewServer>(vo, *feed, run_info_json(rc), SceneSettings::of(rc));
+      try {
+        view->start();
+      } catch (const ViewServerError& e) {
+        std::fprintf(stderr, "swarm-supervisor: --view %d: %s\n", view_port, e.what());
+        logger->error("--view {}: {}", view_port, e.what());
+        return 2;
+      }
+      sup.set_observer(feed.get());
+      std::printf("swarm-supervisor: live view on %s\n", view->url().c_str());
+      std::fflush(stdout);
+      logger->info("live view on {}", view->url());
+      std::ofstream(dir.path() / "view.url") << view->url() << "\n";
+    }
     logger->info("supervisor up on domain {}, expecting {} agents", rc.transport.domain_id,
                  rc.agents.size());
     if (!sup.announce_ready())  // the launcher waits for this
@@ -111,6 +150,13 @@ int main(int argc, char** argv) {
       clock.sleep_until(p.wake_at_s);
     }
     const std::string text = sup.finish(reason);
+    if (view) {
+      view->flush(1.0);  // the end state reaches the pages before the server goes
+      sup.set_observer(nullptr);
+      view->stop();
+      logger->info("live view: {}; feed {} records, {} dropped", view->counts().json(),
+                   feed->counts().records, feed->counts().dropped);
+    }
     std::printf("%s", text.c_str());
     std::fflush(stdout);
     logger->info("finished: {}", reason);

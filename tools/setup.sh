@@ -11,7 +11,7 @@ BUILD_DIR="${1:-build}"
 PACKAGES=(cmake g++ ninja-build pkg-config git
   libeigen3-dev libgtest-dev libgmock-dev libbenchmark-dev
   libfastrtps-dev libfastcdr-dev fastddsgen fastdds-tools
-  libprotobuf-dev protobuf-compiler libspdlog-dev libcli11-dev
+  libprotobuf-dev protobuf-compiler libspdlog-dev libcli11-dev zlib1g-dev libboost-dev
   python3 python3-matplotlib python3-numpy
   openssl iproute2 iptables procps)
 # shellcheck disable=SC2206
@@ -27,6 +27,22 @@ if ((${#missing[@]})); then
   if [[ $(id -u) -ne 0 ]]; then SUDO="sudo"; fi
   $SUDO apt-get update -q
   DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -q --no-install-recommends "${missing[@]}"
+fi
+
+# npm packages (node/package.json, pinned by node/package-lock.json) go into node/node_modules,
+# never committed: the live view's page libraries (three, uplot), which the view server serves, and
+# the tests' clients (Foxglove's MCAP reader and WebSocket client, protobufjs, puppeteer-core).
+# Installed when missing or older than the lockfile. Node and npm come from Debian (nodejs, npm) when the machine has neither.
+if [[ ! -d node/node_modules || node/package-lock.json -nt node/node_modules ]]; then
+  if ! command -v npm > /dev/null; then
+    SUDO=""
+    if [[ $(id -u) -ne 0 ]]; then SUDO="sudo"; fi
+    $SUDO apt-get update -q
+    DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -q --no-install-recommends nodejs npm
+  fi
+  echo "setup: npm ci --prefix node"
+  npm ci --prefix node --no-audit --no-fund
+  touch node/node_modules
 fi
 
 # Tests and benchmarks on explicitly: a build directory configured earlier with them off (the

@@ -140,4 +140,19 @@ double disagreement(const Positions& q) {
   return worst;
 }
 
+double outside_box_m(const Positions& q, const Positions& box) {
+  if (box.empty()) return 0.0;
+  Vec3 lo = box.front(), hi = box.front();
+  for (const Vec3& b : box) {
+    lo = lo.cwiseMin(b);
+    hi = hi.cwiseMax(b);
+  }
+  double worst = 0.0;
+  for (const Vec3& x : q) {
+    const Vec3 out = (lo - x).cwiseMax(x - hi).cwiseMax(Vec3::Zero());
+    worst = std::max(worst, out.norm());
+  }
+  return worst;
+}
+
 }  // namespace qswarm

@@ -85,5 +85,8 @@ bool is_rs_robust(int n, const std::vector<Edge>& edges, int r, int s);
 Vec3 average(const Positions& q);
 // Largest distance of any point from the mean (the disagreement the supervisor reports).
 double disagreement(const Positions& q);
+// Largest distance of a point of q from the axis-aligned bounding box of `box` (0 when every point
+// is inside it, or `box` is empty): where W-MSR promises its honest agents stay, per coordinate.
+double outside_box_m(const Positions& q, const Positions& box);
 
 }  // namespace qswarm

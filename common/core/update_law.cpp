@@ -26,6 +26,8 @@ std::string check_view(const NeighborView& v, double max_abs) {
     if (bad_vec(f.flow)) return "copy not finite or absurd";
     if (f.peer == v.id) return "copy of its own flow";
   }
+  for (const AgentId a : v.asking)
+    if (a == 0 || a == v.id) return "asks agent 0 or itself";
   return {};
 }
 
@@ -134,6 +136,7 @@ NeighborView UpdateLaw::message() const {
   v.total_weight = published_total_weight_;
   v.flows = owned_flows();
   v.copies = held_copies();
+  v.asking = asking();
   v.seq = ticks_;
   return v;
 }
@@ -172,6 +175,7 @@ void WmsrLaw::integrate(const Tick& t) {
     const std::size_t lo = std::min(below, F);
     const std::size_t hi = scratch_.size() - std::min(above, F);
     trimmed_ += lo + (scratch_.size() - hi);
+    trimmed_total_ += lo + (scratch_.size() - hi);
     double W = 0.0;
     for (std::size_t k = lo; k < hi; ++k) W += scratch_[k].w;
     if (W <= 0.0) continue;
@@ -187,73 +191,121 @@ void WmsrLaw::integrate(const Tick& t) {
 
 Vec3 EdgeFlowLaw::state() const {
   Vec3 q = q0_;
-  for (const auto& [peer, f] : owned_) q -= f.flow;
+  for (const auto& [peer, o] : owned_) q -= o.entry.flow;
   for (const auto& [peer, c] : copies_) q += c.flow + c.predicted;
   return q;
 }
 
 std::vector<FlowEntry> EdgeFlowLaw::owned_flows() const {
   std::vector<FlowEntry> out;
-  out.reserve(owned_.size());
-  for (const auto& [peer, f] : owned_) out.push_back(f);
+  for (const auto& [peer, o] : owned_)
+    if (o.entry.active || !o.settled || askers_.count(peer)) out.push_back(o.entry);
+  // A restarted peer asks about an edge this agent never moved on: nothing, said explicitly.
+  for (const AgentId peer : askers_)
+    if (owns(peer) && !owned_.count(peer)) out.push_back({peer, Vec3::Zero(), 0.0, false});
   return out;
 }
 
 std::vector<FlowEntry> EdgeFlowLaw::held_copies() const {
   std::vector<FlowEntry> out;
-  out.reserve(copies_.size());
   for (const auto& [owner, c] : copies_) {
-    if (c.seen) out.push_back({owner, c.flow, 0.0, false});
+    if (c.seen && (c.linked || c.announced || askers_.count(owner)))
+      out.push_back({owner, c.flow, 0.0, false});
+  }
+  for (const AgentId owner : askers_) {
+    if (owns(owner)) continue;
+    const auto it = copies_.find(owner);
+    if (it == copies_.end() || !it->second.seen) out.push_back({owner, Vec3::Zero(), 0.0, false});
   }
   return out;
 }
 
-void EdgeFlowLaw::adopt(const NeighborView& v) {
-  if (!adopted_.insert(v.id).second) return;
-  for (const FlowEntry& c : v.copies) {
-    if (c.peer != self_) continue;
-    FlowEntry& f = owned_[v.id];
-    f.peer = v.id;
-    f.flow = c.flow;
-    ++recovered_;
+std::vector<AgentId> EdgeFlowLaw::asking() const {
+  return {unanswered_.begin(), unanswered_.end()};
+}
+
+namespace {
+const FlowEntry* entry_for(const std::vector<FlowEntry>& entries, AgentId id) {
+  for (const FlowEntry& e : entries)
+    if (e.peer == id) return &e;
+  return nullptr;
+}
+}  // namespace
+
+bool EdgeFlowLaw::take_answer(const NeighborView& v) {
+  if (owns(v.id)) {
+    // Our flow on this edge, as the other end holds its copy: adopted before we move on it again.
+    const FlowEntry* c = entry_for(v.copies, self_);
+    if (!c) return false;
+    if (!c->flow.isZero()) {
+      Owned& o = owned_[v.id];
+      o.entry = {v.id, c->flow, 0.0, false};
+      o.settled = false;
+      ++recovered_;
+    }
+  } else if (!entry_for(v.flows, self_)) {
+    return false;  // the owner's flow arrives as a copy through integrate()
   }
+  answered_.insert(v.id);
+  return true;
 }
 
 void EdgeFlowLaw::recover(const std::vector<NeighborView>& neighbors) {
   recovering_ = true;
+  unanswered_.clear();
   for (const NeighborView& v : neighbors)
-    if (owns(v.id)) adopt(v);
+    if (!answered_.count(v.id) && !take_answer(v)) unanswered_.insert(v.id);
 }
 
 void EdgeFlowLaw::integrate(const Tick& t) {
   const std::vector<NeighborView>& neighbors = t.neighbors;
   const std::vector<double>& coef = t.coef;
   const Vec3 q = state();  // every edge moves from the same snapshot of q_i (Jacobi)
-  for (auto& [peer, f] : owned_) f.active = false;
-  std::map<AgentId, bool> heard;
+  for (auto& [peer, o] : owned_) o.entry.active = false;
+  for (auto& [peer, c] : copies_) c.linked = false;
+  askers_.clear();
+  unanswered_.clear();
+  std::set<AgentId> heard;
   for (size_t k = 0; k < neighbors.size(); ++k) {
     const NeighborView& n = neighbors[k];
+    for (const AgentId a : n.asking)
+      if (a == self_) askers_.insert(n.id);
+    const bool answered = !recovering_ || answered_.count(n.id) || take_answer(n);
+    if (!answered) unanswered_.insert(n.id);
     if (owns(n.id)) {
-      if (recovering_) adopt(n);  // before any increment on this edge in this life
-      if (coef[k] <= 0.0) continue;
-      FlowEntry& f = owned_[n.id];
-      f.peer = n.id;
-      f.flow += coef[k] * (q - n.q);
-      f.weight = links_.count(n.id) ? links_.at(n.id) : 0.0;
-      f.active = true;
+      if (!answered) continue;  // nothing moves on this edge before its flow is known
+      auto it = owned_.find(n.id);
+      if (coef[k] > 0.0) {
+        Owned& o = it != owned_.end() ? it->second : owned_[n.id];
+        o.entry.peer = n.id;
+        o.entry.flow += coef[k] * (q - n.q);
+        o.entry.weight = links_.count(n.id) ? links_.at(n.id) : 0.0;
+        o.entry.active = true;
+        o.settled = false;
+      } else if (it != owned_.end() && !askers_.count(n.id)) {
+        // Settled once the other end shows the flow as it stands.
+        const FlowEntry* c = entry_for(n.copies, self_);
+        if (c && c->flow == it->second.entry.flow) it->second.settled = true;
+      } else if (it != owned_.end()) {
+        it->second.settled = false;  // it restarted and asks: announce until it shows the copy
+      }
     } else {
-      heard[n.id] = true;
+      heard.insert(n.id);
       // The neighbour owns the edge: a newer message replaces copy and prediction.
-      Copy& c = copies_[n.id];
+      const FlowEntry* e = entry_for(n.flows, self_);
+      auto it = copies_.find(n.id);
+      // An edge never linked and never announced costs no entry.
+      if (it == copies_.end() && coef[k] <= 0.0 && (!e || e->flow.isZero())) continue;
+      Copy& c = it != copies_.end() ? it->second : copies_[n.id];
       if (!c.seen || n.seq != c.seq) {  // a new message (or a restarted owner: seq from 1)
-        for (const FlowEntry& e : n.flows) {
-          if (e.peer == self_) c.flow = e.flow;
-        }
+        if (e) c.flow = e->flow;
+        c.announced = e != nullptr;
         c.predicted.setZero();
         c.seq = n.seq;
         c.seen = true;
       }
-      if (coef[k] > 0.0) c.predicted += coef[k] * (n.q - q);
+      c.linked = coef[k] > 0.0;
+      if (c.linked) c.predicted += coef[k] * (n.q - q);
     }
   }
   // A silent owner's increments can no longer be confirmed: keep only its last copy.

@@ -28,7 +28,10 @@ struct NeighborView {
   double total_weight = 0.0;      // sum of the sender's link weights, as of its last tick
   std::vector<FlowEntry> flows;   // flows the sender owns (peer = the other end)
   std::vector<FlowEntry> copies;  // copies the sender holds of flows owned by others (peer = owner)
-  std::uint64_t seq = 0;          // sender's tick count: a new message has a larger one
+  // A restarted sender's question: the peers it hears whose flow or copy on their shared edge it
+  // has not yet been told (edge-flow). Each answers with that entry, zero if it has none.
+  std::vector<AgentId> asking;
+  std::uint64_t seq = 0;  // sender's tick count: a new message has a larger one
   // Not on the wire: under TopologyPolicy::kRange the receiver's runtime sets the physical distance
   // between the two agents here, and links follow it instead of the states' distance.
   double link_distance_m = -1.0;
@@ -96,6 +99,8 @@ class UpdateLaw {
   // Recovery continues lazily: an owned neighbour first heard later is recovered then.
   virtual void recover(const std::vector<NeighborView>&) {}
   virtual int recovered_count() const { return 0; }
+  // Neighbour values the law ignored since it started (W-MSR's trimming; 0 for the others).
+  virtual std::uint64_t trimmed_total() const { return 0; }
 
  protected:
   // What a tick moves along: `coef[k]` is c for neighbours[k] (0 when not linked), `weight[k]`
@@ -107,6 +112,8 @@ class UpdateLaw {
     double dt_s;
   };
   virtual void integrate(const Tick& t) = 0;
+  // What the agent asks its peers (NeighborView::asking).
+  virtual std::vector<AgentId> asking() const { return {}; }
   std::vector<double> update_links(const std::vector<NeighborView>& neighbors);
 
   AgentId self_;
@@ -145,13 +152,15 @@ class WmsrLaw final : public UpdateLaw {
   WmsrLaw(AgentId self, const Vec3& q0, LawConfig cfg)
       : UpdateLaw(self, q0, std::move(cfg)), q_(q0) {}
   Vec3 state() const override { return q_; }
-  // Neighbour values trimmed on the last tick (all coordinates together).
+  // Neighbour values trimmed on the last tick (all coordinates together), and since the start.
   std::uint64_t trimmed() const { return trimmed_; }
+  std::uint64_t trimmed_total() const override { return trimmed_total_; }
 
  private:
   void integrate(const Tick& t) override;
   Vec3 q_;
   std::uint64_t trimmed_ = 0;
+  std::uint64_t trimmed_total_ = 0;
   struct Value {
     double v;
     double w;
@@ -165,6 +174,15 @@ class WmsrLaw final : public UpdateLaw {
 // Laplacian law would do) and drops the prediction when a newer copy arrives: the prediction
 // removes the one-message lag, the copy keeps the total exact. In lockstep the two laws then
 // coincide.
+//
+// A message carries only the entries that still matter, so its size follows the agent's degree,
+// not its history: the owner announces a flow while the edge is linked, until the other end has
+// shown a copy equal to it (settled), and whenever the other end asks for it; the other end shows
+// its copy while the edge is linked, while the owner still announces the flow, and when the owner
+// asks. Settled entries stay in both agents' states. A restarted agent has lost its half of every
+// edge it had: it asks each peer it hears until that peer has answered (an owner adopts the copy
+// before it moves on the edge again; a non-owner takes the owner's flow as a copy), so a restart
+// never moves the total.
 class EdgeFlowLaw final : public UpdateLaw {
  public:
   EdgeFlowLaw(AgentId self, const Vec3& q0, LawConfig cfg) : UpdateLaw(self, q0, std::move(cfg)) {}
@@ -174,21 +192,35 @@ class EdgeFlowLaw final : public UpdateLaw {
   void recover(const std::vector<NeighborView>& neighbors) override;
   int recovered_count() const override { return recovered_; }
   bool owns(AgentId peer) const { return self_ < peer; }
+  // Flows and copies this agent holds, settled or not (its state's history).
+  std::size_t held_entries() const { return owned_.size() + copies_.size(); }
+
+ protected:
+  std::vector<AgentId> asking() const override;
 
  private:
   void integrate(const Tick& t) override;
+  struct Owned {
+    FlowEntry entry;
+    bool settled = false;  // the other end showed a copy equal to it since it last changed
+  };
   struct Copy {
     Vec3 flow = Vec3::Zero();       // newest f_{owner,self} received
     Vec3 predicted = Vec3::Zero();  // our estimate of the owner's increments since that copy
     std::uint64_t seq = 0;          // message it came in
     bool seen = false;
+    bool announced = false;  // the owner's newest message carried this edge's flow
+    bool linked = false;     // linked on the last tick
   };
-  std::map<AgentId, FlowEntry> owned_;  // edges this agent owns (peer id > self)
-  std::map<AgentId, Copy> copies_;      // flows neighbours own toward us
-  bool recovering_ = false;             // restarted: adopt each owned flow from its first view
-  std::set<AgentId> adopted_;
+  std::map<AgentId, Owned> owned_;  // edges this agent owns (peer id > self)
+  std::map<AgentId, Copy> copies_;  // flows neighbours own toward us
+  std::set<AgentId> askers_;        // peers whose newest message asks this agent
+  bool recovering_ = false;         // restarted: ask each peer heard until it answered
+  std::set<AgentId> answered_;
+  std::set<AgentId> unanswered_;  // heard on the last tick, not answered yet
   int recovered_ = 0;
-  void adopt(const NeighborView& v);
+  // Takes a peer's answer (its entry about this agent) if its message has one.
+  bool take_answer(const NeighborView& v);
 };
 
 }  // namespace qswarm

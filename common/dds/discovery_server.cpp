@@ -31,7 +31,7 @@ struct DiscoveryServer::Impl : public dds::DomainParticipantListener {
 };
 
 DiscoveryServer::DiscoveryServer(std::uint32_t domain_id, const std::string& listen,
-                                 std::uint16_t port)
+                                 std::uint16_t port, int participant_id)
     : impl_(std::make_unique<Impl>()) {
   address_ = resolve_discovery_server(listen + ":" + std::to_string(port)).first;
   dds::DomainParticipantQos pqos;
@@ -42,6 +42,16 @@ DiscoveryServer::DiscoveryServer(std::uint32_t domain_id, const std::string& lis
   pqos.wire_protocol().port.portBase = PortPlan::kBase;
   pqos.wire_protocol().port.domainIDGain = PortPlan::kDomainGain;
   pqos.wire_protocol().port.participantIDGain = PortPlan::kParticipantGain;
+  if (participant_id >= 0) {
+    // The run reserved this id's ports for its server: take exactly them, and say if one is taken
+    // rather than come up on shifted ports.
+    if (const std::string problem = participant_ports_problem(domain_id, participant_id, address_);
+        !problem.empty())
+      throw std::runtime_error(problem);
+    pqos.wire_protocol().participant_id = participant_id;
+    pqos.wire_protocol().builtin.mutation_tries = 0;
+  }
+  disable_writer_liveliness(pqos);
   auto& disc = pqos.wire_protocol().builtin.discovery_config;
   disc.discoveryProtocol = eprosima::fastrtps::rtps::DiscoveryProtocol_t::SERVER;
   // An infinite lease, as every DdsBus participant announces: no client runs a lease check on the

@@ -13,7 +13,11 @@ namespace qswarm {
 class DiscoveryServer {
  public:
   // `listen`: an IPv4 address or a host name (resolved); `port`: its metatraffic UDP port.
-  DiscoveryServer(std::uint32_t domain_id, const std::string& listen, std::uint16_t port);
+  // `participant_id`: its place in the port plan (a run's own server: `port` is that id's
+  // discovery port, and the server's data port is the id's too); -1: Fast DDS picks (compose,
+  // where the server is alone in its container).
+  DiscoveryServer(std::uint32_t domain_id, const std::string& listen, std::uint16_t port,
+                  int participant_id = -1);
   ~DiscoveryServer();
   DiscoveryServer(const DiscoveryServer&) = delete;
   DiscoveryServer& operator=(const DiscoveryServer&) = delete;

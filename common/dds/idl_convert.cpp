@@ -14,8 +14,8 @@ std::array<double, 3> arr(const Vec3& v) { return {v.x(), v.y(), v.z()}; }
 void to_idl(const StateMessage& m, qswarm_msgs::AgentState& s) {
   // The wire carries every entry or the sample is not sent: a silently cut flow list would break
   // edge-flow's conservation. The scenario refuses swarms larger than kMaxSwarmAgents.
-  for (const std::size_t n :
-       {m.links.size(), m.initial_links.size(), m.view.flows.size(), m.view.copies.size()}) {
+  for (const std::size_t n : {m.links.size(), m.initial_links.size(), m.view.flows.size(),
+                              m.view.copies.size(), m.view.asking.size()}) {
     if (n > kMaxWireEntries) {
       throw std::length_error("state sample of agent " + std::to_string(m.view.id) + " has " +
                               std::to_string(n) + " entries in a list the wire bounds at " +
@@ -41,6 +41,7 @@ void to_idl(const StateMessage& m, qswarm_msgs::AgentState& s) {
   s.received(m.received);
   s.dropped(m.dropped);
   s.overruns(m.overruns);
+  s.trimmed(m.trimmed);
   s.faults().loss(m.faults.loss);
   s.faults().burst(m.faults.burst);
   s.faults().cut(m.faults.cut);
@@ -88,6 +89,7 @@ void to_idl(const StateMessage& m, qswarm_msgs::AgentState& s) {
     e.flow(arr(f.flow));
     s.copies().push_back(e);
   }
+  s.asking(m.view.asking);
 }
 
 StateMessage from_idl(const qswarm_msgs::AgentState& s) {
@@ -112,6 +114,7 @@ StateMessage from_idl(const qswarm_msgs::AgentState& s) {
   m.received = s.received();
   m.dropped = s.dropped();
   m.overruns = s.overruns();
+  m.trimmed = s.trimmed();
   m.faults = {s.faults().loss(), s.faults().burst(), s.faults().cut(), s.faults().partition(),
               s.faults().delayed()};
   m.strangers.assign(s.strangers().begin(), s.strangers().end());
@@ -121,6 +124,7 @@ StateMessage from_idl(const qswarm_msgs::AgentState& s) {
   for (const auto& e : s.copies()) m.view.copies.push_back({e.peer(), vec(e.flow()), 0.0, false});
   for (const auto& e : s.flows())
     m.view.flows.push_back({e.peer(), vec(e.flow()), e.weight(), e.active()});
+  m.view.asking.assign(s.asking().begin(), s.asking().end());
   return m;
 }
 

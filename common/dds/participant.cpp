@@ -39,6 +39,10 @@ struct CreatingParticipant {
 
 bool creating_participant() { return g_creating > 0; }
 
+void disable_writer_liveliness(dds::DomainParticipantQos& qos) {
+  qos.wire_protocol().builtin.use_WriterLivelinessProtocol = false;
+}
+
 DdsParticipant::DdsParticipant(const ParticipantOptions& opts) : opts_(opts) {
   dds::DomainParticipantQos pqos;
   pqos.name(opts.name);
@@ -70,6 +74,7 @@ DdsParticipant::DdsParticipant(const ParticipantOptions& opts) : opts_(opts) {
   // of a run's reserved ids; every participant gets an id whose ports it checks first, so that a
   // taken one is said (Fast DDS would otherwise come up without them and hear nobody).
   pqos.wire_protocol().builtin.mutation_tries = 0;
+  disable_writer_liveliness(pqos);
   // Participants announce an infinite lease, so no peer ever runs a lease check on them: Fast DDS
   // 2.9.1 races a peer's lease check (timer thread) against that peer's removal when it leaves
   // (receive thread), and the check then asserts on a cleared proxy (docs/architecture.md, "No

@@ -9,7 +9,8 @@
 
 namespace eprosima::fastdds::dds {
 class DomainParticipant;
-}
+class DomainParticipantQos;
+}  // namespace eprosima::fastdds::dds
 
 namespace qswarm {
 
@@ -67,6 +68,11 @@ class DdsParticipant {
   std::unique_ptr<WriterRegistry> writers_ = std::make_unique<WriterRegistry>();
   eprosima::fastdds::dds::DomainParticipant* participant_ = nullptr;
 };
+
+// Turns off the writer liveliness protocol (two reliable endpoints matched with every discovered
+// participant): no writer of the project asserts liveliness (every one keeps the default infinite
+// lease), and agents judge a silent neighbour by their own timeout.
+void disable_writer_liveliness(eprosima::fastdds::dds::DomainParticipantQos& qos);
 
 // The Discovery Server's address as Fast DDS wants it: "HOST:PORT" with HOST resolved to IPv4
 // (with retries for ~15 s while a container network's DNS catches up). Throws

@@ -3,11 +3,70 @@
 #include <algorithm>
 
 namespace qswarm {
+namespace {
+
+// Largest distance of a kept agent's position from its slot (the kept states' mean + its offset).
+double spread_of(const std::vector<bool>& keep, const Positions& q, const Positions& p,
+                 const Positions& offsets, const std::vector<bool>& held) {
+  Vec3 qbar = Vec3::Zero();
+  int n = 0;
+  for (std::size_t i = 0; i < q.size(); ++i)
+    if (keep[i]) {
+      qbar += q[i];
+      ++n;
+    }
+  if (n == 0) return 0.0;
+  qbar /= n;
+  double spread = 0.0;
+  for (std::size_t i = 0; i < q.size(); ++i) {
+    if (!keep[i] || (!held.empty() && held[i])) continue;
+    const Vec3 slot = offsets.empty() ? qbar : Vec3(qbar + offsets[i]);
+    spread = std::max(spread, (p[i] - slot).norm());
+  }
+  return spread;
+}
+
+Positions kept(const Positions& v, const std::vector<bool>& keep) {
+  Positions out;
+  for (std::size_t i = 0; i < v.size(); ++i)
+    if (keep[i]) out.push_back(v[i]);
+  return out;
+}
+
+// W-MSR: take out the state farthest from the others' mean, one at a time, at most F, while the
+// rest disagree by the tolerance or more.
+void measure_trimmed(records::GraphSnapshot& g, const std::vector<AgentId>& ids, const Positions& q,
+                     const Positions& p, const Positions& offsets, const std::vector<bool>& held,
+                     const WmsrMeasure& w) {
+  std::vector<bool> keep(q.size(), true);
+  for (int out = 0; out < w.f && out + 1 < static_cast<int>(q.size()); ++out) {
+    const Positions rest = kept(q, keep);
+    if (disagreement(rest) < w.tolerance_m) break;
+    const Vec3 mean = average(rest);
+    std::size_t far = 0;
+    double far_m = -1.0;
+    for (std::size_t i = 0; i < q.size(); ++i)
+      if (keep[i] && (q[i] - mean).norm() > far_m) {
+        far_m = (q[i] - mean).norm();
+        far = i;
+      }
+    keep[far] = false;
+    g.add_trimmed_agents(ids[far]);
+  }
+  const Positions rest = kept(q, keep);
+  g.set_trimmed_disagreement_m(disagreement(rest));
+  g.set_trimmed_spread_m(spread_of(keep, q, p, offsets, held));
+  if (w.q0.size() == q.size())
+    g.set_outside_initial_box_m(outside_box_m({average(rest)}, kept(w.q0, keep)));
+}
+
+}  // namespace
 
 records::GraphSnapshot measure_graph(double t_s, const std::vector<AgentId>& ids,
                                      const Positions& q, const Positions& p,
                                      const LinksOf& links_of, const Vec3& initial_average,
-                                     const Positions& offsets, const std::vector<bool>& held) {
+                                     const Positions& offsets, const std::vector<bool>& held,
+                                     const WmsrMeasure* wmsr) {
   records::GraphSnapshot g;
   g.set_t_s(t_s);
   g.set_agents(static_cast<std::uint32_t>(ids.size()));
@@ -20,6 +79,18 @@ records::GraphSnapshot measure_graph(double t_s, const std::vector<AgentId>& ids
   }
   const int n = static_cast<int>(ids.size());
   if (n == 0) return g;
+  // Only links to agents of the snapshot (running) count: one to a departed peer lapses with its
+  // neighbour timeout.
+  std::vector<AgentId> sorted = ids;
+  std::sort(sorted.begin(), sorted.end());
+  std::size_t min_degree = static_cast<std::size_t>(n);
+  for (int i = 0; i < n; ++i) {
+    std::size_t degree = 0;
+    for (const auto& [peer, w] : links_of(i))
+      degree += std::binary_search(sorted.begin(), sorted.end(), peer) ? 1 : 0;
+    min_degree = std::min(min_degree, degree);
+  }
+  g.set_min_degree(static_cast<std::uint32_t>(min_degree));
   const Spectrum s = analyze(laplacian(n, edges));
   g.set_lambda2(s.lambda2);
   g.set_components(static_cast<std::uint32_t>(s.components));
@@ -40,13 +111,8 @@ records::GraphSnapshot measure_graph(double t_s, const std::vector<AgentId>& ids
     }
     g.set_min_separation_m(min_sep);
   }
-  double spread = 0.0;
-  for (int i = 0; i < n; ++i) {
-    if (!held.empty() && held[static_cast<std::size_t>(i)]) continue;
-    const Vec3 slot = offsets.empty() ? qbar : Vec3(qbar + offsets[static_cast<std::size_t>(i)]);
-    spread = std::max(spread, (p[static_cast<std::size_t>(i)] - slot).norm());
-  }
-  g.set_spread_m(spread);
+  g.set_spread_m(spread_of(std::vector<bool>(q.size(), true), q, p, offsets, held));
+  if (wmsr) measure_trimmed(g, ids, q, p, offsets, held, *wmsr);
   return g;
 }
 

@@ -24,7 +24,8 @@ std::string quoted(const std::string& s) {
 
 }  // namespace
 
-RecordSinks::RecordSinks(const RunDir& dir) : dir_(dir) {
+RecordSinks::RecordSinks(const RunDir& dir, SceneSettings scene)
+    : dir_(dir), mcap_(std::move(scene)) {
   telemetry_.open(dir_.telemetry());
   graph_.open(dir_.graph());
   events_.open(dir_.events());
@@ -35,20 +36,22 @@ RecordSinks::RecordSinks(const RunDir& dir) : dir_(dir) {
   telemetry_ << "stamp_s,id,seq,phase,mode,qx,qy,qz,px,py,pz,vx,vy,vz,qw,qxr,qyr,qzr,w1,w2,w3,w4,"
                 "total_weight,links,age_ms\n";
   graph_ << "t_s,agents,edges,lambda2,components,disagreement_m,mean_drift_m,min_separation_m,"
-            "spread_m,edge_list\n";
+            "spread_m,edge_list,min_degree,robust,trimmed_disagreement_m\n";
   events_ << "t_s,kind,agent,detail\n";
   telemetry_ << std::setprecision(10);
   graph_ << std::setprecision(10);
   check(telemetry_, dir_.telemetry());
   check(graph_, dir_.graph());
   check(events_, dir_.events());
+  if (!mcap_.open(dir_.mcap()) && failed_.empty()) failed_ = dir_.mcap().string();
 }
 
 void RecordSinks::check(std::ofstream& f, const std::filesystem::path& path) {
   if (!f && failed_.empty()) failed_ = path.string();
 }
 
-void RecordSinks::write_record(const records::Record& r) {
+void RecordSinks::write_record(const records::Record& r, std::int64_t published_wall_ns) {
+  if (observer_) observer_->on_record(r, published_wall_ns);
   {
     google::protobuf::io::OstreamOutputStream raw(&records_);
     google::protobuf::io::CodedOutputStream out(&raw);
@@ -57,6 +60,14 @@ void RecordSinks::write_record(const records::Record& r) {
     if (out.HadError() && failed_.empty()) failed_ = dir_.records();
   }
   check(records_, dir_.records());
+  // records.pb reaches the disk before each chunk of run.mcap does: a supervisor killed mid-run
+  // leaves in records.pb at least what run.mcap holds, so `swarm export` can rebuild it.
+  if (mcap_.chunk_due()) {
+    records_.flush();
+    check(records_, dir_.records());
+  }
+  mcap_.write(r);
+  if (!mcap_.ok() && failed_.empty()) failed_ = dir_.mcap().string();
 }
 
 void RecordSinks::sample(const StateMessage& m, double age_ms) {
@@ -85,7 +96,8 @@ void RecordSinks::sample(const StateMessage& m, double age_ms) {
   s->add_orientation(o.z());
   for (int i = 0; i < 4; ++i) s->add_rotors(m.rotors_radps[i]);
   s->set_mode(static_cast<std::uint32_t>(m.mode));
-  write_record(r);
+  s->set_trimmed(m.trimmed);
+  write_record(r, m.wall_ns);
 }
 
 void RecordSinks::graph(const records::GraphSnapshot& g) {
@@ -94,7 +106,9 @@ void RecordSinks::graph(const records::GraphSnapshot& g) {
     list << (list.tellp() > 0 ? ";" : "") << e.a() << '-' << e.b() << ':' << e.weight();
   graph_ << g.t_s() << ',' << g.agents() << ',' << g.edges_size() << ',' << g.lambda2() << ','
          << g.components() << ',' << g.disagreement_m() << ',' << g.mean_drift_m() << ','
-         << g.min_separation_m() << ',' << g.spread_m() << ",\"" << list.str() << "\"\n";
+         << g.min_separation_m() << ',' << g.spread_m() << ",\"" << list.str() << "\","
+         << g.min_degree() << ',' << (g.has_robust() ? int(g.robust()) : -1) << ','
+         << g.trimmed_disagreement_m() << '\n';
   check(graph_, dir_.graph());
   records::Record r;
   *r.mutable_graph() = g;
@@ -124,6 +138,12 @@ bool RecordSinks::flush() {
   check(events_, dir_.events());
   records_.flush();
   check(records_, dir_.records());
+  return ok();
+}
+
+bool RecordSinks::close() {
+  flush();
+  if (!mcap_.close() && failed_.empty()) failed_ = dir_.mcap().string();
   return ok();
 }
 

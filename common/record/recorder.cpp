@@ -24,13 +24,24 @@ Recorder::Recorder(RunConfig rc, RunDir dir, double time_scale)
     : rc_(std::move(rc)),
       dir_(std::move(dir)),
       time_scale_(time_scale),
-      sinks_(dir_),
+      sinks_(dir_, SceneSettings::of(rc_)),
       presence_(ids_of(rc_), rc_.agent.neighbor_timeout_s, rc_.record_every()),
       judge_(rc_.judge.tolerance_m, rc_.judge.hold_s, rc_.agent.neighbor_timeout_s,
-             rc_.agent.law.kind == LawKind::kEdgeFlow ? rc_.judge.tolerance_m : -1.0, rc_.faults),
+             rc_.agent.law.kind == LawKind::kEdgeFlow ? rc_.judge.tolerance_m : -1.0, rc_.faults,
+             rc_.agent.law.kind == LawKind::kWmsr ? rc_.agent.law.wmsr_f : 0),
       separation_(rc_.agent.avoidance.safe_distance_m),
       timeline_(rc_.faults.timeline()) {
   tally_.held = rc_.held_agents();
+  if (rc_.agent.law.kind == LawKind::kWmsr) {
+    records::ResilienceOverTime r;
+    r.set_f(static_cast<std::uint32_t>(rc_.agent.law.wmsr_f));
+    r.set_min_degree(static_cast<std::uint32_t>(rc_.agents.size()));
+    r.set_first_degree_short_s(-1.0);
+    r.set_first_not_robust_s(-1.0);
+    if (rc_.agents.size() <= static_cast<std::size_t>(kMaxExactRobustness))
+      r.set_robust_always(true);
+    tally_.resilience = r;
+  }
 }
 
 void Recorder::event(const std::string& kind, AgentId agent, const std::string& detail) {
@@ -217,9 +228,11 @@ void Recorder::snapshot() {
   std::vector<AgentId> ids;
   Positions q, p, offsets;
   std::vector<double> speed;
+  WmsrMeasure wmsr{rc_.agent.law.wmsr_f, rc_.judge.tolerance_m, {}};
   for (const auto& [id, a] : presence_.tracks()) {
     if (presence_.running(id)) {
       ids.push_back(id);
+      wmsr.q0.push_back(a.last.view.q0);
       q.push_back(a.last.view.q);
       p.push_back(a.last.p_W);
       offsets.push_back(offset_of(id));
@@ -241,8 +254,10 @@ void Recorder::snapshot() {
   last_ = measure_graph(
       t_s_, ids, q, p,
       [&](int i) -> const auto& { return presence_.track(ids[static_cast<size_t>(i)]).last.links; },
-      rc_.initial_average(), offsets, held);
+      rc_.initial_average(), offsets, held, rc_.agent.law.kind == LawKind::kWmsr ? &wmsr : nullptr);
   last_->set_held_speed_mps(held_speed);
+  // Judged once the whole swarm has started: a swarm still starting lacks links it will have.
+  if (tally_.resilience && first_full_) judge_resilience(*last_, ids);
   record_graph(*last_);
   const ConvergenceJudge::Verdict v = judge_.update(t_s_, *last_, presence_);
   if (v == ConvergenceJudge::Verdict::kNone) return;
@@ -253,6 +268,8 @@ void Recorder::snapshot() {
     event("agreed_forged", 0, impersonated_text() + "; " + buf);
   } else if (v == ConvergenceJudge::Verdict::kConverged) {
     event("converged", 0, buf);
+  } else if (v == ConvergenceJudge::Verdict::kAgreedExceptOutliers) {
+    event("agreed_except", 0, outliers_text() + "; " + buf);
   } else if (v == ConvergenceJudge::Verdict::kAgreedElsewhere) {
     event("agreed_elsewhere", 0, elsewhere_text() + "; " + buf);
   } else {
@@ -271,12 +288,90 @@ std::string Recorder::missing_text() const {
   return "agent" + std::string(judge_.missing().size() > 1 ? "s " : " ") + ids;
 }
 
+void Recorder::judge_resilience(records::GraphSnapshot& g, const std::vector<AgentId>& ids) {
+  records::ResilienceOverTime& r = *tally_.resilience;
+  const int f = rc_.agent.law.wmsr_f;
+  // Each condition is timed from one snapshot to the next, in the state it was in.
+  const double dt = resilience_t_s_ < 0.0 ? 0.0 : t_s_ - resilience_t_s_;
+  resilience_t_s_ = t_s_;
+  r.set_min_degree(std::min(r.min_degree(), g.min_degree()));
+  if (degree_short_) r.set_degree_short_s(r.degree_short_s() + dt);
+  const bool short_now = g.min_degree() < static_cast<std::uint32_t>(2 * f + 1);
+  if (short_now != degree_short_) {
+    char buf[160];
+    if (short_now) {
+      if (r.first_degree_short_s() < 0.0) r.set_first_degree_short_s(t_s_);
+      std::snprintf(buf, sizeof buf, "an agent reads %u neighbour%s; W-MSR with F = %d needs %d",
+                    g.min_degree(), g.min_degree() == 1 ? "" : "s", f, 2 * f + 1);
+    } else {
+      std::snprintf(buf, sizeof buf, "every agent reads at least %d neighbours again", 2 * f + 1);
+    }
+    event(short_now ? "resilience_lost" : "resilience_restored", 0, buf);
+    degree_short_ = short_now;
+  }
+  if (ids.size() > static_cast<std::size_t>(kMaxExactRobustness)) return;
+  // Exhaustive, so decided once per distinct graph: the graph changes far less often than it is
+  // measured.
+  std::vector<std::pair<AgentId, AgentId>> edges;
+  for (const records::GraphEdge& e : g.edges()) edges.emplace_back(e.a(), e.b());
+  if (!robust_known_ || ids != robust_ids_ || edges != robust_edges_) {
+    std::vector<Edge> by_index;
+    for (const auto& [a, b] : edges) {
+      const auto i = std::find(ids.begin(), ids.end(), a) - ids.begin();
+      const auto j = std::find(ids.begin(), ids.end(), b) - ids.begin();
+      by_index.push_back({static_cast<int>(i), static_cast<int>(j), 1.0});
+    }
+    robust_ = is_rs_robust(static_cast<int>(ids.size()), by_index, f + 1, f + 1);
+    robust_known_ = true;
+    robust_ids_ = ids;
+    robust_edges_ = std::move(edges);
+    r.set_robustness_checks(r.robustness_checks() + 1);
+  }
+  g.set_robust(robust_);
+  if (not_robust_) r.set_not_robust_s(r.not_robust_s() + dt);
+  if (!robust_) r.set_robust_always(false);
+  if (robust_ == not_robust_) {  // it changed
+    char buf[160];
+    if (!robust_) {
+      if (r.first_not_robust_s() < 0.0) r.set_first_not_robust_s(t_s_);
+      std::snprintf(buf, sizeof buf,
+                    "the graph is not (%d, %d)-robust: up to F = %d liars can drag or split the "
+                    "others",
+                    f + 1, f + 1, f);
+    } else {
+      std::snprintf(buf, sizeof buf, "the graph is (%d, %d)-robust again", f + 1, f + 1);
+    }
+    event(robust_ ? "resilience_restored" : "resilience_lost", 0, buf);
+    not_robust_ = !robust_;
+  }
+}
+
+std::string Recorder::outliers_text() const {
+  std::string ids;
+  for (const AgentId id : judge_.outliers()) ids += (ids.empty() ? "" : ", ") + std::to_string(id);
+  std::string text = "agreed except agent" +
+                     std::string(judge_.outliers().size() > 1 ? "s " : " ") + ids +
+                     " (a liar W-MSR ignored, or an agent cut off)";
+  if (judge_.agreed_elsewhere_m() >= 0.0) {
+    char buf[120];
+    std::snprintf(buf, sizeof buf, ", %.3g m outside the others' initial bounding box",
+                  judge_.agreed_elsewhere_m());
+    text += buf;
+  }
+  return text;
+}
+
 std::string Recorder::elsewhere_text() const {
   char buf[160];
   std::snprintf(buf, sizeof buf,
                 "agreed %.3g m from the initial average, which edge-flow keeps: forged states or "
                 "flows?",
                 judge_.agreed_elsewhere_m());
+  if (rc_.agent.law.kind == LawKind::kWmsr)
+    std::snprintf(buf, sizeof buf,
+                  "agreed %.3g m outside the agents' initial bounding box, which W-MSR keeps: more "
+                  "than F = %d liars, or too few links?",
+                  judge_.agreed_elsewhere_m(), rc_.agent.law.wmsr_f);
   return buf;
 }
 
@@ -291,6 +386,7 @@ std::string Recorder::impersonated_text() const {
 std::string Recorder::end_reason_if_over() const {
   if (judge_.converged()) return converged() ? "converged" : impersonated_text();
   if (judge_.agreed_without_some()) return "agreed without " + missing_text();
+  if (!judge_.outliers().empty()) return outliers_text();
   if (judge_.agreed_elsewhere_m() >= 0.0) return elsewhere_text();
   if (duration_reached()) return "duration";
   return "";
@@ -316,9 +412,16 @@ std::string Recorder::finish(const std::string& end_reason, double wall_time_s) 
   summary_ = build_summary(rc_, presence_, judge_, tally_, first_full_, last_,
                            {end_reason, t_s_, wall_time_s, time_scale_});
   event("end", 0, end_reason);
+  // The files end before the summary is written, so that a file that could not be completed (a
+  // full disk) is in the summary too: never "converged" over a record cut short.
+  if (!sinks_.close()) {
+    summary_.set_converged(false);
+    summary_.set_end_reason(summary_.end_reason() + "; record incomplete: could not write " +
+                            std::filesystem::path(sinks_.failed_file()).filename().string());
+  }
+  if (RunObserver* o = sinks_.observer()) o->on_summary(summary_);
   const std::string json = to_json(summary_);
   if (!dir_.write_summary(json)) sinks_.fail(dir_.summary().string());
-  sinks_.flush();
   std::string text = summary_text(summary_, rc_, dir_.str());
   if (!sinks_.ok()) text += "RECORD INCOMPLETE: could not write " + sinks_.failed_file() + "\n";
   return text;

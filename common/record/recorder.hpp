@@ -45,6 +45,10 @@ class Recorder {
   // of ms.
   void tick(std::int64_t now_wall_ns);
 
+  // Shows the record to `observer` as it is written, and the summary at the end (nullptr: none).
+  // Not owned; it must outlive the recorder or be unset first.
+  void set_observer(RunObserver* observer) { sinks_.set_observer(observer); }
+
   double time_s() const { return t_s_; }
   // The agents agreed, every expected one was there, and no agent's samples were forged.
   bool converged() const { return judge_.converged() && tally_.impersonated().empty(); }
@@ -68,9 +72,12 @@ class Recorder {
   void snapshot();          // the swarm now, from the latest samples; checks convergence
   void initial_snapshot();  // the swarm at t = 0, from q(0) and each agent's initial links
   double swarm_time_at(std::int64_t wall_ns) const;
+  // Law W_MSR: its condition on this snapshot (sets g's robust), timed and told in events.
+  void judge_resilience(records::GraphSnapshot& g, const std::vector<AgentId>& ids);
   std::string missing_text() const;
   std::string elsewhere_text() const;
   std::string impersonated_text() const;
+  std::string outliers_text() const;
   // Its formation slot about the centre (zero for an agent the scenario does not list).
   Vec3 offset_of(AgentId id) const;
 
@@ -92,6 +99,13 @@ class Recorder {
   std::set<std::uint64_t> foreign_runs_;
   std::set<AgentId> implausible_;
   std::vector<std::string> notes_;
+  // W-MSR's condition: the graph robustness was last decided for (ids, and edges as id pairs),
+  // and what the condition was at the last snapshot.
+  std::vector<AgentId> robust_ids_;
+  std::vector<std::pair<AgentId, AgentId>> robust_edges_;
+  bool robust_ = true, robust_known_ = false;
+  bool degree_short_ = false, not_robust_ = false;
+  double resilience_t_s_ = -1.0;
   // How far (simulated s) a sample may be stamped ahead of the swarm's clock: a late joiner's
   // first stamps, the supervisor's own scheduling, a tick or two of skew.
   static constexpr double kStampSlackS = 5.0;

@@ -47,10 +47,12 @@ class RunDir {
   std::filesystem::path graph() const { return file(kGraph); }
   std::filesystem::path events() const { return file(kEvents); }
   std::filesystem::path records() const { return file(kRecords); }
+  std::filesystem::path mcap() const { return file(kMcap); }
   std::filesystem::path processes() const { return file(kProcesses); }
   std::filesystem::path supervisor_ready() const { return file(kSupervisorReady); }
   std::filesystem::path supervisor_log() const { return file(kSupervisorLog); }
   std::filesystem::path supervisor_out() const { return file(kSupervisorOut); }
+  std::filesystem::path discovery_out() const { return file(kDiscoveryOut); }
   std::filesystem::path plots() const { return file(kPlots); }
   std::filesystem::path agent_log(AgentId id) const;
   // The agent's process output: its first life's, or the k-th restart's.
@@ -96,10 +98,12 @@ class RunDir {
   static constexpr const char* kGraph = "graph.csv";
   static constexpr const char* kEvents = "events.csv";
   static constexpr const char* kRecords = "records.pb";
+  static constexpr const char* kMcap = "run.mcap";
   static constexpr const char* kProcesses = "processes.csv";
   static constexpr const char* kSupervisorReady = "supervisor.ready";
   static constexpr const char* kSupervisorLog = "supervisor.log";
   static constexpr const char* kSupervisorOut = "supervisor.out";
+  static constexpr const char* kDiscoveryOut = "discovery.out";
   static constexpr const char* kPlots = "plots";
 
  private:

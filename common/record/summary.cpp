@@ -54,6 +54,7 @@ records::Summary build_summary(const RunConfig& rc, const Presence& presence,
   s.set_foreign_samples(tally.foreign_samples);
   s.set_implausible_samples(tally.implausible_samples);
   for (const AgentId id : judge.missing()) s.add_missing_agents(id);
+  for (const AgentId id : judge.outliers()) s.add_outlier_agents(id);
   if (judge.agreed_elsewhere_m() >= 0.0) s.set_agreed_elsewhere_m(judge.agreed_elsewhere_m());
   s.set_convergence_time_s(converged ? judge.converged_at_s() : -1.0);
   for (const auto& [key, note] : tally.forgeries) {
@@ -101,6 +102,7 @@ records::Summary build_summary(const RunConfig& rc, const Presence& presence,
     as->set_samples(count32(a.samples));
     as->set_seq_gaps(count32(a.gaps));
     as->set_dropped_by_agent(count32(a.last.dropped));
+    as->set_trimmed(a.last.trimmed);
     const double span = a.last.stamp_s - a.first.stamp_s;
     if (span > 0.0) {
       as->set_rate_hz(static_cast<double>(a.samples - 1) / (span / end.time_scale));
@@ -115,6 +117,13 @@ records::Summary build_summary(const RunConfig& rc, const Presence& presence,
     received += a.samples;
     dropped += a.last.dropped;
     gaps += a.gaps;
+  }
+  if (tally.resilience) {
+    records::ResilienceOverTime& r = *s.mutable_resilience();
+    r = *tally.resilience;
+    std::uint64_t trimmed = 0;
+    for (const records::AgentSummary& as : s.agents()) trimmed += as.trimmed();
+    r.set_trimmed(trimmed);
   }
   msg.set_published(count32(published));
   msg.set_received(count32(received));
@@ -247,7 +256,11 @@ std::string summary_text(const records::Summary& s, const RunConfig& rc, const s
     << msg.dropped() << ", gaps " << msg.seq_gaps() << ", age p50 " << fmt("%.3f", msg.age_p50_ms())
     << " ms p99 " << fmt("%.3f", msg.age_p99_ms()) << " ms\n";
   h << "joins " << s.joins() << ", departures " << s.departures() << "\n";
-  if (s.has_agreed_elsewhere_m()) {
+  if (s.has_agreed_elsewhere_m() && rc.agent.law.kind == LawKind::kWmsr) {
+    h << "MOVED: the agents agreed " << fmt("%.3g", s.agreed_elsewhere_m())
+      << " m outside their initial bounding box, which W-MSR keeps with at most F = "
+      << rc.agent.law.wmsr_f << " liars on a robust graph: more liars, or too few links?\n";
+  } else if (s.has_agreed_elsewhere_m()) {
     h << "MOVED: the agents agreed " << fmt("%.3g", s.agreed_elsewhere_m())
       << " m from the initial average, which edge-flow keeps exactly: something outside the law "
          "moved it (a participant publishing forged states or flows?)\n";
@@ -261,6 +274,21 @@ std::string summary_text(const records::Summary& s, const RunConfig& rc, const s
       sep = ", ";
     }
     h << "\n";
+  }
+  if (s.outlier_agents_size() > 0) {
+    h << "OUTLIERS: the others agreed, but not agent(s)";
+    for (const auto id : s.outlier_agents()) h << " " << id;
+    h << " (a liar W-MSR ignored, or an agent cut off: the record cannot tell which)\n";
+  }
+  if (s.has_resilience()) {
+    const records::ResilienceOverTime& r = s.resilience();
+    h << "W-MSR, F = " << r.f() << ": fewest neighbours " << r.min_degree() << " (needs "
+      << 2 * r.f() + 1 << ")";
+    if (r.degree_short_s() > 0.0) h << ", short for " << fmt("%.2f", r.degree_short_s()) << " s";
+    if (r.has_robust_always())
+      h << ", (" << r.f() + 1 << ", " << r.f() + 1 << ")-robust "
+        << (r.robust_always() ? "throughout" : "NOT for " + fmt("%.2f", r.not_robust_s()) + " s");
+    h << ", neighbour values trimmed " << r.trimmed() << "\n";
   }
   if (s.missing_agents_size() > 0) {
     h << "MISSING: the others agreed without agent(s)";

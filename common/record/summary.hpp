@@ -41,6 +41,8 @@ struct RunTally {
   // Agents whose samples came from two writers at once: the record cannot tell which of their
   // samples were real, so the run does not converge.
   std::vector<AgentId> impersonated() const;
+  // Law W_MSR: its condition over the run (trimmed is summed from the agents' last samples).
+  std::optional<records::ResilienceOverTime> resilience;
 };
 
 struct RunEnd {

@@ -55,6 +55,12 @@ class SupervisorLoop {
   // people. Call once, after poll() returned an end reason (or at any time, to stop early).
   std::string finish(const std::string& reason);
 
+  // Shows the record to a watcher (the live view) as it is written; nullptr: none. Not owned.
+  void set_observer(RunObserver* observer) {
+    std::lock_guard<std::mutex> lock(mu_);
+    recorder_.set_observer(observer);
+  }
+
   // 0 converged with a complete record, 1 not converged, 3 the record is incomplete.
   int exit_code() const;
   bool complete() const { return recorder_.complete(); }

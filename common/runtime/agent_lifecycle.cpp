@@ -28,7 +28,8 @@ const char* to_string(LifePhase p) {
 AgentLifecycle::AgentLifecycle(LifecycleConfig cfg, double now_wall_s)
     : cfg_(std::move(cfg)),
       born_s_(now_wall_s),
-      phase_(cfg_.join_at_s ? LifePhase::kJoinWait : LifePhase::kWaiting) {
+      phase_(cfg_.join_at_s ? LifePhase::kJoinWait : LifePhase::kWaiting),
+      next_progress_s_(now_wall_s + kProgressPeriodS) {
   std::sort(cfg_.kill_at_s.begin(), cfg_.kill_at_s.end());
 }
 
@@ -112,6 +113,19 @@ LifecycleStep AgentLifecycle::barrier(double now, const std::vector<PeerStatus>&
     s.warning = buf;
     enter_running(now, s, 0.0);
     return s;
+  }
+  if (now >= next_progress_s_) {
+    // A large swarm can wait here for a long time: say what for, so a stuck start is never silent.
+    char buf[200];
+    std::snprintf(buf, sizeof buf,
+                  "at the start barrier after %.0f s: %zu of %zu peers heard, %zu ready, %d of %d "
+                  "readers matched, recorder %s",
+                  now - born_s_, heard, expected, ready, matched_readers, cfg_.min_matched_readers,
+                  !cfg_.wait_recorder  ? "not awaited"
+                  : recorder_confirmed ? "confirmed"
+                                       : "not confirmed");
+    s.progress = buf;
+    next_progress_s_ = now + kProgressPeriodS;
   }
   phase_ = all_heard ? LifePhase::kReady : LifePhase::kWaiting;
   s.announce = all_heard ? Phase::kReady : Phase::kWaiting;

@@ -65,6 +65,7 @@ struct LifecycleStep {
   bool stop = false;           // the wall limit is reached
   double wake_at_s = 0.0;      // when to call step() next (wall)
   std::string warning;         // something worth a log line (a timeout)
+  std::string progress;        // where a long wait stands (every kProgressPeriodS at the barrier)
 };
 
 // The agent's phases as one state machine: it takes the wall time, the peers' latest states and the
@@ -80,6 +81,8 @@ class AgentLifecycle {
   void stop() { phase_ = LifePhase::kStopping; }
 
   LifePhase phase() const { return phase_; }
+  // How often an agent waiting at the start barrier says what it still waits for [wall s].
+  static constexpr double kProgressPeriodS = 10.0;
   // Wall seconds from construction to Phase::kRunning (discovery and barrier), -1 before.
   double discovery_s() const { return discovery_s_; }
   const std::optional<TickPacer>& pacer() const { return pacer_; }
@@ -95,6 +98,7 @@ class AgentLifecycle {
   double born_s_;
   LifePhase phase_;
   double discovery_s_ = -1.0;
+  double next_progress_s_ = 0.0;
   std::optional<TickPacer> pacer_;
   std::size_t next_kill_ = 0;
 };

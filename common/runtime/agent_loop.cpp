@@ -114,6 +114,7 @@ AgentLoop::Poll AgentLoop::poll() {
   const LifecycleStep s = life_.step(now, peers, transport_.matched_readers(), runtime_.time_s(),
                                      transport_.recorder_confirmed());
   if (!s.warning.empty()) r.notes.push_back({true, s.warning});
+  if (!s.progress.empty()) r.notes.push_back({false, s.progress});
   if (s.swarm_time_s >= 0.0) faulty_.set_time(s.swarm_time_s);
   runtime_.set_wall_ns(clock_.wall_ns());  // what samples published now carry
   if (s.announce) runtime_.publish(*s.announce);

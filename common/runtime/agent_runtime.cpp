@@ -58,6 +58,7 @@ void AgentRuntime::publish(Phase phase) {
   m.received = received_;
   m.dropped = dropped_;
   m.overruns = overruns_;
+  m.trimmed = law_->trimmed_total();
   m.faults = faults_;
   m.strangers = strangers_;
   m.suspects = suspects_;

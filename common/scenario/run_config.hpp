@@ -57,6 +57,8 @@ struct JudgeConfig {
 // Which samples an agent is sent: those of the agents that can be its neighbours (the default), or
 // everyone's.
 enum class Delivery { kNeighbours, kAll };
+// How a run's participants discover each other (scenario Transport.Discovery).
+enum class Discovery { kSimple, kServer };
 
 // Where the run's DDS traffic goes.
 struct TransportConfig {
@@ -66,6 +68,7 @@ struct TransportConfig {
   std::uint64_t run_id = 0;  // isolates this run on a shared DDS domain (0: the launcher draws one)
   Delivery delivery = Delivery::kNeighbours;
   std::string keystore;  // DDS-Security keystore (an absolute path); empty: plain DDS
+  Discovery discovery = Discovery::kSimple;
 };
 
 // A scenario with every default filled in and random agents resolved: what a run actually uses.

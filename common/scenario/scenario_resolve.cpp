@@ -398,6 +398,20 @@ void resolve_transport(const scenario::Transport& t, RunConfig& rc) {
     tc.delivery = rc.agents.size() <= kAllToAllUpTo ? Delivery::kAll : Delivery::kNeighbours;
   else
     tc.delivery = t.delivery() == scenario::Transport::ALL ? Delivery::kAll : Delivery::kNeighbours;
+  const bool secure = !tc.keystore.empty();
+  switch (t.discovery()) {
+    case scenario::Transport::SERVER:
+      if (secure)
+        fail("transport.discovery",
+             "SIMPLE with a keystore (Fast DDS 2.9 has no secure Discovery Server)", "SERVER");
+      tc.discovery = Discovery::kServer;
+      break;
+    case scenario::Transport::SIMPLE:
+      tc.discovery = Discovery::kSimple;
+      break;
+    default:
+      tc.discovery = Discovery::kSimple;
+  }
 }
 
 // Checks shared by the fault entries: agent ids, time windows, probabilities.
@@ -547,6 +561,9 @@ void write_back_defaults(RunConfig& rc, scenario::Scenario& s) {
   s.mutable_transport()->set_delivery(rc.transport.delivery == Delivery::kAll
                                           ? scenario::Transport::ALL
                                           : scenario::Transport::NEIGHBOURS);
+  s.mutable_transport()->set_discovery(rc.transport.discovery == Discovery::kServer
+                                           ? scenario::Transport::SERVER
+                                           : scenario::Transport::SIMPLE);
   s.mutable_avoidance()->set_enabled(rc.agent.avoidance.enabled);
 }
 

@@ -14,6 +14,7 @@
 #include "common/runtime/agent_loop.hpp"
 #include "common/runtime/restart_policy.hpp"
 #include "common/scenario/run_config.hpp"
+#include "common/sim/liar.hpp"
 #include "common/transport/in_memory_bus.hpp"
 
 namespace qswarm {
@@ -44,6 +45,11 @@ class InProcessSwarm {
   // The agent's process dies unplanned (a crash, a SIGKILL from outside): silently, and the
   // restart policy does not bring it back.
   void crash(AgentId id);
+  // From now on agent liar.id lies (each call adds a liar): every consensus state it sends, to its
+  // neighbours and to the recorder, is liar.claim(receiver, its q0, its stamp) (the recorder counts
+  // as id 0), and a point agent's position with it. It still runs the real runtime; only what it
+  // says changes.
+  void add_liar(const Liar& liar);
 
   double wall_s() const { return clock_.now_s(); }
   const RunConfig& config() const { return rc_; }
@@ -81,6 +87,7 @@ class InProcessSwarm {
   std::unique_ptr<SupervisorLoop> supervisor_;
   double supervisor_wake_s_ = 0.0;
   std::optional<std::string> end_reason_;
+  std::vector<Liar> liars_;
 };
 
 }  // namespace qswarm

@@ -1,7 +1,6 @@
 #include "common/sim/lockstep_laws.hpp"
 
 #include <map>
-#include <random>
 #include <set>
 #include <stdexcept>
 
@@ -31,25 +30,6 @@ LockstepLaws::LockstepLaws(LockstepConfig cfg) : cfg_(std::move(cfg)) {
   // is known at the first tick.
   for (auto& law : laws_) law->observe(others(views_, law->id()));
   for (const auto& law : laws_) views_[law->id()] = law->message();
-}
-
-Vec3 Liar::claim(AgentId to, const Vec3& q0, double t_s) const {
-  switch (kind) {
-    case Kind::kConstant:
-      return value;
-    case Kind::kDrift:
-      return q0 + drift_mps * t_s;
-    case Kind::kSplit:
-      return to % 2 == 0 ? value : Vec3(-value);
-  }
-  return value;
-}
-
-Liar::Kind parse_liar_kind(const std::string& s) {
-  if (s == "constant") return Liar::Kind::kConstant;
-  if (s == "drift") return Liar::Kind::kDrift;
-  if (s == "split") return Liar::Kind::kSplit;
-  throw std::invalid_argument("liar '" + s + "': expected constant, drift or split");
 }
 
 void LockstepLaws::step() {
@@ -108,13 +88,10 @@ std::vector<Edge> LockstepLaws::edges() const {
 }
 
 std::vector<SwarmAgentSpec> LockstepLaws::random_agents(int n, std::uint64_t seed, double box_m) {
-  std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<double> u(0.0, box_m);
+  // The scenario's generator (random_agents { count box_m } with `seed`), so a test's agents and a
+  // scenario file's are the same points.
   std::vector<SwarmAgentSpec> out;
-  for (int i = 0; i < n; ++i) {
-    const double x = u(rng), y = u(rng), z = u(rng);
-    out.push_back({static_cast<AgentId>(i + 1), Vec3(x, y, z)});
-  }
+  for (const AgentSpec& a : random_agent_specs(n, seed, box_m, 0.0)) out.push_back({a.id, a.q0()});
   return out;
 }
 

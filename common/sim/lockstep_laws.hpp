@@ -10,6 +10,7 @@
 #include "common/core/graph.hpp"
 #include "common/core/update_law.hpp"
 #include "common/scenario/run_config.hpp"
+#include "common/sim/liar.hpp"
 
 namespace qswarm {
 
@@ -17,24 +18,6 @@ struct SwarmAgentSpec {
   AgentId id = 0;
   Vec3 q0 = Vec3::Zero();
 };
-
-// An insider with valid credentials that lies: it tells its neighbours a state of its choosing
-// every tick, while the others run their laws (the resilient law's tests and swarm-preview --liar).
-struct Liar {
-  enum class Kind {
-    kConstant,  // claims `value`, always
-    kDrift,     // claims its initial state + drift_mps * t: slow enough to look like motion
-    kSplit,     // claims +value to even ids and -value to odd ids (a transport that lets an
-                // agent tell each neighbour something else; DDS does not: one sample for all)
-  };
-  AgentId id = 0;
-  Kind kind = Kind::kConstant;
-  Vec3 value = Vec3::Zero();
-  Vec3 drift_mps = Vec3::Zero();
-  // What it tells `to` at time t, given its initial state.
-  Vec3 claim(AgentId to, const Vec3& q0, double t_s) const;
-};
-Liar::Kind parse_liar_kind(const std::string& s);  // constant, drift, split
 
 struct LockstepConfig {
   std::vector<SwarmAgentSpec> agents;
@@ -69,7 +52,8 @@ class LockstepLaws {
   Positions honest_states() const;
   Positions honest_initial_states() const;
 
-  // n agents uniformly in a cube of side box_m from a seeded generator (ids 1..n).
+  // n agents uniformly in a cube of side box_m from a seeded generator (ids 1..n): the points a
+  // scenario's `random_agents { count: n box_m: box_m }` with `seed` gives.
   static std::vector<SwarmAgentSpec> random_agents(int n, std::uint64_t seed, double box_m);
 
  private:

@@ -25,7 +25,14 @@ void InMemoryNetwork::deliver() {
     for (InMemoryBus* to : endpoints_) {
       if (to == p.from || to->role() != to_role) continue;
       // A record goes to every recorder; a sample to whoever listens where it was published.
-      if (p.record || Interest::meets(p.published, to->interest())) to->receive(p.m);
+      if (!p.record && !Interest::meets(p.published, to->interest())) continue;
+      if (rewrite_ && p.from) {
+        StateMessage m = p.m;
+        rewrite_(*p.from, *to, m);
+        to->receive(m);
+      } else {
+        to->receive(p.m);
+      }
     }
   }
 }

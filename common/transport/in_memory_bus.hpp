@@ -1,5 +1,6 @@
 #pragma once
 
+#include <functional>
 #include <map>
 #include <vector>
 
@@ -23,6 +24,12 @@ class InMemoryNetwork {
   // Hands every posted message to every other attached endpoint of its stream, in posting order.
   void deliver();
   int endpoints(InMemoryRole role) const;
+  // What `from` sends is rewritten for each endpoint `to` before it arrives (samples and records
+  // alike): how a test puts an insider that lies on the network, to every listener alike or to
+  // each its own.
+  using Rewrite =
+      std::function<void(const InMemoryBus& from, const InMemoryBus& to, StateMessage& m)>;
+  void set_rewrite(Rewrite rewrite) { rewrite_ = std::move(rewrite); }
 
  private:
   struct Posted {
@@ -33,6 +40,7 @@ class InMemoryNetwork {
   };
   std::vector<InMemoryBus*> endpoints_;
   std::vector<Posted> queue_;
+  Rewrite rewrite_;
 };
 
 // One agent's endpoint on an InMemoryNetwork: it admits samples through the same SampleGate as

@@ -80,6 +80,7 @@ struct StateMessage {
   std::uint64_t received = 0;  // samples the sender accepted
   std::uint64_t dropped = 0;   // samples the sender rejected
   std::uint64_t overruns = 0;  // the sender's late ticks
+  std::uint64_t trimmed = 0;   // neighbour values the sender's law trimmed so far (W-MSR)
   FaultCounters faults;        // injected in the sender's receive path (this incarnation)
   // Ids outside the run whose samples the sender's transport dropped (the first kMaxStrangers):
   // the recorder, which does not hear the agents' stream, names each stranger from these.

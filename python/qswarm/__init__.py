@@ -1,6 +1,6 @@
 """quadswarm's Python: the figures and reports drawn from run records.
 
-`swarm plot` runs `python3 -m qswarm.plot` and `swarm paper` runs `python3 -m qswarm.paper`, with
+`swarm plot` runs `python3 -m qswarm.plot`, `swarm paper` `python3 -m qswarm.paper` and so on, with
 PYTHONPATH at the copy of this package the build keeps beside the `swarm` binary (bin/python/).
 
   run_dir        the run directory's file names
@@ -14,4 +14,5 @@ PYTHONPATH at the copy of this package the build keeps beside the `swarm` binary
   paper_numbers  the paper's printed numbers and ours,
   paper_figures  its figures,
   paper_report   and report.md
+  resilience     `swarm resilience`: the three laws under one lying insider (swarm-preview --liar)
 """

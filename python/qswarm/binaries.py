@@ -36,19 +36,22 @@ def inspect(swarm, scenario_path):
         raise BinaryError(scenario_path, "swarm inspect printed no JSON") from None
 
 
-def lockstep(preview, scenario_path, np, law="laplacian"):
+def lockstep(preview, scenario_path, np, law="laplacian", liar=None):
     """`swarm-preview SCENARIO --law LAW --csv`: the scenario's agents flown by the bare laws in
     lockstep (every agent at every tick from the others' states of the previous tick) at its
-    consensus rate, until its tolerance or duration. Returns (t_s, ids, states), states being
-    ticks x agents x 3 in the order of ids."""
+    consensus rate, until its tolerance or duration. With `liar` ("ID:KIND", swarm-preview's
+    --liar) that agent lies for the whole duration and only the honest agents are returned.
+    Returns (t_s, ids, states), states being ticks x agents x 3 in the order of ids."""
     with tempfile.TemporaryDirectory(prefix="qswarm-lockstep-") as tmp:
         path = os.path.join(tmp, "lockstep.csv")
         try:
-            r = subprocess.run([preview, scenario_path, "--law", law, "--csv", path],
+            r = subprocess.run([preview, scenario_path, "--law", law, "--csv", path]
+                               + (["--liar", liar] if liar else []),
                                stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
         except OSError as e:
             raise BinaryError(preview, f"cannot run ({e.strerror})") from None
-        # 1 says only that the mean moved more than 1e-6 m: the states are still the law's.
+        # 1 says only that the mean moved more than 1e-6 m (or, with a liar, that the honest
+        # agents did not meet inside their box): the states are still the law's.
         if r.returncode not in (0, 1):
             raise BinaryError(scenario_path,
                               f"swarm-preview exited {r.returncode}: {r.stderr.strip()}")

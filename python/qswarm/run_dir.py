@@ -12,6 +12,7 @@ GRAPH = "graph.csv"
 EVENTS = "events.csv"
 SCENARIO = "scenario.txtpb"  # the scenario as run: read through `swarm inspect --json`
 RECORDS = "records.pb"  # the samples, graph and events as Protobuf (nothing here reads it)
+MCAP = "run.mcap"  # the same and a 3D scene as MCAP, for Foxglove or Lichtblick (nor this)
 PLOTS = "plots"  # not written by the run: where `swarm plot` puts its figures by default
 PROCESSES = "processes.csv"  # role,id,pid of every process the launcher started
 AGENT_STATS = "agent-N.stats"  # N: the agent's id (agent_file)

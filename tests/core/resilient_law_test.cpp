@@ -2,6 +2,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <fstream>
+#include <sstream>
 
 #include "common/core/graph.hpp"
 #include "common/core/update_law.hpp"
@@ -119,16 +121,7 @@ TEST(WmsrLaw, WithoutLiarsItStillAgrees) {
 
 // Does every honest agent end inside the honest initial values' bounding box (per coordinate)?
 bool inside_honest_box(const LockstepLaws& s, double slack_m) {
-  const Positions q0 = s.honest_initial_states();
-  Vec3 lo = q0.front(), hi = q0.front();
-  for (const Vec3& p : q0) {
-    lo = lo.cwiseMin(p);
-    hi = hi.cwiseMax(p);
-  }
-  for (const Vec3& p : s.honest_states())
-    if ((p.array() < lo.array() - slack_m).any() || (p.array() > hi.array() + slack_m).any())
-      return false;
-  return true;
+  return outside_box_m(s.honest_states(), s.honest_initial_states()) <= slack_m;
 }
 
 struct Attack {
@@ -138,9 +131,9 @@ struct Attack {
 
 std::vector<Attack> attacks() {
   const Vec3 far(1000, 1000, 1000);
-  Liar constant{7, Liar::Kind::kConstant, far, Vec3::Zero()};
-  Liar drift{7, Liar::Kind::kDrift, Vec3::Zero(), Vec3(0.5, 0.5, 0.5)};
-  Liar split{7, Liar::Kind::kSplit, far, Vec3::Zero()};
+  Liar constant{7, Liar::Kind::kConstant, far};
+  Liar drift{7, Liar::Kind::kDrift, Vec3(0.5, 0.5, 0.5)};
+  Liar split{7, Liar::Kind::kSplit, far};
   return {{"constant", constant}, {"drift", drift}, {"split", split}};
 }
 
@@ -175,6 +168,65 @@ TEST(WmsrLaw, TheSameLiarDragsTheLawsThatTrustEveryone) {
       EXPECT_FALSE(inside_honest_box(s, 1.0));
     }
   }
+}
+
+TEST(Robustness, OutsideTheBoxIsMeasuredPerCoordinate) {
+  const Positions box = {{0, 0, 0}, {10, 2, 4}};
+  EXPECT_EQ(outside_box_m({{5, 1, 2}, {10, 0, 4}}, box), 0.0);
+  // (13, 6, 4): 3 beyond x, 4 beyond y: 5 m from the box, though inside the span of each axis' z.
+  EXPECT_DOUBLE_EQ(outside_box_m({{5, 1, 2}, {13, 6, 4}}, box), 5.0);
+  EXPECT_DOUBLE_EQ(outside_box_m({{-1, 1, 2}}, box), 1.0);
+  EXPECT_EQ(outside_box_m({{1e9, 0, 0}}, {}), 0.0);
+}
+
+// The table of docs/resilience.md and what `swarm resilience` writes (numbers.csv) come from
+// tests/core/insider_seven_expected.csv, which this test holds the core law to: the same
+// scenario (scenarios/insider_seven.txtpb is these seven agents), law and attacks, 120 s.
+TEST(InsiderTable, TheLockstepLawsGiveTheNumbersSwarmResilienceDraws) {
+  std::ifstream in(std::string(QSWARM_SOURCE_DIR) + "/tests/core/insider_seven_expected.csv");
+  ASSERT_TRUE(in) << "tests/core/insider_seven_expected.csv";
+  std::string line;
+  std::getline(in, line);
+  ASSERT_EQ(line, "law,attack,outside_m,max_outside_m,disagreement_m,mean_x,mean_y,mean_z");
+  int rows = 0;
+  while (std::getline(in, line)) {
+    std::istringstream row(line);
+    std::string law, attack, field;
+    std::getline(row, law, ',');
+    std::getline(row, attack, ',');
+    std::vector<double> want;
+    while (std::getline(row, field, ',')) want.push_back(std::stod(field));
+    ASSERT_EQ(want.size(), 6u) << line;
+    SCOPED_TRACE(law + " / " + attack);
+    Liar liar;
+    for (const Attack& a : attacks())
+      if (attack == a.name) liar = a.liar;
+    ASSERT_EQ(liar.id, 7u) << "unknown attack " << attack;
+    LockstepConfig cfg;
+    cfg.agents = LockstepLaws::random_agents(7, 5, 20.0);
+    cfg.law = wmsr(1);
+    cfg.law.kind = parse_law_kind(law);
+    cfg.liar = liar;
+    LockstepLaws s(cfg);
+    double most_outside = 0.0;
+    for (;;) {
+      most_outside =
+          std::max(most_outside, outside_box_m(s.honest_states(), s.honest_initial_states()));
+      if (s.time_s() >= 120.0) break;
+      s.step();
+    }
+    const Vec3 mean = average(s.honest_states());
+    const std::vector<double> got = {outside_box_m(s.honest_states(), s.honest_initial_states()),
+                                     most_outside,
+                                     disagreement(s.honest_states()),
+                                     mean.x(),
+                                     mean.y(),
+                                     mean.z()};
+    for (std::size_t k = 0; k < got.size(); ++k)
+      EXPECT_NEAR(got[k], want[k], 1e-9 + 1e-9 * std::abs(want[k])) << "column " << k + 2;
+    ++rows;
+  }
+  EXPECT_EQ(rows, 9);  // three laws, three attacks
 }
 
 }  // namespace

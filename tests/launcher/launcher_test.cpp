@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "common/mcap/writer.hpp"
 #include "common/scenario/proto_util.hpp"
 #include "common/scenario/scenario.hpp"
 #include "launcher/launcher.hpp"
@@ -100,6 +101,56 @@ TEST(Launcher, StartsNoAgentWhenTheSupervisorNeverListens) {
   EXPECT_THROW(l.start(), std::runtime_error);
   EXPECT_GE(clock.now_s(), 20.0);  // waited its 20 s (on the manual clock: instantly)
   EXPECT_EQ(procs.children().size(), 1u);
+}
+
+TEST(Launcher, ARunsOwnDiscoveryServerStartsFirstAndEveryParticipantIsToldItsAddress) {
+  FakeProcesses procs;
+  ManualClock clock;
+  LaunchSpec spec = spec_for("transport { domain_id: 3 }");
+  spec.participant_base = 10;
+  spec.discovery_id = 14;  // the block's last id: supervisor 10, agents 11..13
+  int polls = 0;
+  spec.discovery_ready = [&] { return ++polls > 3; };  // listening after a few polls
+  Launcher l(spec, procs, clock, [] { return true; });
+  l.start();
+  ASSERT_EQ(procs.children().size(), 5u);
+  EXPECT_EQ(procs.children()[0].role, "discovery");
+  EXPECT_EQ(procs.children()[1].role, "supervisor");
+  // Discovery port of id 14 on domain 3: 7400 + 1100 x 3 + 10 + 2 x 14.
+  const std::string address = "127.0.0.1:10738";
+  EXPECT_TRUE(has(procs.argv_[0], "14"));     // --participant-id
+  EXPECT_TRUE(has(procs.argv_[0], "10738"));  // --port
+  for (std::size_t i = 1; i < procs.argv_.size(); ++i)
+    EXPECT_TRUE(has(procs.argv_[i], address)) << procs.children()[i].role;
+  // The supervisor is found by its role, not its place.
+  procs.exit_child("supervisor", 0, exited(0));
+  EXPECT_EQ(l.poll(false), std::string(Launcher::kFinished));
+}
+
+TEST(Launcher, ADiscoveryServerThatNeverListensStartsNothingElse) {
+  FakeProcesses procs;
+  ManualClock clock;
+  LaunchSpec spec = spec_for("");
+  spec.participant_base = 0;
+  spec.discovery_id = 4;
+  spec.discovery_ready = [] { return false; };
+  Launcher l(spec, procs, clock, [] { return true; });
+  EXPECT_THROW(l.start(), std::runtime_error);
+  EXPECT_EQ(procs.children().size(), 1u);
+}
+
+TEST(Launcher, ADiscoveryServerThatCrashesMidRunIsACrashTheRecordMustShow) {
+  FakeProcesses procs;
+  ManualClock clock;
+  LaunchSpec spec = spec_for("");
+  spec.participant_base = 0;
+  spec.discovery_id = 4;
+  Launcher l(spec, procs, clock, [] { return true; });
+  l.start();
+  procs.exit_child("discovery", 0, signalled(SIGSEGV));
+  EXPECT_FALSE(l.poll(false));  // the matched participants fly on
+  ASSERT_EQ(l.problems().size(), 1u);
+  EXPECT_NE(l.problems()[0].find("Discovery Server"), std::string::npos) << l.problems()[0];
 }
 
 TEST(Launcher, AnUnmarkedSigkillIsNotThePlansEvenWithKillsPlanned) {
@@ -221,6 +272,8 @@ TEST(Launcher, ARunStoppedAtTheWallLimitSaysSoAndASummaryCutShortIsReplaced) {
       s.set_converged(true);
       s.set_end_reason("interrupted");
       ASSERT_TRUE(spec.dir.write_summary(to_json(s)));
+      mcap::Writer w;  // a supervisor that wrote its summary had ended run.mcap first
+      ASSERT_TRUE(w.open(spec.dir.mcap()) && w.close());
     }
     l.stop();
     for (AgentId id = 1; id <= 3; ++id) std::ofstream(spec.dir.agent_stats(id)) << "{}";
@@ -230,6 +283,46 @@ TEST(Launcher, ARunStoppedAtTheWallLimitSaysSoAndASummaryCutShortIsReplaced) {
     EXPECT_FALSE(s.converged()) << cut_short;
     EXPECT_NE(s.end_reason().find("did not finish in time"), std::string::npos) << s.end_reason();
     EXPECT_FALSE(std::filesystem::exists(spec.dir.summary().string() + ".tmp"));
+    std::filesystem::remove_all(spec.dir.path());
+  }
+}
+
+// run.mcap ends with a footer only when the supervisor closed it. A summary that says converged
+// over a run.mcap cut short (or missing) is amended, and the run exits 3 naming the file; a
+// supervisor that died leaves a summary that names it too.
+TEST(Launcher, ARunMcapCutShortMakesTheRecordIncompleteNamingIt) {
+  for (const bool supervisor_died : {false, true}) {
+    FakeProcesses procs;
+    ManualClock clock;
+    const LaunchSpec spec = spec_for("");
+    Launcher l(spec, procs, clock, [] { return true; });
+    l.start();
+    {
+      mcap::Writer w;
+      ASSERT_TRUE(w.open(spec.dir.mcap()) && w.close());
+    }
+    std::filesystem::resize_file(spec.dir.mcap(), 40);  // as a supervisor killed mid-run leaves it
+    if (!supervisor_died) {
+      records::Summary s;
+      s.set_converged(true);
+      s.set_end_reason("converged");
+      ASSERT_TRUE(spec.dir.write_summary(to_json(s)));
+    }
+    procs.exit_child("supervisor", 0, supervisor_died ? signalled(SIGKILL) : exited(0));
+    ASSERT_TRUE(l.poll(false).has_value());
+    l.stop();
+    for (AgentId id = 1; id <= 3; ++id) std::ofstream(spec.dir.agent_stats(id)) << "{}";
+    const Launcher::Outcome out = l.conclude(clock.now_s());
+    EXPECT_EQ(out.exit_code, supervisor_died ? 1 : 3);
+    const records::Summary s = read_summary(spec.dir);
+    EXPECT_FALSE(s.converged());
+    EXPECT_NE(s.end_reason().find("record incomplete: run.mcap: no footer"), std::string::npos)
+        << s.end_reason();
+    std::string said;
+    for (const std::string& line : out.lines) said += line + "\n";
+    if (!supervisor_died) {
+      EXPECT_NE(said.find("run.mcap"), std::string::npos) << said;
+    }
     std::filesystem::remove_all(spec.dir.path());
   }
 }

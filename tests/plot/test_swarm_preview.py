@@ -14,6 +14,7 @@ import unittest
 BIN = None
 SOURCE = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", ".."))
 UNWEIGHTED = os.path.join(SOURCE, "scenarios", "paper", "unweighted.txtpb")
+INSIDER = os.path.join(SOURCE, "scenarios", "insider_seven.txtpb")
 
 
 def preview(*args, cwd=None):
@@ -104,6 +105,30 @@ class SwarmPreviewTest(unittest.TestCase):
             r = preview(*args)
             self.assertEqual(r.returncode, 2, args)
             self.assertIn(named, r.stderr, args)
+            self.assertEqual(r.stderr.count("\n"), 1, r.stderr)
+
+    def test_w_msr_keeps_the_honest_agents_in_their_box_under_a_liar(self):
+        path = os.path.join(self.root, "liar.csv")
+        r = preview(INSIDER, "--liar", "7:split", "--duration", "60", "--csv", path)
+        self.assertEqual(r.returncode, 0, r.stdout + r.stderr)
+        self.assertIn("agent 7 lied (split) for 60.00 s", r.stdout)
+        self.assertIn("the honest agents met inside their initial bounding box", r.stdout)
+        rows = read_csv(path)
+        self.assertEqual(sorted({row["id"] for row in rows}), ["1", "2", "3", "4", "5", "6"])
+        self.assertAlmostEqual(max(float(row["t_s"]) for row in rows), 60.0, delta=0.02 + 1e-9)
+
+    def test_a_law_that_trusts_everyone_is_dragged_and_exits_1(self):
+        r = preview(INSIDER, "--law", "laplacian", "--liar", "7:constant:-500,0,0",
+                    "--duration", "30")
+        self.assertEqual(r.returncode, 1, r.stdout + r.stderr)
+        self.assertIn("dragged them out of their initial bounding box", r.stdout)
+
+    def test_a_bad_liar_is_named_and_exits_2(self):
+        for value in ("7", "7:lies", "0:constant", "x:drift", "9:constant", "7:drift:1,2",
+                      "7:constant:1,2,nan", "7:split:1,2,3,4", "-1:constant"):
+            r = preview(INSIDER, "--liar", value)
+            self.assertEqual(r.returncode, 2, value)
+            self.assertIn("--liar", r.stderr, value)
             self.assertEqual(r.stderr.count("\n"), 1, r.stderr)
 
     def test_a_csv_that_cannot_be_written_completely_exits_3(self):

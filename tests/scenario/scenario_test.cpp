@@ -135,6 +135,27 @@ TEST(Scenario, SwarmsBeyondWhatTheWireCarriesAreRefusedAndTheBoundItselfIsAccept
   EXPECT_NE(error_of(beyond).find("at most 512 agents"), std::string::npos) << error_of(beyond);
 }
 
+TEST(Scenario, DiscoveryIsSimpleUnlessAServerIsAskedForAndSecureRunsCannotAskForOne) {
+  const auto discovery = [](const std::string& text) {
+    return resolve_scenario(parse_scenario_text(text, "s")).transport.discovery;
+  };
+  EXPECT_EQ(discovery("random_agents { count: 64 }\n"), Discovery::kSimple);
+  EXPECT_EQ(discovery("random_agents { count: 33 }\ntransport { discovery: SIMPLE }\n"),
+            Discovery::kSimple);
+  EXPECT_EQ(discovery(kTwo + "transport { discovery: SERVER }\n"), Discovery::kServer);
+  // A secure run (a keystore; any directory passes the resolver, `swarm keys --check` judges it).
+  const std::string keystore =
+      "transport { keystore: \"" + std::filesystem::temp_directory_path().string() + "\" ";
+  EXPECT_NE(error_of(kTwo + keystore + "discovery: SERVER }\n").find("transport.discovery"),
+            std::string::npos);
+  // The scenario as run says which was used.
+  const RunConfig rc = resolve_scenario(
+      parse_scenario_text("random_agents { count: 4 }\ntransport { discovery: SERVER }\n", "s"));
+  EXPECT_EQ(rc.resolved.transport().discovery(), scenario::Transport::SERVER);
+  EXPECT_EQ(resolve_scenario(parse_scenario_text(kTwo, "s")).resolved.transport().discovery(),
+            scenario::Transport::SIMPLE);
+}
+
 TEST(Scenario, DefaultsAreWrittenBackSoTheRecordSaysWhatRan) {
   const RunConfig rc = resolve_scenario(parse_scenario_text(kTwo, "s"));
   EXPECT_DOUBLE_EQ(rc.resolved.rates().consensus_hz(), 50.0);

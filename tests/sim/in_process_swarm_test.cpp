@@ -2,8 +2,6 @@
 // manual clock over the in-memory network: deterministic, and seconds of swarm in milliseconds.
 #include <gtest/gtest.h>
 
-#include <unistd.h>
-
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -13,32 +11,11 @@
 #include "common/scenario/scenario.hpp"
 #include "common/sim/in_process_swarm.hpp"
 #include "common/transport/in_memory_bus.hpp"
+#include "tests/sim/recorded_run.hpp"
+#include "tests/sim/six_agents.hpp"
 
 namespace qswarm {
 namespace {
-
-// Six point agents on the complete graph, unweighted (scenarios/faults_six.txtpb): agreement is
-// exponential, so the average can be checked to 1e-9. Initial average (14, 9, 20).
-const char* kSix = R"(
-name: "six"
-agents { id: 1 position { x: 4 y: 17 z: 24 } }
-agents { id: 2 position { x: 18 y: 10 z: 32 } }
-agents { id: 3 position { x: 15 y: 10 z: 26 } }
-agents { id: 4 position { x: 4 y: 2 z: 35 } }
-agents { id: 5 position { x: 30 y: 5 z: 3 } }
-agents { id: 6 position { x: 13 y: 10 z: 0 } }
-mode: PARTICLE
-law: EDGE_FLOW
-weight { policy: UNWEIGHTED }
-topology { policy: PROXIMITY threshold_m: 1000 }
-convergence { tolerance_m: 1e-8 hold_s: 1 }
-duration_s: 60
-seed: 3
-)";
-
-RunConfig six(const std::string& extra = "") {
-  return resolve_scenario(parse_scenario_text(std::string(kSix) + extra, "six"));
-}
 
 bool all_running(const InProcessSwarm& s) {
   for (const AgentSpec& a : s.config().agents) {
@@ -155,31 +132,9 @@ TEST(InProcessSwarm, ARunReplaysExactly) {
   for (size_t i = 0; i < a.size(); ++i) EXPECT_EQ(a[i], b[i]);
 }
 
-// A fresh run directory per test and process (ctest runs tests at once).
-RunDir fresh_run_dir() {
-  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-  const std::filesystem::path dir =
-      std::filesystem::temp_directory_path() /
-      ("qswarm-in-process-" + std::string(info->name()) + "-" + std::to_string(::getpid()));
-  std::filesystem::remove_all(dir);
-  return RunDir::claim(dir.string(), "six", "t");
-}
-
-records::Summary summary_of(const RunDir& dir) {
-  const std::optional<records::Summary> s = dir.read_summary();
-  EXPECT_TRUE(s.has_value()) << dir.summary() << " does not read as a summary";
-  return s.value_or(records::Summary{});
-}
-
 std::vector<std::string> event_kinds(const RunDir& dir) {
-  std::ifstream in(dir.events());
   std::vector<std::string> kinds;
-  std::string line;
-  std::getline(in, line);  // header
-  while (std::getline(in, line)) {
-    const auto a = line.find(','), b = line.find(',', a + 1);
-    kinds.push_back(line.substr(a + 1, b - a - 1));
-  }
+  for (const auto& [kind, detail] : events_of(dir)) kinds.push_back(kind);
   return kinds;
 }
 

@@ -13,7 +13,9 @@
 
 #include "common/core/graph.hpp"
 #include "common/dds/dds_bus.hpp"
+#include "common/mcap/file_check.hpp"
 #include "common/scenario/scenario.hpp"
+#include "tests/mcap/validate.hpp"
 #include "tests/swarm/domain_lease.hpp"
 #include "tests/swarm/harness.hpp"
 
@@ -184,6 +186,26 @@ TEST(SwarmRun, TwelveSeededRandomAgentsConvergeToTheirInitialAverage) {
         << "agent " << s.agents(i).id();
   }
   EXPECT_LT(s.average_drift_m(), 1e-3);
+}
+
+// transport.discovery SERVER: the launcher starts the run's own Discovery Server first, on ports of
+// the run's block, every participant discovers through it, and it stops with the run.
+TEST(SwarmRun, ASwarmDiscoveringThroughItsOwnServerConvergesAndTheServerStopsWithIt) {
+  const auto dir = fresh_dir("discovery-server");
+  const auto scen = dir.parent_path() / "discovery-server.txtpb";
+  // The six agents of the fault runs (complete graph), discovering through a server.
+  std::ofstream(scen) << read_file(scenario("faults_six")) << "transport { discovery: SERVER }\n";
+  const Result r = run({bin("swarm"), "run", scen.string(), "--out", dir.string(), "--domain",
+                        test_domain().str(), "--time-scale", "2", "--quiet"},
+                       240.0);
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_TRUE(read_summary(dir).converged());
+  const pid_t server = pid_of(dir, "discovery", 0);
+  ASSERT_GT(server, 0) << read_file(dir / "processes.csv");
+  EXPECT_FALSE(process_alive(server));
+  EXPECT_NE(read_file(dir / "discovery.out").find("6 participants"), std::string::npos)
+      << read_file(dir / "discovery.out");
+  EXPECT_NE(read_file(dir / "scenario.txtpb").find("discovery: SERVER"), std::string::npos);
 }
 
 // scenarios/formation_grid16.txtpb: 16 quadcopter processes agree on a centre (the average of their
@@ -526,6 +548,13 @@ TEST(SwarmRun, CtrlCLeavesNoOrphansAndARecordThatSaysWhatIsMissing) {
   for (const auto& row : read_csv(dir / "events.csv")) ended |= row.at("kind") == "end";
   EXPECT_TRUE(ended);
   EXPECT_GT(read_csv(dir / "telemetry.csv").size(), 10u);
+  // The supervisor ended run.mcap on SIGTERM: footer, summary, every record of records.pb.
+  const mcap::FileCheck c = mcap::check_file(dir / "run.mcap");
+  EXPECT_TRUE(c.complete) << c.problem;
+  if (mcap_validator_missing().empty()) {
+    const McapValidation v = validate_mcap(dir / "run.mcap", dir / "records.pb");
+    EXPECT_EQ(v.code, 0) << v.output;
+  }
 }
 
 // The launcher SIGKILLed while an agent is stopped (SIGSTOP): the agent's SIGTERM stays pending
@@ -623,15 +652,79 @@ TEST(Record, ASecondRunOnTheSameOutIsRefusedAndADeadSupervisorStillLeavesASummar
                              "--domain", test_domain().str(), "--quiet"});
   EXPECT_EQ(second.code, 2) << second.output;
   EXPECT_NE(second.output.find("--out"), std::string::npos) << second.output;
-  // When the supervisor dies mid-run
+  // When the supervisor dies mid-run, once run.mcap holds a chunk beyond its header and schemas
+  ASSERT_TRUE(wait_for([&] { return std::filesystem::exists(dir / "supervisor.ready"); }, 60.0));
+  const auto size = [&] {
+    std::error_code ec;
+    const auto n = std::filesystem::file_size(dir / "run.mcap", ec);
+    return ec ? 0 : n;
+  };
+  const auto headed = size();
+  ASSERT_TRUE(wait_for([&] { return size() > headed + 1000; }, 60.0));
   ASSERT_EQ(::kill(pid_of(dir, "supervisor", 0), SIGKILL), 0);
   const Result r = launcher.wait(60.0);
-  // then the run fails, and the launcher's summary says why.
+  // then the run fails, and the launcher's summary says why, run.mcap cut short among it.
   EXPECT_EQ(r.code, 1) << r.output;
   const records::Summary s = read_summary(dir);
   EXPECT_FALSE(s.converged());
   EXPECT_NE(s.end_reason().find("supervisor killed by signal"), std::string::npos)
       << s.end_reason();
+  EXPECT_NE(s.end_reason().find("record incomplete: run.mcap: no footer"), std::string::npos)
+      << s.end_reason();
+  // Foxglove's indexed reader refuses the file; its streamed reader recovers a prefix of
+  // records.pb.
+  QSWARM_REQUIRE_MCAP_VALIDATOR();
+  const McapValidation cut = validate_mcap(dir / "run.mcap", dir / "records.pb", true);
+  EXPECT_EQ(cut.code, 0) << cut.output;
+  // swarm export rebuilds it from records.pb (exit 2 if the kill cut records.pb mid-record too:
+  // then its whole records), and says what it replaced.
+  const Result e = run({bin("swarm"), "export", "--mcap", dir.string()});
+  EXPECT_TRUE(e.code == 0 || (e.code == 2 && e.output.find("records.pb: cut inside a record") !=
+                                                 std::string::npos))
+      << e.output;
+  EXPECT_NE(e.output.find("run.mcap was incomplete (no footer"), std::string::npos) << e.output;
+  EXPECT_TRUE(mcap::check_file(dir / "run.mcap").complete);
+  const McapValidation whole = validate_mcap(dir / "run.mcap", dir / "records.pb");
+  EXPECT_EQ(whole.code, 0) << whole.output;
+}
+
+// A multi-process run's run.mcap opens in Foxglove's reader with every record of records.pb and a
+// scene per snapshot; `swarm export` rebuilds the same bytes from records.pb.
+TEST(Record, ASwarmRunsRunMcapOpensInFoxglovesReaderAndExportRebuildsItByteForByte) {
+  QSWARM_REQUIRE_MCAP_VALIDATOR();
+  const auto dir = fresh_dir("mcap");
+  const Result r = swarm_run(scenario("demo"), dir, 2.0);
+  ASSERT_EQ(r.code, 0) << r.output;
+  const McapValidation v = validate_mcap(dir / "run.mcap", dir / "records.pb");
+  EXPECT_EQ(v.code, 0) << v.output;
+  const auto out = fresh_dir("mcap-export") / "rebuilt.mcap";
+  std::filesystem::create_directories(out.parent_path());
+  const Result e = run({bin("swarm"), "export", "--mcap", dir.string(), "--out", out.string()});
+  ASSERT_EQ(e.code, 0) << e.output;
+  EXPECT_NE(e.output.find(" records -> " + out.string()), std::string::npos) << e.output;
+  EXPECT_TRUE(read_file(out) == read_file(dir / "run.mcap")) << "the export differs";
+  const McapValidation ev = validate_mcap(out, dir / "records.pb");
+  EXPECT_EQ(ev.code, 0) << ev.output;
+}
+
+TEST(Record, SwarmExportRefusesBadInputNamingItWithExit2) {
+  const auto dir = fresh_dir("export-bad");
+  std::filesystem::create_directories(dir);
+  std::ofstream(dir / "notes.txt") << "not a run\n";
+  const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {
+      {{"export", "--mcap", (dir / "absent").string()}, "not a directory"},
+      {{"export", "--mcap", dir.string()}, "not a run directory (it has no records.pb)"},
+      {{"export"}, "--mcap"},
+      {{"export", "--mcap", dir.string(), "--out", (dir / "no/such/x.mcap").string()}, "--out"},
+  };
+  for (const auto& [args, said] : cases) {
+    std::vector<std::string> argv = {bin("swarm")};
+    argv.insert(argv.end(), args.begin(), args.end());
+    const Result r = run(argv);
+    EXPECT_EQ(r.code, 2) << r.output;
+    EXPECT_NE(r.output.find(said), std::string::npos) << said << "\n" << r.output;
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir / "run.mcap"));
 }
 
 // `--grace 0` kills every agent still running at teardown at once: an agent killed before it wrote
@@ -700,10 +793,13 @@ TEST(Record, AFullFilesystemEndsTheRunNonZeroNamingTheFileNeverConverged) {
   const Result r = run({bin("swarm"), "run", scenario("demo"), "--out", (mnt / "run").string(),
                         "--domain", test_domain().str(), "--time-scale", "2", "--quiet"},
                        120.0);
+  const mcap::FileCheck c = mcap::check_file(mnt / "run" / "run.mcap");
   run({"/bin/umount", "-l", mnt.string()});
   EXPECT_EQ(r.code, 3) << r.output;  // the record could not be written completely
   EXPECT_NE(r.output.find("could not write"), std::string::npos) << r.output;
   EXPECT_EQ(r.output.find("swarm run: converged"), std::string::npos) << r.output;
+  // run.mcap, whichever file failed first, is never left cut short without saying so.
+  if (!c.complete) EXPECT_NE(r.output.find("run.mcap"), std::string::npos) << r.output;
 }
 
 // The pids controller's root (cgroup v1 or v2) where this process may make a cgroup, or empty.

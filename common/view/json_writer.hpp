@@ -1,0 +1,30 @@
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <string_view>
+
+namespace qswarm {
+
+// Appends JSON to a string: the view's frames are built many times a second for up to 512 agents,
+// so numbers are written with a fixed, short precision and nothing is parsed back. Strings are
+// escaped (event details carry text from people and the network); non-finite numbers become null.
+class JsonWriter {
+ public:
+  explicit JsonWriter(std::string& out) : out_(out) {}
+  JsonWriter& raw(std::string_view s) {
+    out_ += s;
+    return *this;
+  }
+  JsonWriter& key(std::string_view k);  // "k":
+  JsonWriter& str(std::string_view s);
+  JsonWriter& num(double v, int decimals = 4);
+  JsonWriter& sig(double v);  // six significant digits (metrics that shrink to 1e-8)
+  JsonWriter& integer(std::int64_t v);
+  JsonWriter& boolean(bool b) { return raw(b ? "true" : "false"); }
+
+ private:
+  std::string& out_;
+};
+
+}  // namespace qswarm

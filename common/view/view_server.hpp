@@ -1,0 +1,110 @@
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "common/record/scene.hpp"
+#include "common/view/foxglove_protocol.hpp"
+#include "common/view/view_feed.hpp"
+
+namespace qswarm {
+
+// Where the page's files and the npm packages are: $QSWARM_VIEW_PAGE_DIR and $QSWARM_NODE_MODULES
+// when set (an installed or containerised supervisor), else the source tree the build came from.
+std::string default_page_dir();
+std::string default_node_modules();
+
+// "" if a server could listen on address:port now, else why not (not an address, in use).
+std::string probe_listen(const std::string& address, std::uint16_t port);
+
+struct ViewServerOptions {
+  std::string address = "127.0.0.1";          // loopback unless the user names another address
+  std::uint16_t port = 8765;                  // 0: any free port (port() says which)
+  std::string page_dir = default_page_dir();  // index.html, view.js, view.css
+  std::string node_modules = default_node_modules();  // three, uplot (npm, tools/setup.sh)
+  std::string name = "quadswarm";
+  double frame_period_s = 0.05;               // 20 frames a second
+  std::size_t max_connections = 64;           // HTTP and WebSocket together
+  std::size_t max_queue_frames = 64;          // per client, before its frames are dropped
+  std::size_t max_queue_bytes = 16u << 20;    // per client
+  std::size_t max_message_bytes = 64u << 10;  // a client frame above this ends its session
+  double client_messages_per_s = 20.0;        // sustained; bursts of 5 s worth pass
+  std::size_t strikes = 50;  // floods or malformed frames before the session is closed
+  // Where the server says what it refused, once per kind and session (the supervisor's log).
+  std::function<void(const std::string&)> log;
+};
+
+// What the server served and refused, since it started.
+struct ViewCounts {
+  std::uint64_t connections = 0;          // TCP connections accepted
+  std::uint64_t refused_connections = 0;  // over max_connections
+  std::uint64_t http_requests = 0;
+  std::uint64_t not_found = 0;
+  std::uint64_t sessions = 0;          // WebSocket sessions opened
+  std::uint64_t open_sessions = 0;     // now
+  std::uint64_t refused_upgrades = 0;  // no sub-protocol of ours, or a bad handshake
+  std::uint64_t frames_sent = 0;
+  std::uint64_t frames_dropped = 0;  // for a client whose queue was full
+  std::uint64_t malformed = 0;       // client frames that were not a JSON op we parse
+  std::uint64_t oversized = 0;       // client frames above max_message_bytes
+  std::uint64_t flooded = 0;         // client frames beyond the rate
+  std::uint64_t refused_ops = 0;     // ops we do not serve, bad subscriptions, binary frames
+  std::uint64_t closed_for_abuse = 0;
+  std::uint64_t refused_hosts = 0;  // a Host header that names another site (DNS rebinding)
+  std::string json() const;
+};
+
+// A replay's clock and controls (swarm view); a live run has none.
+class ViewPlayback {
+ public:
+  virtual ~ViewPlayback() = default;
+  // What became due by wall time `wall_s`. `reset`: the model must forget the run first (a seek).
+  virtual ViewBatch advance(double wall_s, bool& reset) = 0;
+  // play, pause, seek (t), speed: "" when done, else why not.
+  virtual std::string control(const view::ClientOp& op, double wall_s) = 0;
+  virtual std::string state_json() const = 0;
+};
+
+struct ViewServerError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+// The live view's server: one thread, one port, HTTP for the page and its libraries, WebSocket
+// for Foxglove's protocol (the page is a Foxglove client too). Every frame period it takes what
+// the feed (or a replay) has, turns it into the page's frame and the protobuf channels' messages,
+// and queues them for each subscribed client; a client whose queue is full loses frames (counted)
+// and gets a fresh snapshot once it reads again. Clients can only subscribe: nothing they send
+// reaches the run.
+class ViewServer {
+ public:
+  // `scene`: where the swarm should meet and its slots, for the 3D scene channel.
+  ViewServer(ViewServerOptions opts, ViewFeed& feed, std::string run_info, SceneSettings scene,
+             ViewPlayback* playback = nullptr);
+  ~ViewServer();
+  ViewServer(const ViewServer&) = delete;
+  ViewServer& operator=(const ViewServer&) = delete;
+
+  // Binds and starts the thread. Throws ViewServerError naming the address and why (in use, not
+  // an address of this host).
+  void start();
+  void stop();
+  // Waits (at most `timeout_s`) until what the feed holds now went out in a frame and every
+  // client's queue is empty: the end of a run reaches the pages before the server stops.
+  void flush(double timeout_s);
+  std::uint16_t port() const;
+  std::string url() const;
+  ViewCounts counts() const;
+  const std::vector<FoxgloveChannel>& channels() const;
+
+  class Impl;
+
+ private:
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace qswarm

@@ -1,0 +1,84 @@
+// The live page in a real browser (Debian's headless Chromium, driven by puppeteer-core): during an
+// 8-quadcopter formation run (`swarm run --view`) the page shows 8 agents and the links, its
+// lambda_2 chart grows, and it measures the latency from a sample's publication to the page. A
+// screenshot is kept (QSWARM_VIEW_SCREENSHOT names where; default the run directory).
+import fs from 'node:fs';
+import path from 'node:path';
+import { check, finish, freshDir, npm, skip, startRun, until } from './harness.mjs';
+
+const chromium = process.env.QSWARM_CHROMIUM || '/usr/bin/chromium';
+if (!fs.existsSync(chromium)) skip(`no browser at ${chromium} (apt-get install chromium)`);
+const puppeteer = npm('puppeteer-core');
+if (!fs.existsSync(path.join(process.env.QSWARM_NODE_MODULES, 'three')))
+  skip('the page\'s npm packages are missing: run tools/setup.sh');
+
+// The 16-quadcopter grid formation with 8 agents, holding its agreement for 8 s before it is
+// judged converged: about 20 s in real time (records at 10 Hz per agent), the page open well
+// before the end.
+const scenario = `${freshDir('view-browser-scenario')}.txtpb`;
+fs.writeFileSync(scenario, fs.readFileSync(path.join(process.env.QSWARM_SOURCE_DIR,
+  'scenarios/formation_grid16.txtpb'), 'utf8')
+  .replace('count: 16', 'count: 8').replace('hold_s: 1 ', 'hold_s: 8 '));
+const run = await startRun('view-browser', [scenario, '--seed', '5', '--quiet', '--duration', '120']);
+const browser = await puppeteer.launch({
+  executablePath: chromium,
+  headless: true,
+  // Root in CI has no user namespace for Chromium's sandbox; the page is our own, on loopback.
+  // WebGL without a GPU: SwiftShader, Chromium's software renderer.
+  args: ['--no-sandbox', '--use-angle=swiftshader', '--enable-unsafe-swiftshader',
+    '--window-size=1400,820'],
+});
+let code = 1;
+try {
+  const page = await browser.newPage();
+  await page.setViewport({ width: 1400, height: 820 });
+  const errors = [];
+  page.on('pageerror', (e) => errors.push(e.message));
+  await page.goto(run.url);
+  const stats = () => page.evaluate(() => ({ ...window.qswarm, latencyMs: window.qswarm.latencyMs.slice() }));
+  const s1 = await until(async () => {
+    const s = await stats();
+    return s.agentsDrawn === 8 && s.linksDrawn > 0 && s.metricPoints > 5 ? s : null;
+  }, 90000, '8 agents and their links drawn');
+  check(s1.subprotocol === 'foxglove.websocket.v1', `the page speaks Foxglove's protocol (${s1.subprotocol})`);
+  check(s1.agentsDrawn === 8, `8 agents drawn (${s1.agentsDrawn})`);
+  check(s1.linksDrawn > 0, `links drawn (${s1.linksDrawn})`);
+  // The lambda_2 chart grows while the swarm flies.
+  const s2 = await until(async () => {
+    const s = await stats();
+    return s.metricPoints >= s1.metricPoints + 10 ? s : null;
+  }, 30000, 'the lambda_2 chart to grow');
+  check(s2.metricPoints > s1.metricPoints, `lambda_2 chart grew from ${s1.metricPoints} to ${s2.metricPoints} points`);
+  const chartPoints = await page.evaluate(() => document.querySelectorAll('#chart-lambda2 canvas').length);
+  check(chartPoints === 1, 'the lambda_2 chart is drawn');
+  const t0 = Date.now(), f0 = s2.frames;
+  await new Promise((r) => setTimeout(r, 4000));
+  const s3 = await stats();
+  const rate = (s3.frames - f0) / ((Date.now() - t0) / 1000);
+  check(rate >= 10, `at least 10 updates a second (${rate.toFixed(1)})`);
+  const lat = s3.latencyMs.slice().sort((a, b) => a - b);
+  const med = lat[Math.floor(lat.length / 2)];
+  check(lat.length > 10 && med < 1000, `publication to page latency measured: median ${med} ms, p90 ` +
+    `${lat[Math.floor(lat.length * 0.9)]} ms over ${lat.length} frames`);
+  const shot = process.env.QSWARM_VIEW_SCREENSHOT || path.join(run.dir, 'view.png');
+  // The end state, when the run ends within its time: converged, shown on the page.
+  const end = await until(async () => (await stats()).ended, 120000, 'the end state on the page')
+    .catch(() => null);
+  check(end && end.converged === true, `the page shows the end: ${JSON.stringify(end)}`);
+  const banner = await page.evaluate(() => document.getElementById('end').textContent);
+  check(/^Converged/.test(banner), `end banner: ${banner}`);
+  await page.screenshot({ path: shot });
+  console.log(`screenshot: ${shot}`);
+  check(errors.length === 0, `no page errors (${errors.join('; ')})`);
+  console.log(`page stats: frames ${s3.frames}, renders ${s3.renders}, events ${s3.events}`);
+  code = 0;
+} catch (e) {
+  console.log(`FAILED: ${e.message}`);
+  console.log(run.output());
+} finally {
+  await browser.close();
+}
+const exit = await run.done;
+check(exit === 0, `swarm run exited ${exit}`);
+if (code) check(false, 'the browser test ran to its end');
+finish();
