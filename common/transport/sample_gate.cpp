@@ -28,28 +28,38 @@ std::uint64_t WriterId::hash() const {
   return h;
 }
 
+bool SampleGate::far_ahead(const StateMessage& a, const StateMessage& b, double since_s) {
+  if (a.incarnation != b.incarnation || a.seq <= b.seq) return false;
+  return static_cast<double>(a.seq - b.seq) >
+         static_cast<double>(kJumpSlack) + kMaxRatePerS * std::max(0.0, since_s);
+}
+
 bool SampleGate::jumps(const StateMessage& m, const Agent& a, std::int64_t now_wall_ns) const {
-  const StateMessage& held = a.held;
-  if (now_wall_ns <= 0 || a.held_at_ns <= 0 || m.incarnation != held.incarnation ||
-      m.seq <= held.seq)
-    return false;
-  const double since_s =
-      static_cast<double>(std::max<std::int64_t>(0, now_wall_ns - a.held_at_ns)) * 1e-9;
-  return static_cast<double>(m.seq - held.seq) >
-         static_cast<double>(kJumpSlack) + kMaxRatePerS * since_s;
+  if (now_wall_ns <= 0 || a.held_at_ns <= 0) return false;
+  return far_ahead(m, a.held, static_cast<double>(now_wall_ns - a.held_at_ns) * 1e-9);
+}
+
+bool SampleGate::behind(const StateMessage& m, const Agent& a, std::int64_t now_wall_ns) const {
+  if (now_wall_ns <= 0 || a.held_at_ns <= 0) return false;
+  return far_ahead(a.held, m, static_cast<double>(now_wall_ns - a.held_at_ns) * 1e-9);
 }
 
 bool SampleGate::interleaved(Agent& a, const WriterId& w) {
-  a.recent[a.recent_n % a.recent.size()] = w.hash();
-  ++a.recent_n;
-  const std::size_t n = std::min(a.recent_n, a.recent.size());
-  int changes = 0;
-  for (std::size_t k = 1; k < n; ++k) {
-    const std::size_t i = (a.recent_n - n + k) % a.recent.size();
-    const std::size_t j = (a.recent_n - n + k - 1) % a.recent.size();
-    changes += a.recent[i] != a.recent[j] ? 1 : 0;
+  const std::uint64_t h = w.hash();
+  ++a.samples;
+  Agent::Seen* slot = nullptr;
+  for (Agent::Seen& s : a.seen)
+    if (s.at != 0 && s.writer == h) slot = &s;
+  if (slot && a.last_writer != h && a.samples - slot->at <= kRecentSamples) ++a.returns;
+  if (!slot) {
+    slot = &a.seen[0];  // the writer heard longest ago makes room
+    for (Agent::Seen& s : a.seen)
+      if (s.at < slot->at) slot = &s;
+    slot->writer = h;
   }
-  return changes >= kInterleaved;
+  slot->at = a.samples;
+  a.last_writer = h;
+  return a.returns >= kReturns;
 }
 
 std::uint8_t SampleGate::notice_bits(AgentId id, std::uint8_t kinds) {
@@ -117,13 +127,18 @@ SampleGate::Result SampleGate::admit(const StateMessage& m, const std::string& w
       a.contender = writer;
       a.contender_run = 0;
     }
+    // The owner's numbers far ahead of this writer's in the same life: the owner forged them (a
+    // relay heard before the real agent); this writer takes the agent at once.
+    const bool owner_jumped = behind(m, a, now_wall_ns);
+    if (owner_jumped) r.noticed |= notice_bits(m.view.id, kSequenceJump);
     // A jump against the held sample still counts toward a takeover: the held sample may be a
     // forger's, and the real agent's numbers far from it.
-    if (++a.contender_run < kTakeover)
+    if (!owner_jumped && ++a.contender_run < kTakeover)
       return refuse(jump ? "sequence number jumps far ahead of the agent's"
                          : "another writer holds this agent");
-    // The owner went silent while this writer spoke: it takes the agent over, and its own
-    // sequence from here (a restart, or the real agent after its forger stopped).
+    // The owner went silent while this writer spoke, or forged its numbers: this writer takes the
+    // agent over, and its own sequence from here (a restart, or the real agent after its forger
+    // stopped).
     a.contender = a.owner;
     a.contender_run = 0;
     a.owner = writer;

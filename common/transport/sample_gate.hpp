@@ -29,14 +29,17 @@ struct WriterId {
 // who writes each agent (WriterId) and names what it cannot prevent (SuspectKind, reported in
 // the agent's samples and in the record):
 // - The first writer heard for an agent owns it; another writer's samples are refused while the
-//   owner speaks. Two writers whose samples interleave are two at once (an impersonator, or a
-//   relay of the real one); a restart never interleaves (the old process is gone).
-// - Ownership passes to another writer only after kTakeover of its samples in a row with none from
-//   the owner: a restarted agent is heard after that many, and an agent whose forger stopped is
-//   heard again, whatever sequence numbers or start times the forger used. Order (is_newer) is
-//   judged within one writer's samples.
+//   owner speaks. Two writers whose samples interleave (one heard again after the other spoke,
+//   kReturns times) are two at once: an impersonator, or a relay of the real one. A restart never
+//   interleaves (the old process is gone).
+// - Ownership passes to another writer after kTakeover of its samples in a row with none from the
+//   owner: a restarted agent is heard after that many, and an agent whose forger stopped is heard
+//   again, whatever sequence numbers or start times the forger used. Order (is_newer) is judged
+//   within one writer's samples.
 // - A sequence number far beyond what the agent could have sent since the held sample (a forged
-//   "newer" one) is refused and named; so is an incarnation from the future.
+//   "newer" one) is refused and named. When the owner's own numbers are that far ahead of another
+//   writer's in the same life, the owner is the one forging them (a relay heard first): the other
+//   writer takes the agent at once. An incarnation from the future is refused and named.
 class SampleGate {
  public:
   enum class Verdict { kAccepted, kInvalid, kStale, kForeign, kContested };
@@ -85,13 +88,26 @@ class SampleGate {
     WriterId owner;
     WriterId contender;  // the last other writer heard
     int contender_run = 0;
-    // Writers of this agent's last valid samples, newest last (a ring): two interleaved writers
-    // change places kInterleaved times within it; a restart changes once.
-    std::array<std::uint64_t, 8> recent{};
-    std::size_t recent_n = 0;
+    // The writers heard lately (by hash) and at which of this agent's samples, to tell a writer
+    // heard again after another spoke; how often that happened.
+    struct Seen {
+      std::uint64_t writer = 0;
+      std::uint64_t at = 0;
+    };
+    std::array<Seen, 4> seen{};
+    std::uint64_t samples = 0;
+    std::uint64_t last_writer = 0;
+    int returns = 0;
   };
-  static constexpr int kInterleaved = 3;
+  static constexpr int kReturns = 3;
+  // A writer is heard "again" only within this many of the agent's samples since its last one: a
+  // long-gone life's late sample is not a second writer.
+  static constexpr std::uint64_t kRecentSamples = 256;
+  // How far `a` is ahead of `b` in the same life beyond what the agent could have sent in
+  // `since_s` (> 0: a jump).
+  static bool far_ahead(const StateMessage& a, const StateMessage& b, double since_s);
   bool jumps(const StateMessage& m, const Agent& a, std::int64_t now_wall_ns) const;
+  bool behind(const StateMessage& m, const Agent& a, std::int64_t now_wall_ns) const;
   bool interleaved(Agent& a, const WriterId& w);
   std::uint8_t notice_bits(AgentId id, std::uint8_t kinds);
 

@@ -107,6 +107,38 @@ TEST(SampleGate, ARelayOfTheRealSamplesWithAHigherSequenceIsAJumpAndTwoWriters) 
   EXPECT_EQ(f.suspected(1), kTwoWriters | kSequenceJump);
 }
 
+TEST(SampleGate, ARelayHeardBeforeTheRealAgentLosesItToTheRealAgentsFirstSample) {
+  // Discovery may match the relay's writer before the real agent's: the relay owns agent 1 first.
+  Feed f;
+  const WriterId real = writer(1), relay = writer(2);
+  f.admit(sample(1, 1'000'001, kLife, 51.0), relay);
+  f.admit(sample(1, 1'000'002, kLife, 51.0), relay);
+  EXPECT_EQ(f.held_x(1), 51.0);
+  // Its numbers are a jump ahead of the real agent's in the same life: it forged them.
+  const SampleGate::Result r = f.admit(sample(1, 3, kLife, 1.0), real);
+  EXPECT_EQ(r.verdict, SampleGate::Verdict::kAccepted);
+  EXPECT_TRUE(r.new_owner);
+  for (std::uint64_t k = 4; k <= 20; ++k) {
+    f.admit(sample(1, 1'000'000 + k, kLife, 51.0), relay);
+    f.admit(sample(1, k, kLife, 1.0), real);
+    EXPECT_EQ(f.held_x(1), 1.0) << "at " << k;
+  }
+  EXPECT_EQ(f.suspected(1), kTwoWriters | kSequenceJump);
+}
+
+TEST(SampleGate, TwoWritersAreNamedWhenOneSpeaksTwentyTimesAsOftenAndWhenThreeTakeTurns) {
+  Feed fast;
+  for (std::uint64_t k = 1; k <= 4; ++k) {
+    fast.admit(sample(2, k, kLife, 1.0), writer(1));
+    for (std::uint64_t j = 0; j < 20; ++j) fast.admit(sample(2, 100 * k + j, kNow, 9.0), writer(2));
+  }
+  EXPECT_TRUE(fast.suspected(2) & kTwoWriters);
+  Feed turns;
+  for (std::uint64_t k = 1; k <= 4; ++k)
+    for (std::uint8_t w = 1; w <= 3; ++w) turns.admit(sample(2, k, kLife, 1.0), writer(w));
+  EXPECT_TRUE(turns.suspected(2) & kTwoWriters);
+}
+
 TEST(SampleGate, AJumpFromTheOwnersOwnWriterIsRefusedAndItsNextSampleIsNot) {
   // A forger that spoofs the real writer's identity (plain RTPS cannot tell) with a large number.
   Feed f;
