@@ -40,6 +40,24 @@ int main(int argc, char** argv) {
                  f.process.scenario.c_str());
     return 2;
   }
+  std::string identity;
+  if (!rc->transport.keystore.empty()) {
+    // A replica that claims its id cannot hold a certificate for it in advance: it needs the
+    // shared member identity of a compose keystore.
+    if (claiming && !compose_keystore(rc->transport.keystore)) {
+      std::fprintf(stderr,
+                   "swarm-agent: --id auto: a replica that claims its id needs a compose keystore "
+                   "(swarm keys SCENARIO --out DIR --compose), not one per agent (%s)\n",
+                   rc->transport.keystore.c_str());
+      return 2;
+    }
+    std::string why;
+    identity = keystore_identity(rc->transport.keystore, "agent-" + std::to_string(id), why);
+    if (identity.empty()) {
+      std::fprintf(stderr, "swarm-agent: transport.keystore: %s\n", why.c_str());
+      return 2;
+    }
+  }
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, f.ignore_sigterm ? SIG_IGN : on_signal);
   // A hangup (the terminal gone, or the launcher gone while this process was stopped) stops it
@@ -49,11 +67,7 @@ int main(int argc, char** argv) {
   try {
     SteadyClock clock;
     DdsOptions dopt = dds_options(*rc, "swarm-agent", f.process);
-    if (!rc->transport.keystore.empty() && claiming)
-      throw std::invalid_argument(
-          "a replica that claims its id cannot fly a secure run yet (its certificate names an id "
-          "it does not know before the claim)");
-    dopt.participant.identity = "agent-" + std::to_string(id);
+    dopt.participant.identity = identity;
     DdsParticipant participant(dopt.participant);
     // A replica claims its id before it reads or writes any state: the state reader then leaves
     // out its own samples from the start.

@@ -439,7 +439,9 @@ int main(int argc, char** argv) {
   // The compose swarm's variables are read by swarm-agent and swarm-supervisor as flag defaults;
   // `swarm run` passes everything its children need, so a shell that exported them for compose
   // must not change a local run.
-  for (const char* v : {"QSWARM_AGENTS", "QSWARM_DISCOVERY_SERVER", "QSWARM_AGENT_ID"}) unsetenv(v);
+  for (const char* v :
+       {"QSWARM_AGENTS", "QSWARM_DISCOVERY_SERVER", "QSWARM_AGENT_ID", "QSWARM_KEYSTORE"})
+    unsetenv(v);
   CLI::App app{"swarm: a quadcopter swarm that agrees over DDS"};
   app.require_subcommand(1);
   RunOptions ro;
@@ -543,6 +545,10 @@ int main(int argc, char** argv) {
   keys_cmd->add_option("--out", keys_out, "new keystore directory")->required();
   keys_cmd->add_option("--days", keys_days, "validity in days (default 365)")
       ->check(CLI::Range(1, 36500));
+  bool keys_compose = false;
+  keys_cmd->add_flag("--compose", keys_compose,
+                     "one member identity for compose replicas (they claim their ids) instead of "
+                     "one per agent");
   std::string plot_dir, plot_out;
   CLI::App* plot_cmd = app.add_subcommand("plot", "PNG figures of a run directory (matplotlib)");
   plot_cmd->add_option("run_dir", plot_dir, "run directory written by swarm run")->required();
@@ -593,10 +599,13 @@ int main(int argc, char** argv) {
   }
   if (*run_cmd) return run(ro);
   if (*plot_cmd) return plot(plot_dir, plot_out);
-  if (*keys_cmd)
-    return exec_python("swarm keys", "keys",
-                       {"--swarm", (bin_dir() / "swarm").string(), keys_scenario, "--out", keys_out,
-                        "--days", std::to_string(keys_days)});
+  if (*keys_cmd) {
+    std::vector<std::string> args = {
+        "--swarm", (bin_dir() / "swarm").string(), keys_scenario, "--out", keys_out,
+        "--days",  std::to_string(keys_days)};
+    if (keys_compose) args.push_back("--compose");
+    return exec_python("swarm keys", "keys", args);
+  }
   if (*paper_cmd) return paper(po);
   if (*export_cmd) return export_run(export_dir, export_out);
   if (*res_cmd) return resilience(res_scenario, res_out, res_liar);

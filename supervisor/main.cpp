@@ -60,6 +60,13 @@ int main(int argc, char** argv) {
   const std::optional<RunConfig> loaded = load_for_process("swarm-supervisor", opts);
   if (!loaded) return 2;
   const RunConfig& rc = *loaded;
+  if (!rc.transport.keystore.empty()) {
+    std::string why;
+    if (keystore_identity(rc.transport.keystore, "supervisor", why).empty()) {
+      std::fprintf(stderr, "swarm-supervisor: transport.keystore: %s\n", why.c_str());
+      return 2;
+    }
+  }
   if (run_dir.empty() == new_run_in.empty()) {
     std::fprintf(stderr, "swarm-supervisor: give --run-dir DIR or --new-run-in ROOT\n");
     return 2;
@@ -131,6 +138,7 @@ int main(int argc, char** argv) {
     std::string reason;
     while (true) {
       const SupervisorLoop::Poll p = sup.poll(g_stop);
+      for (const std::string& w : p.warnings) logger->warn("{}", w);
       if (p.progress) {
         std::printf("%s\n", p.progress->c_str());
         std::fflush(stdout);

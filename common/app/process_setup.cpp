@@ -12,6 +12,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
+#include <filesystem>
 #include <new>
 #include <system_error>
 
@@ -41,6 +42,29 @@ void add_process_options(CLI::App& app, ProcessOptions& o) {
       ->check(CLI::Range(0, PortPlan::kMaxParticipantId));
   app.add_option("--seed", o.seed, "run seed (overrides the scenario)")
       ->check(CLI::Range(std::int64_t{0}, std::int64_t{4294967295}));
+  app.add_option("--keystore", o.keystore,
+                 "DDS-Security with this keystore (swarm keys; overrides the scenario's "
+                 "transport.keystore; compose: swarm keys --compose)")
+      ->envname("QSWARM_KEYSTORE");
+}
+
+bool compose_keystore(const std::string& keystore) {
+  return std::filesystem::is_directory(std::filesystem::path(keystore) / "member");
+}
+
+std::string keystore_identity(const std::string& keystore, const std::string& own,
+                              std::string& why) {
+  const std::filesystem::path ks(keystore);
+  std::string who = own == "supervisor" || !compose_keystore(keystore) ? own : "member";
+  for (const std::filesystem::path& f :
+       {ks / "ca.cert.pem", ks / "governance.p7s", ks / who / "cert.pem", ks / who / "key.pem",
+        ks / who / "permissions.p7s"}) {
+    if (!std::filesystem::is_regular_file(f)) {
+      why = f.string() + ": missing (swarm keys writes a keystore)";
+      return {};
+    }
+  }
+  return who;
 }
 
 std::optional<RunConfig> load_for_process(const char* prog, const ProcessOptions& opts) {
@@ -49,6 +73,7 @@ std::optional<RunConfig> load_for_process(const char* prog, const ProcessOptions
     o.domain_id = opts.domain;
     o.seed = opts.seed;
     o.agents = opts.agents;
+    o.keystore = opts.keystore;
     RunConfig rc = load_scenario(opts.scenario, o);
     // Checked (and resolved, with retries while a container network's DNS catches up) before
     // anything is created, so that a bad address is bad input: exit 2.

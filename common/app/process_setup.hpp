@@ -28,6 +28,7 @@ struct ProcessOptions {
   int agents = -1;               // --agents / QSWARM_AGENTS: N seeded random agents (compose)
   std::string discovery_server;  // --discovery-server / QSWARM_DISCOVERY_SERVER: HOST:PORT
   int participant_id = -1;       // --participant-id: its place in the port plan (-1: Fast DDS's)
+  std::string keystore;          // --keystore / QSWARM_KEYSTORE (overrides the scenario)
 };
 void add_process_options(CLI::App& app, ProcessOptions& o);
 
@@ -43,6 +44,14 @@ std::string describe_exception(const std::exception& e);
 // Loads the scenario with the process's --domain/--seed overrides; on bad input prints
 // "PROG: message" to stderr and returns nothing (the caller exits 2).
 std::optional<RunConfig> load_for_process(const char* prog, const ProcessOptions& o);
+
+// The identity a process of a secure run speaks as in `keystore`: "member" in a compose keystore
+// (swarm keys --compose: one identity every replica shares, for replicas that claim their ids),
+// else `own` ("agent-3", "supervisor"). Empty, with `why` naming the file, when a file it needs
+// is missing.
+std::string keystore_identity(const std::string& keystore, const std::string& own,
+                              std::string& why);
+bool compose_keystore(const std::string& keystore);
 
 // The participant settings a run implies (domain, interface unless overridden, shared memory,
 // reader sizing for the swarm, the test transport's drop rate, the discovery server).

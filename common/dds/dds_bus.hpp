@@ -35,6 +35,7 @@ class DdsBus final : public NeighborBus {
   int matched_readers() const override { return state_.matched_readers(); }
   std::set<std::uint64_t> foreign_runs() const override { return state_.foreign_runs(); }
   std::set<AgentId> strangers() const override { return state_.strangers(); }
+  std::map<AgentId, std::uint8_t> suspects() const override { return state_.suspects(); }
 
   // The claim topic (DdsOptions::id_claims; std::logic_error without it).
   ClaimBus& claim_bus();

@@ -51,6 +51,16 @@ void to_idl(const StateMessage& m, qswarm_msgs::AgentState& s) {
     throw std::length_error("a sample reports at most " + std::to_string(kMaxStrangers) +
                             " strangers");
   s.strangers(m.strangers);
+  if (m.suspects.size() > kMaxSuspects)
+    throw std::length_error("a sample reports at most " + std::to_string(kMaxSuspects) +
+                            " suspects");
+  s.suspects().clear();
+  for (const Suspect& x : m.suspects) {
+    qswarm_msgs::Suspect e;
+    e.id(x.id);
+    e.kinds(x.kinds);
+    s.suspects().push_back(e);
+  }
   const auto put_links = [](const std::vector<std::pair<AgentId, double>>& in,
                             std::vector<qswarm_msgs::LinkEntry>& out) {
     out.clear();
@@ -108,6 +118,7 @@ StateMessage from_idl(const qswarm_msgs::AgentState& s) {
   m.faults = {s.faults().loss(), s.faults().burst(), s.faults().cut(), s.faults().partition(),
               s.faults().delayed()};
   m.strangers.assign(s.strangers().begin(), s.strangers().end());
+  for (const auto& e : s.suspects()) m.suspects.push_back({e.id(), e.kinds()});
   for (const auto& e : s.links()) m.links.emplace_back(e.peer(), e.weight());
   for (const auto& e : s.initial_links()) m.initial_links.emplace_back(e.peer(), e.weight());
   for (const auto& e : s.copies()) m.view.copies.push_back({e.peer(), vec(e.flow()), 0.0, false});

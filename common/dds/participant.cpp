@@ -147,8 +147,10 @@ DdsParticipant::DdsParticipant(const ParticipantOptions& opts) : opts_(opts) {
     pqos.wire_protocol().participant_id = id;
     {
       const CreatingParticipant creating;
-      participant_ =
-          dds::DomainParticipantFactory::get_instance()->create_participant(opts.domain_id, pqos);
+      // The writer registry listens from the start: it must hear every writer before a reader
+      // can match it. Discovery callbacks only (no entity status goes to it).
+      participant_ = dds::DomainParticipantFactory::get_instance()->create_participant(
+          opts.domain_id, pqos, writers_.get(), dds::StatusMask::none());
     }
     if (!participant_)
       throw std::runtime_error("dds: cannot create a participant on domain " +
@@ -158,6 +160,7 @@ DdsParticipant::DdsParticipant(const ParticipantOptions& opts) : opts_(opts) {
     if (this_process_holds_udp_port(PortPlan::discovery_port(opts.domain_id, id)) &&
         this_process_holds_udp_port(PortPlan::data_port(opts.domain_id, id)))
       break;
+    participant_->set_listener(nullptr);
     dds::DomainParticipantFactory::get_instance()->delete_participant(participant_);
     participant_ = nullptr;
     if (given || attempt >= 16)
@@ -169,6 +172,7 @@ DdsParticipant::DdsParticipant(const ParticipantOptions& opts) : opts_(opts) {
 
 DdsParticipant::~DdsParticipant() {
   if (!participant_) return;
+  participant_->set_listener(nullptr);  // waits for a discovery callback in progress
   participant_->delete_contained_entities();
   dds::DomainParticipantFactory::get_instance()->delete_participant(participant_);
 }

@@ -1,8 +1,11 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <utility>
+
+#include "common/dds/writer_registry.hpp"
 
 namespace eprosima::fastdds::dds {
 class DomainParticipant;
@@ -56,9 +59,13 @@ class DdsParticipant {
 
   eprosima::fastdds::dds::DomainParticipant* get() const { return participant_; }
   const ParticipantOptions& options() const { return opts_; }
+  bool secure() const { return !opts_.keystore.empty(); }
+  // The other participants' state and record writers, and the agent each is bound to.
+  const WriterRegistry& writers() const { return *writers_; }
 
  private:
   ParticipantOptions opts_;
+  std::unique_ptr<WriterRegistry> writers_ = std::make_unique<WriterRegistry>();
   eprosima::fastdds::dds::DomainParticipant* participant_ = nullptr;
 };
 

@@ -12,14 +12,18 @@
 #include <fastdds/dds/topic/ContentFilteredTopic.hpp>
 #include <fastdds/dds/topic/TypeSupport.hpp>
 
+#include <algorithm>
 #include <atomic>
 #include <cstdio>
+#include <cstring>
 #include <mutex>
 #include <stdexcept>
 
 #include "common/dds/idl_convert.hpp"
 #include "common/dds/qos.hpp"
 #include "common/dds/roster_filter.hpp"
+#include "common/dds/writer_registry.hpp"
+#include "common/transport/interest.hpp"
 #include "common/transport/sample_gate.hpp"
 
 #include "swarm_statePubSubTypes.h"
@@ -56,8 +60,13 @@ struct DdsStateBus::Impl : public dds::DataReaderListener {
   dds::DataWriter* record_writer = nullptr;
   dds::DataReader* reader = nullptr;
 
-  mutable std::mutex mu;  // the gate
+  const WriterRegistry* writers = nullptr;
+  bool bind = false;  // a secure participant: samples only from writers bound to their key
+  std::array<std::uint8_t, 12> own_prefix{};  // our participant's GUID prefix
+
+  mutable std::mutex mu;  // the gate, and what follows
   SampleGate gate;
+  std::set<std::uint64_t> warned_writers;  // refused for their binding, logged once
   // Held while the listener runs and while it is replaced: once set_listener returns, the old
   // listener is neither running nor called again (the agent's decorator unregisters this way
   // before it is destroyed, while DDS threads still deliver).
@@ -86,7 +95,9 @@ struct DdsStateBus::Impl : public dds::DataReaderListener {
       dds::SampleInfo info;
       while (r->take_next_sample(&s, &info) == ReturnCode_t::RETCODE_OK) {
         if (!info.valid_data) continue;
-        accept(from_idl(s));
+        WriterId w;  // the publication handle is the writer's GUID
+        std::memcpy(w.bytes.data(), info.publication_handle.value, w.bytes.size());
+        accept(from_idl(s), w);
       }
     } catch (const std::exception& e) {
       spdlog::error("dds: listener caught: {}", e.what());
@@ -95,13 +106,56 @@ struct DdsStateBus::Impl : public dds::DataReaderListener {
     }
   }
 
-  void accept(const StateMessage& m) {
+  bool own(const WriterId& w) const {
+    return std::memcmp(w.bytes.data(), own_prefix.data(), own_prefix.size()) == 0;
+  }
+
+  // Under DDS-Security: whether the writer is bound to the agent the sample is keyed as; if not,
+  // the sample is refused, counted, named (kBoundElsewhere) and logged once per writer.
+  bool bound(const StateMessage& m, const WriterId& w) {
+    if (!bind || own(w)) return true;
+    const WriterRegistry::Binding b = writers->binding(w);
+    if (b.agent && *b.agent == m.view.id) return true;
+    std::string bound_to = "no agent";
+    if (b.changed) {
+      bound_to = "no agent any more (its partitions changed)";
+    } else if (b.agent) {
+      bound_to = "agent " + std::to_string(*b.agent);
+    } else if (!b.known) {
+      bound_to = "nothing yet (not discovered)";
+    }
+    bool first = false;
+    {
+      std::lock_guard<std::mutex> lock(mu);
+      ++gate.counters().dropped;
+      // A writer not yet discovered is a race, not a forgery (its binding comes with discovery).
+      if (b.known) gate.notice(m.view.id, kBoundElsewhere);
+      first = warned_writers.insert(w.hash()).second;
+    }
+    if (first)
+      spdlog::warn(
+          "refused samples keyed as agent {} from writer {}, which its certificate binds to {} "
+          "(further refusals are counted, not logged)",
+          m.view.id, w.str(), bound_to);
+    return false;
+  }
+
+  void accept(const StateMessage& m, const WriterId& w) {
+    if (!bound(m, w)) return;
     const std::string why = check_message(m);  // pure: outside the lock the agent's tick takes
     SampleGate::Result r;
     {
       std::lock_guard<std::mutex> lock(mu);
-      r = gate.admit(m, why, clock->wall_ns());
+      r = gate.admit(m, why, clock->wall_ns(), w);
     }
+    for (const SuspectKind k : {kTwoWriters, kSequenceJump, kFutureIncarnation}) {
+      if ((r.noticed & k) == 0) continue;
+      spdlog::warn("agent {}: {} (writer {}, seq {}); named in the record", m.view.id,
+                   suspect_text(k), w.str(), m.seq);
+    }
+    if (r.new_owner)
+      spdlog::info("agent {}: now heard from writer {} (the writer heard before went silent)",
+                   m.view.id, w.str());
     if (r.verdict == SampleGate::Verdict::kForeign && r.first_from) {
       spdlog::warn("samples of another run (run id {:x}) on this domain: dropped and counted",
                    m.run_id);
@@ -125,6 +179,9 @@ DdsStateBus::DdsStateBus(DdsParticipant& participant, const StateBusOptions& opt
   d.clock = &clock;
   d.gate = SampleGate(opts.run_id);
   d.participant = participant.get();
+  d.writers = &participant.writers();
+  d.bind = participant.secure();
+  std::memcpy(d.own_prefix.data(), d.participant->guid().guidPrefix.value, d.own_prefix.size());
   d.type.register_type(d.participant);
   d.topic = d.participant->create_topic("qswarm/agent_state", d.type.get_type_name(),
                                         dds::TOPIC_QOS_DEFAULT);
@@ -135,6 +192,7 @@ DdsStateBus::DdsStateBus(DdsParticipant& participant, const StateBusOptions& opt
   if (opts.publish) {
     const auto writer_in = [&](const std::string& part, dds::Publisher*& pub, dds::Topic* topic,
                                dds::DataWriterQos wq, dds::DataWriterListener* listener) {
+      // The stream's partition, and this agent's own under it (which binds the writer to it).
       // No filtering on the writer's side: it would evaluate each sample for every filtering
       // reader and send per reader (64 agents on 2 cores fell behind with it); readers filter.
       wq.writer_resource_limits().reader_filters_allocation =
@@ -143,6 +201,8 @@ DdsStateBus::DdsStateBus(DdsParticipant& participant, const StateBusOptions& opt
           eprosima::fastrtps::rtps::PREALLOCATED_WITH_REALLOC_MEMORY_MODE;
       dds::PublisherQos pub_qos = dds::PUBLISHER_QOS_DEFAULT;
       pub_qos.partition().push_back(part.c_str());
+      if (opts.self != 0)
+        pub_qos.partition().push_back((part + '/' + agent_partition(opts.self)).c_str());
       pub = d.participant->create_publisher(pub_qos);
       dds::DataWriter* w = pub ? pub->create_datawriter(topic, wq, listener) : nullptr;
       if (!w) throw std::runtime_error("dds: cannot create a writer in " + part);
@@ -216,10 +276,14 @@ void DdsStateBus::publish(const StateMessage& msg) {
 }
 
 namespace {
-// The DDS partitions of an interest: the run's partition, or one under it per name.
-dds::PartitionQosPolicy partitions(const std::string& run, const std::vector<std::string>& names) {
+// The DDS partitions of an interest: the run's partition, or one under it per name; and the
+// writer's own agent partition (`self`, 0: none), which binds it to its agent.
+dds::PartitionQosPolicy partitions(const std::string& run, std::vector<std::string> names,
+                                   AgentId self = 0) {
   dds::PartitionQosPolicy p;
   if (names.empty()) p.push_back(run.c_str());
+  if (self != 0 && std::find(names.begin(), names.end(), agent_partition(self)) == names.end())
+    names.push_back(agent_partition(self));
   for (const std::string& n : names) {
     std::string full = run;
     full += '/';
@@ -236,7 +300,7 @@ void DdsStateBus::set_interest(const Interest& interest) {
   const std::string run = run_partition(d.opts.run_id);
   if (d.publisher) {
     dds::PublisherQos q = d.publisher->get_qos();
-    q.partition() = partitions(run, interest.publish);
+    q.partition() = partitions(run, interest.publish, d.opts.self);
     if (d.publisher->set_qos(q) != ReturnCode_t::RETCODE_OK)
       throw std::runtime_error("dds: cannot move the state writer's partitions");
   }
@@ -295,6 +359,11 @@ std::set<AgentId> DdsStateBus::strangers() const {
   const StrangerTally& t = impl_->roster_factory.tally;
   std::lock_guard<std::mutex> lock(t.mu);
   return t.ids;
+}
+
+std::map<AgentId, std::uint8_t> DdsStateBus::suspects() const {
+  std::lock_guard<std::mutex> lock(impl_->mu);
+  return impl_->gate.suspects();
 }
 
 std::set<std::uint64_t> DdsStateBus::foreign_runs() const {

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstdint>
+#include <map>
 #include <memory>
 #include <set>
 #include <string>
@@ -29,7 +30,11 @@ struct StateBusOptions {
   // sample takes a slot in the reader), so a stranger publishing many keys on the run's partition
   // cannot fill the reader and blind it. Empty: any id.
   std::vector<AgentId> roster;
-  // The agent this process flies: its reader does not read its own samples (0: none).
+  // The agent this process flies: its reader does not read its own samples (0: none), and its
+  // writers publish into that agent's partition (agent_partition) too, which binds them to it.
+  // Under DDS-Security the reader takes a sample keyed K only from a writer bound to K
+  // (WriterRegistry): with per-agent permissions a certificate then says which agent it speaks
+  // as (a compose keystore's shared member identity may name any: docs/security.md).
   AgentId self = 0;
 };
 
@@ -69,6 +74,7 @@ class DdsStateBus final : public NeighborBus {
   // Ids outside the roster whose samples the roster filter dropped (the first 64 of them; their
   // samples are counted in counters().dropped too).
   std::set<AgentId> strangers() const override;
+  std::map<AgentId, std::uint8_t> suspects() const override;
 
   struct Impl;
 

@@ -98,6 +98,12 @@ void Recorder::on_sample(const StateMessage& m, std::int64_t recv_wall_ns) {
       break;
   }
   tally_.fault_counts[{id, m.incarnation}] = m.faults;
+  // What the agent's transport found forged: the recorder does not hear the agents' stream.
+  if (!m.suspects.empty()) {
+    std::map<AgentId, std::uint8_t> suspects;
+    for (const Suspect& s : m.suspects) suspects[s.id] |= s.kinds;
+    note_suspects(suspects, id);
+  }
   // Strangers the agent's transport turned away: the recorder does not hear the agents' stream.
   for (const AgentId s : m.strangers)
     if (presence_.note_stranger(s))
@@ -136,6 +142,29 @@ void Recorder::note_strangers(const std::set<AgentId>& ids) {
   for (const AgentId id : ids)
     if (presence_.note_stranger(id))
       event("unknown_agent", id, "sample from an agent not in the scenario");
+}
+
+void Recorder::note_suspects(const std::map<AgentId, std::uint8_t>& suspects, AgentId reporter) {
+  const std::string by = reporter == 0 ? "the supervisor" : "agent " + std::to_string(reporter);
+  for (const auto& [id, kinds] : suspects) {
+    for (const SuspectKind k : {kTwoWriters, kSequenceJump, kFutureIncarnation, kBoundElsewhere}) {
+      if ((kinds & k) == 0) continue;
+      const auto [it, fresh] = tally_.forgeries.try_emplace({id, static_cast<std::uint8_t>(k)});
+      it->second.noticed_by.insert(reporter);
+      if (!fresh) continue;
+      it->second.first_t_s = t_s_;
+      const std::string detail =
+          std::string(suspect_name(k)) + ": " + suspect_text(k) + "; noticed by " + by;
+      event("forgery", id, detail);
+      notes_.push_back("agent " + std::to_string(id) + " " + detail);
+    }
+  }
+}
+
+std::vector<std::string> Recorder::take_notes() {
+  std::vector<std::string> out;
+  out.swap(notes_);
+  return out;
 }
 
 void Recorder::depart(AgentId id, const std::string& why) {
@@ -235,7 +264,9 @@ void Recorder::snapshot() {
   char buf[120];
   std::snprintf(buf, sizeof buf, "disagreement %.3g m, spread %.3g m", last_->disagreement_m(),
                 last_->spread_m());
-  if (v == ConvergenceJudge::Verdict::kConverged) {
+  if (v == ConvergenceJudge::Verdict::kConverged && !converged()) {
+    event("agreed_forged", 0, impersonated_text() + "; " + buf);
+  } else if (v == ConvergenceJudge::Verdict::kConverged) {
     event("converged", 0, buf);
   } else if (v == ConvergenceJudge::Verdict::kAgreedExceptOutliers) {
     event("agreed_except", 0, outliers_text() + "; " + buf);
@@ -344,8 +375,16 @@ std::string Recorder::elsewhere_text() const {
   return buf;
 }
 
+std::string Recorder::impersonated_text() const {
+  const std::vector<AgentId> ids = tally_.impersonated();
+  std::string list;
+  for (const AgentId id : ids) list += (list.empty() ? "" : ", ") + std::to_string(id);
+  return "agreed, but the samples of agent" + std::string(ids.size() > 1 ? "s " : " ") + list +
+         " came from two writers at once (an impersonator, or a relay of it): not trusted";
+}
+
 std::string Recorder::end_reason_if_over() const {
-  if (judge_.converged()) return "converged";
+  if (judge_.converged()) return converged() ? "converged" : impersonated_text();
   if (judge_.agreed_without_some()) return "agreed without " + missing_text();
   if (!judge_.outliers().empty()) return outliers_text();
   if (judge_.agreed_elsewhere_m() >= 0.0) return elsewhere_text();

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstdint>
+#include <map>
 #include <optional>
 #include <set>
 #include <string>
@@ -34,6 +35,12 @@ class Recorder {
   // Ids outside the run whose samples DDS's roster filter dropped before they arrived: each noted
   // once, as a stranger whose samples did arrive would be.
   void note_strangers(const std::set<AgentId>& ids);
+  // Agents whose samples `reporter` (an agent; 0: the supervisor's own transport) found forged,
+  // with SuspectKind bits: each agent and kind is an event once, and the summary lists who
+  // noticed. Two writers at once keep the run from converging.
+  void note_suspects(const std::map<AgentId, std::uint8_t>& suspects, AgentId reporter);
+  // Lines for the supervisor's log since the last call (forgeries first noticed).
+  std::vector<std::string> take_notes();
   // Periodic work (departures, fault windows, graph snapshots, convergence); call every few tens
   // of ms.
   void tick(std::int64_t now_wall_ns);
@@ -43,7 +50,8 @@ class Recorder {
   void set_observer(RunObserver* observer) { sinks_.set_observer(observer); }
 
   double time_s() const { return t_s_; }
-  bool converged() const { return judge_.converged(); }
+  // The agents agreed, every expected one was there, and no agent's samples were forged.
+  bool converged() const { return judge_.converged() && tally_.impersonated().empty(); }
   // Why the run is over ("converged", "agreed without agent 5", "duration"), or "" while it goes
   // on.
   std::string end_reason_if_over() const;
@@ -68,6 +76,7 @@ class Recorder {
   void judge_resilience(records::GraphSnapshot& g, const std::vector<AgentId>& ids);
   std::string missing_text() const;
   std::string elsewhere_text() const;
+  std::string impersonated_text() const;
   std::string outliers_text() const;
   // Its formation slot about the centre (zero for an agent the scenario does not list).
   Vec3 offset_of(AgentId id) const;
@@ -89,6 +98,7 @@ class Recorder {
   std::map<AgentId, double> killed_at_;  // planned kill time, until the departure is seen
   std::set<std::uint64_t> foreign_runs_;
   std::set<AgentId> implausible_;
+  std::vector<std::string> notes_;
   // W-MSR's condition: the graph robustness was last decided for (ids, and edges as id pairs),
   // and what the condition was at the last snapshot.
   std::vector<AgentId> robust_ids_;

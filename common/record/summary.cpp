@@ -34,6 +34,13 @@ std::string fmt(const char* f, double x) {
 
 }  // namespace
 
+std::vector<AgentId> RunTally::impersonated() const {
+  std::vector<AgentId> out;
+  for (const auto& [key, note] : forgeries)
+    if (key.second == kTwoWriters) out.push_back(key.first);
+  return out;
+}
+
 records::Summary build_summary(const RunConfig& rc, const Presence& presence,
                                const ConvergenceJudge& judge, const RunTally& tally,
                                const std::optional<records::GraphSnapshot>& first,
@@ -41,14 +48,22 @@ records::Summary build_summary(const RunConfig& rc, const Presence& presence,
                                const RunEnd& end) {
   records::Summary s;
   s.set_scenario(rc.name);
-  s.set_converged(judge.converged());
+  const bool converged = judge.converged() && tally.impersonated().empty();
+  s.set_converged(converged);
   s.set_run_id(rc.transport.run_id);
   s.set_foreign_samples(tally.foreign_samples);
   s.set_implausible_samples(tally.implausible_samples);
   for (const AgentId id : judge.missing()) s.add_missing_agents(id);
   for (const AgentId id : judge.outliers()) s.add_outlier_agents(id);
   if (judge.agreed_elsewhere_m() >= 0.0) s.set_agreed_elsewhere_m(judge.agreed_elsewhere_m());
-  s.set_convergence_time_s(judge.converged() ? judge.converged_at_s() : -1.0);
+  s.set_convergence_time_s(converged ? judge.converged_at_s() : -1.0);
+  for (const auto& [key, note] : tally.forgeries) {
+    records::Forgery* f = s.add_forgeries();
+    f->set_agent(key.first);
+    f->set_kind(suspect_name(static_cast<SuspectKind>(key.second)));
+    for (const AgentId by : note.noticed_by) f->add_noticed_by(by);
+    f->set_first_t_s(note.first_t_s);
+  }
   s.set_end_reason(end.reason);
   s.set_wall_time_s(end.wall_time_s);
   s.set_duration_s(end.t_s);
@@ -176,9 +191,8 @@ records::Summary build_summary(const RunConfig& rc, const Presence& presence,
                                         : detect / static_cast<double>(tally.detect_s.size()));
   const double last_fault = rc.faults.last_fault_end_s();
   s.set_last_fault_end_s(last_fault);
-  s.set_reconverge_s(judge.converged() && last_fault > 0.0
-                         ? std::max(0.0, judge.converged_at_s() - last_fault)
-                         : -1.0);
+  s.set_reconverge_s(
+      converged && last_fault > 0.0 ? std::max(0.0, judge.converged_at_s() - last_fault) : -1.0);
   const double avg_norm = rc.initial_average().norm();
   s.set_average_relative_error(avg_norm > 0 ? s.average_drift_m() / avg_norm : s.average_drift_m());
   return s;
@@ -250,6 +264,16 @@ std::string summary_text(const records::Summary& s, const RunConfig& rc, const s
     h << "MOVED: the agents agreed " << fmt("%.3g", s.agreed_elsewhere_m())
       << " m from the initial average, which edge-flow keeps exactly: something outside the law "
          "moved it (a participant publishing forged states or flows?)\n";
+  }
+  for (const records::Forgery& f : s.forgeries()) {
+    h << "FORGED: agent " << f.agent() << ": " << f.kind()
+      << " from t = " << fmt("%.2f", f.first_t_s()) << " s, noticed by";
+    const char* sep = " ";
+    for (const auto by : f.noticed_by()) {
+      h << sep << (by == 0 ? std::string("the supervisor") : "agent " + std::to_string(by));
+      sep = ", ";
+    }
+    h << "\n";
   }
   if (s.outlier_agents_size() > 0) {
     h << "OUTLIERS: the others agreed, but not agent(s)";

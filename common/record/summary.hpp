@@ -16,6 +16,12 @@
 
 namespace qswarm {
 
+// Forged samples of one agent of one SuspectKind, as noticed during a run.
+struct ForgeryNote {
+  double first_t_s = 0.0;
+  std::set<AgentId> noticed_by;  // 0: the supervisor
+};
+
 // What the recorder counted during a run, for the summary.
 struct RunTally {
   std::uint32_t joins = 0, departures = 0, fault_events = 0;
@@ -30,6 +36,11 @@ struct RunTally {
   std::vector<double> detect_s;  // planned kill -> departure seen
   // Fault counters per agent incarnation (an incarnation's counters only grow).
   std::map<std::pair<AgentId, std::int64_t>, FaultCounters> fault_counts;
+  // Forgeries by agent and kind (one SuspectKind bit).
+  std::map<std::pair<AgentId, std::uint8_t>, ForgeryNote> forgeries;
+  // Agents whose samples came from two writers at once: the record cannot tell which of their
+  // samples were real, so the run does not converge.
+  std::vector<AgentId> impersonated() const;
   // Law W_MSR: its condition over the run (trimmed is summed from the agents' last samples).
   std::optional<records::ResilienceOverTime> resilience;
 };

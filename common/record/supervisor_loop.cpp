@@ -37,6 +37,8 @@ SupervisorLoop::Poll SupervisorLoop::poll(bool interrupted) {
   recorder_.tick(clock_.wall_ns());
   recorder_.note_foreign_runs(bus_.foreign_runs(), bus_.counters().foreign);
   recorder_.note_strangers(bus_.strangers());
+  recorder_.note_suspects(bus_.suspects(), 0);
+  p.warnings = recorder_.take_notes();
   if (opts_.progress && (now >= next_progress_s_ || recorder_.edges_now() != last_edges_)) {
     last_edges_ = recorder_.edges_now();
     p.progress = recorder_.progress_line();

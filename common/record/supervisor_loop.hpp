@@ -4,6 +4,7 @@
 #include <mutex>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "common/clock/clock.hpp"
 #include "common/record/recorder.hpp"
@@ -44,6 +45,7 @@ class SupervisorLoop {
   struct Poll {
     std::optional<std::string> progress;    // a live line to print
     std::optional<std::string> end_reason;  // the run is over: why
+    std::vector<std::string> warnings;      // for the log: forgeries first noticed
     double wake_at_s = 0.0;
   };
   // One pass: the recorder's periodic work, what the transport refused, the live line, the end

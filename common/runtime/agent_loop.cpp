@@ -137,6 +137,7 @@ AgentLoop::Poll AgentLoop::poll() {
     runtime_.set_counters(c.received, c.dropped + c.stale, overruns());
     runtime_.set_fault_counters(faulty_.fault_counters());
     runtime_.set_strangers(transport_.strangers());
+    runtime_.set_suspects(transport_.suspects());
     faulty_.set_time(runtime_.time_s());
     for (int i = 0; i < runtime_.steps_per_tick(); ++i, ++physics_steps_) {
       for (const AgentEvent& e : runtime_.step()) {

@@ -61,6 +61,7 @@ void AgentRuntime::publish(Phase phase) {
   m.trimmed = law_->trimmed_total();
   m.faults = faults_;
   m.strangers = strangers_;
+  m.suspects = suspects_;
   bus_.publish(m);
   // The recorder gets every k-th sample, and the goodbye (a departure it sees at once).
   if (m.seq % p_.start.record_every == 0 || phase == Phase::kStopping) bus_.record(m);
@@ -69,6 +70,14 @@ void AgentRuntime::publish(Phase phase) {
 void AgentRuntime::set_strangers(const std::set<AgentId>& ids) {
   strangers_.assign(ids.begin(), ids.end());
   if (strangers_.size() > kMaxStrangers) strangers_.resize(kMaxStrangers);
+}
+
+void AgentRuntime::set_suspects(const std::map<AgentId, std::uint8_t>& suspects) {
+  suspects_.clear();
+  for (const auto& [id, kinds] : suspects) {
+    if (suspects_.size() == kMaxSuspects) break;
+    suspects_.push_back({id, kinds});
+  }
 }
 
 void AgentRuntime::consensus_tick(std::vector<AgentEvent>& events) {

@@ -92,6 +92,8 @@ class AgentRuntime {
   }
   // Stranger ids its transport dropped (reported in its samples, at most kMaxStrangers).
   void set_strangers(const std::set<AgentId>& ids);
+  // Agents its transport found forged (reported in its samples, at most kMaxSuspects).
+  void set_suspects(const std::map<AgentId, std::uint8_t>& suspects);
 
  private:
   void consensus_tick(std::vector<AgentEvent>& events);
@@ -126,6 +128,7 @@ class AgentRuntime {
   std::int64_t wall_ns_ = 0;
   std::uint64_t received_ = 0, dropped_ = 0, overruns_ = 0;
   std::vector<AgentId> strangers_;
+  std::vector<Suspect> suspects_;
   FaultCounters faults_;
 };
 

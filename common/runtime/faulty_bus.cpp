@@ -40,7 +40,7 @@ void FaultyBus::deliver(const StateMessage& m) {
     if (m.view.id == self_) return;
     const LinkFaults::Verdict v = faults_.on_receive(m.view.id, t_s_);
     if (v.drop) return;
-    held_.emplace(t_s_ + v.delay_s, m);
+    held_.emplace(t_s_ + v.delay_s, Arrival{++arrivals_, m});
     release_due_locked(has_listener_ ? &released : nullptr);  // nothing to collect without one
   }
   notify(released);
@@ -48,12 +48,12 @@ void FaultyBus::deliver(const StateMessage& m) {
 
 void FaultyBus::release_due_locked(std::vector<StateMessage>* released) {
   while (!held_.empty() && held_.begin()->first <= t_s_) {
-    const StateMessage& m = held_.begin()->second;
-    auto it = latest_.find(m.view.id);
-    // Jitter can reorder: keep the newest.
-    if (it == latest_.end() || is_newer(m, it->second)) {
-      latest_[m.view.id] = m;
-      if (released) released->push_back(m);
+    const Arrival& a = held_.begin()->second;
+    auto it = latest_.find(a.m.view.id);
+    // Jitter can reorder: keep the one the transport accepted last.
+    if (it == latest_.end() || a.index > it->second.index) {
+      latest_[a.m.view.id] = a;
+      if (released) released->push_back(a.m);
     }
     held_.erase(held_.begin());
   }
@@ -63,8 +63,8 @@ std::vector<StateMessage> FaultyBus::latest(AgentId self) {
   std::lock_guard<std::mutex> lock(mu_);
   release_due_locked(nullptr);
   std::vector<StateMessage> out;
-  for (const auto& [id, m] : latest_)
-    if (id != self) out.push_back(m);
+  for (const auto& [id, a] : latest_)
+    if (id != self) out.push_back(a.m);
   return out;
 }
 

@@ -41,8 +41,16 @@ class FaultyBus final : public NeighborBus {
   AgentId self_;
   mutable std::mutex mu_;
   double t_s_ = 0.0;
-  std::multimap<double, StateMessage> held_;  // release time -> message
-  std::map<AgentId, StateMessage> latest_;
+  // A sample the transport accepted, in the order it did: the transport (SampleGate) judges which
+  // sample of an agent is newest, including a takeover by another writer that numbers its samples
+  // lower (a restart, or the real agent after a forger stopped); delays here only reorder.
+  struct Arrival {
+    std::uint64_t index = 0;
+    StateMessage m;
+  };
+  std::uint64_t arrivals_ = 0;
+  std::multimap<double, Arrival> held_;  // release time -> sample
+  std::map<AgentId, Arrival> latest_;
   std::mutex listener_mu_;  // held while listener_ runs or is replaced
   std::atomic<bool> has_listener_{false};
   Listener listener_;

@@ -30,8 +30,6 @@ bool near_cell(const Vec3& x, const Eigen::Vector3i& c, double cell_m, double ke
   return true;
 }
 
-std::string id_name(AgentId id) { return "a" + std::to_string(id); }
-
 void sort_unique(std::vector<std::string>& v) {
   std::sort(v.begin(), v.end());
   v.erase(std::unique(v.begin(), v.end()), v.end());
@@ -70,7 +68,7 @@ Neighbourhood::Neighbourhood(const RunConfig& rc, AgentId self) : self_(self) {
 Interest Neighbourhood::update(const Vec3& p_W, const Vec3& q, const std::set<AgentId>& linked) {
   Interest in;
   if (whole_run_) return in;
-  in.publish.push_back(id_name(self_));
+  in.publish.push_back(agent_partition(self_));
   for (Space& s : spaces_) {
     const Vec3& x = s.tag == 'q' ? q : p_W;
     if (!s.cell || !near_cell(x, *s.cell, s.cell_m, s.keep_m)) s.cell = cell_of(x, s.cell_m);
@@ -80,10 +78,10 @@ Interest Neighbourhood::update(const Vec3& p_W, const Vec3& q, const std::set<Ag
         for (int dz = -1; dz <= 1; ++dz)
           in.subscribe.push_back(cell_name(s.tag, *s.cell + Eigen::Vector3i(dx, dy, dz)));
   }
-  for (const AgentId id : listed_) in.subscribe.push_back(id_name(id));
+  for (const AgentId id : listed_) in.subscribe.push_back(agent_partition(id));
   if (by_name_)
     for (const AgentId id : linked)
-      if (id != self_) in.subscribe.push_back(id_name(id));
+      if (id != self_) in.subscribe.push_back(agent_partition(id));
   sort_unique(in.publish);
   sort_unique(in.subscribe);
   return in;

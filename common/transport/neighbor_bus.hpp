@@ -2,6 +2,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <set>
 #include <vector>
 
@@ -16,6 +17,8 @@ struct BusCounters {
   std::uint64_t dropped = 0;   // refused: invalid content
   std::uint64_t stale = 0;     // refused: not newer than what we hold
   std::uint64_t foreign = 0;   // refused: from another run on the same domain
+  // refused: another writer holds the agent's key (SampleGate), or a sequence jump
+  std::uint64_t contested = 0;
 };
 
 // The one narrow interface an agent uses to talk: publish its own state, read the newest state of
@@ -53,6 +56,8 @@ class NeighborBus {
   // Ids outside the run whose samples the transport dropped before the gate saw them (the DDS
   // roster filter), so that the record can still name each stranger once.
   virtual std::set<AgentId> strangers() const { return {}; }
+  // Agents whose samples this transport found forged, with SuspectKind bits (SampleGate).
+  virtual std::map<AgentId, std::uint8_t> suspects() const { return {}; }
 };
 
 }  // namespace qswarm

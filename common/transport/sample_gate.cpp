@@ -1,13 +1,85 @@
 #include "common/transport/sample_gate.hpp"
 
+#include <algorithm>
+#include <cstdio>
+
 namespace qswarm {
 
+bool WriterId::known() const {
+  for (const std::uint8_t b : bytes)
+    if (b != 0) return true;
+  return false;
+}
+
+std::string WriterId::str() const {
+  std::string out;
+  char buf[4];
+  for (std::size_t i = 0; i < bytes.size(); ++i) {
+    if (i == 12) out += '.';  // prefix.entity
+    std::snprintf(buf, sizeof buf, "%02x", bytes[i]);
+    out += buf;
+  }
+  return out;
+}
+
+std::uint64_t WriterId::hash() const {
+  std::uint64_t h = 1469598103934665603ULL;  // FNV-1a
+  for (const std::uint8_t b : bytes) h = (h ^ b) * 1099511628211ULL;
+  return h;
+}
+
+bool SampleGate::far_ahead(const StateMessage& a, const StateMessage& b, double since_s) {
+  if (a.incarnation != b.incarnation || a.seq <= b.seq) return false;
+  return static_cast<double>(a.seq - b.seq) >
+         static_cast<double>(kJumpSlack) + kMaxRatePerS * std::max(0.0, since_s);
+}
+
+bool SampleGate::jumps(const StateMessage& m, const Agent& a, std::int64_t now_wall_ns) const {
+  if (now_wall_ns <= 0 || a.held_at_ns <= 0) return false;
+  return far_ahead(m, a.held, static_cast<double>(now_wall_ns - a.held_at_ns) * 1e-9);
+}
+
+bool SampleGate::behind(const StateMessage& m, const Agent& a, std::int64_t now_wall_ns) const {
+  if (now_wall_ns <= 0 || a.held_at_ns <= 0) return false;
+  return far_ahead(a.held, m, static_cast<double>(now_wall_ns - a.held_at_ns) * 1e-9);
+}
+
+bool SampleGate::interleaved(Agent& a, const WriterId& w) {
+  const std::uint64_t h = w.hash();
+  ++a.samples;
+  Agent::Seen* slot = nullptr;
+  for (Agent::Seen& s : a.seen)
+    if (s.at != 0 && s.writer == h) slot = &s;
+  if (slot && a.last_writer != h && a.samples - slot->at <= kRecentSamples) ++a.returns;
+  if (!slot) {
+    slot = &a.seen[0];  // the writer heard longest ago makes room
+    for (Agent::Seen& s : a.seen)
+      if (s.at < slot->at) slot = &s;
+    slot->writer = h;
+  }
+  slot->at = a.samples;
+  a.last_writer = h;
+  return a.returns >= kReturns;
+}
+
+std::uint8_t SampleGate::notice_bits(AgentId id, std::uint8_t kinds) {
+  std::uint8_t& held = suspects_[id];
+  const std::uint8_t fresh = static_cast<std::uint8_t>(kinds & ~held);
+  held = static_cast<std::uint8_t>(held | kinds);
+  return fresh;
+}
+
+bool SampleGate::notice(AgentId id, std::uint8_t kinds) { return notice_bits(id, kinds) != 0; }
+
 SampleGate::Result SampleGate::admit(const StateMessage& m, const std::string& why,
-                                     std::int64_t now_wall_ns) {
+                                     std::int64_t now_wall_ns, const WriterId& writer) {
   Result r;
   constexpr std::int64_t kClockSkewNs = 60'000'000'000;
   if (why.empty() && now_wall_ns > 0 && m.incarnation > now_wall_ns + kClockSkewNs) {
-    return admit(m, "incarnation (start time) in the future", 0);
+    // It would lock the real agent out as "stale" for the rest of the run.
+    Result f = admit(m, "incarnation (start time) in the future", 0, writer);
+    if (f.verdict == Verdict::kInvalid) f.noticed = notice_bits(m.view.id, kFutureIncarnation);
+    return f;
   }
   if (run_id_ != 0 && m.run_id != run_id_) {
     ++counters_.foreign;
@@ -22,22 +94,67 @@ SampleGate::Result SampleGate::admit(const StateMessage& m, const std::string& w
     r.first_from = warned_.insert(m.view.id).second;
     return r;
   }
-  auto it = latest_.find(m.view.id);
-  if (it != latest_.end() && !is_newer(m, it->second)) {
-    ++counters_.stale;
-    r.verdict = Verdict::kStale;
+  const auto refuse = [&](const char* what) {
+    ++counters_.contested;
+    r.verdict = Verdict::kContested;
+    r.why = what;
+    return r;
+  };
+  auto it = agents_.find(m.view.id);
+  if (it == agents_.end()) {
+    Agent& a = agents_[m.view.id];
+    a.held = m;
+    a.held_at_ns = now_wall_ns;
+    a.owner = writer;
+    interleaved(a, writer);
+    ++counters_.received;
     return r;
   }
-  latest_[m.view.id] = m;
+  Agent& a = it->second;
+  if (interleaved(a, writer)) r.noticed |= notice_bits(m.view.id, kTwoWriters);
+  const bool jump = jumps(m, a, now_wall_ns);
+  if (jump) r.noticed |= notice_bits(m.view.id, kSequenceJump);
+  if (writer == a.owner) {
+    a.contender_run = 0;
+    if (jump) return refuse("sequence number jumps far ahead of the agent's");
+    if (!is_newer(m, a.held)) {
+      ++counters_.stale;
+      r.verdict = Verdict::kStale;
+      return r;
+    }
+  } else {
+    if (!(writer == a.contender)) {
+      a.contender = writer;
+      a.contender_run = 0;
+    }
+    // The owner's numbers far ahead of this writer's in the same life: the owner forged them (a
+    // relay heard before the real agent); this writer takes the agent at once.
+    const bool owner_jumped = behind(m, a, now_wall_ns);
+    if (owner_jumped) r.noticed |= notice_bits(m.view.id, kSequenceJump);
+    // A jump against the held sample still counts toward a takeover: the held sample may be a
+    // forger's, and the real agent's numbers far from it.
+    if (!owner_jumped && ++a.contender_run < kTakeover)
+      return refuse(jump ? "sequence number jumps far ahead of the agent's"
+                         : "another writer holds this agent");
+    // The owner went silent while this writer spoke, or forged its numbers: this writer takes the
+    // agent over, and its own sequence from here (a restart, or the real agent after its forger
+    // stopped).
+    a.contender = a.owner;
+    a.contender_run = 0;
+    a.owner = writer;
+    r.new_owner = true;
+  }
+  a.held = m;
+  a.held_at_ns = now_wall_ns;
   ++counters_.received;
   return r;
 }
 
 std::vector<StateMessage> SampleGate::latest(AgentId self) const {
   std::vector<StateMessage> out;
-  out.reserve(latest_.size());
-  for (const auto& [id, m] : latest_)
-    if (id != self) out.push_back(m);
+  out.reserve(agents_.size());
+  for (const auto& [id, a] : agents_)
+    if (id != self) out.push_back(a.held);
   return out;
 }
 

@@ -23,12 +23,43 @@ std::string check_message(const StateMessage& m) {
   if (m.mode != AgentMode::kParticle && m.mode != AgentMode::kQuadcopter) return "unknown mode";
   if (m.phase > Phase::kReady) return "unknown phase";
   if (m.strangers.size() > kMaxStrangers) return "too many strangers reported";
+  if (m.suspects.size() > kMaxSuspects) return "too many suspects reported";
+  for (const Suspect& s : m.suspects)
+    if (s.id == 0 || s.kinds == 0 || (s.kinds & ~kAllSuspectKinds) != 0) return "suspect invalid";
   for (const auto* links : {&m.links, &m.initial_links}) {
     for (const auto& [peer, w] : *links) {
       if (!std::isfinite(w) || w < 0.0 || w > 1e9 || peer == m.view.id) return "link invalid";
     }
   }
   return {};
+}
+
+const char* suspect_name(SuspectKind k) {
+  switch (k) {
+    case kTwoWriters:
+      return "two_writers";
+    case kSequenceJump:
+      return "sequence_jump";
+    case kFutureIncarnation:
+      return "future_incarnation";
+    case kBoundElsewhere:
+      return "bound_elsewhere";
+  }
+  return "unknown";
+}
+
+const char* suspect_text(SuspectKind k) {
+  switch (k) {
+    case kTwoWriters:
+      return "its samples came from two writers at once (an impersonator, or a relay of it)";
+    case kSequenceJump:
+      return "a sample jumped far beyond its sequence numbers (forged as newer; refused)";
+    case kFutureIncarnation:
+      return "a sample claimed a start time in the future (forged as a restart; refused)";
+    case kBoundElsewhere:
+      return "a participant whose certificate names another agent published as it (refused)";
+  }
+  return "unknown";
 }
 
 }  // namespace qswarm

@@ -37,6 +37,27 @@ enum class Phase : std::uint8_t { kWaiting = 0, kRunning = 1, kStopping = 2, kRe
 // How many stranger ids a sample reports (the wire's bound).
 inline constexpr std::size_t kMaxStrangers = 16;
 
+// What a receiver found forged in one agent's samples (bits; SampleGate says how it decides).
+// Carried in samples, so that the recorder, which does not hear the agents' stream, names them.
+enum SuspectKind : std::uint8_t {
+  kTwoWriters = 1,         // two writers published the agent's samples at once
+  kSequenceJump = 2,       // a sequence number beyond what the agent could have sent (refused)
+  kFutureIncarnation = 4,  // a start time more than a minute ahead (refused)
+  // DDS-Security: a writer whose certificate binds it to another agent published them (refused).
+  kBoundElsewhere = 8,
+};
+inline constexpr std::uint8_t kAllSuspectKinds = 15;
+struct Suspect {
+  AgentId id = 0;
+  std::uint8_t kinds = 0;  // SuspectKind bits
+  bool operator==(const Suspect&) const = default;
+};
+// How many suspects a sample reports (the wire's bound).
+inline constexpr std::size_t kMaxSuspects = 16;
+// The name of one kind in the record ("two_writers") and what it means for people.
+const char* suspect_name(SuspectKind k);
+const char* suspect_text(SuspectKind k);
+
 // One agent's published state: the consensus part its neighbours' laws read, plus the physical
 // part the supervisor records. The DDS type in idl/ mirrors this.
 struct StateMessage {
@@ -64,6 +85,8 @@ struct StateMessage {
   // Ids outside the run whose samples the sender's transport dropped (the first kMaxStrangers):
   // the recorder, which does not hear the agents' stream, names each stranger from these.
   std::vector<AgentId> strangers;
+  // Agents whose samples the sender's transport found forged (the first kMaxSuspects).
+  std::vector<Suspect> suspects;
 };
 
 // Empty if a received message is usable, else why not. Anything non-finite or absurd is refused.

@@ -1,6 +1,6 @@
 """swarm keys: a DDS-Security keystore for a scenario, and the check a secure run makes first.
 
-Usage: python3 -m qswarm.keys --swarm BIN SCENARIO --out DIR [--days N]
+Usage: python3 -m qswarm.keys --swarm BIN SCENARIO --out DIR [--days N] [--compose]
        python3 -m qswarm.keys --swarm BIN SCENARIO --check DIR
 (the C++ `swarm keys` subcommand execs this; `swarm run --secure DIR` runs the check)
 
@@ -13,8 +13,22 @@ signs every identity and, as S/MIME (detached, text), the governance and every p
                                   encrypted, read and write access controlled, no stranger admitted
   DIR/<name>/cert.pem, key.pem    one identity per agent id (agent-ID) and one for the supervisor
   DIR/<name>/permissions.xml, .p7s
-      agent-ID     publish and read the state stream, publish the record stream, claim ids
+      agent-ID     publish state and record samples only as agent ID (below), read the state
+                   stream, claim ids
       supervisor   read the record stream only
+
+An agent publishes into a partition of its own id beside its stream's partition (".../a3",
+common/transport/interest.hpp); agent-ID's permissions let it publish state only into the run's
+partition, its own ".../aID" and partitions that name no agent (".../q...", any name not
+starting with "a"), and record samples only into the record partition and its ".../aID". Readers
+take a sample keyed ID only from a writer in ".../aID" (common/dds/writer_registry.hpp), so the
+holder of agent 3's key cannot publish as agent 5.
+
+With --compose, for compose replicas that claim their ids at start (and so cannot be handed a
+certificate for one in advance), it writes one `member` identity that every replica shares,
+instead of agent-ID: a member may publish as any agent and claim ids, and a participant without
+a certificate of this authority is kept out. The scenario's ids are not used; the supervisor's
+identity is as above. `swarm run --secure` refuses such a keystore.
 
 Keys are written with mode 0600 and never copied into a run directory.
 
@@ -93,13 +107,46 @@ def rule(kind, topics, partitions):
     return (f"        <{kind}><topics>{t}</topics><partitions>{p}</partitions></{kind}>\n")
 
 
+# A run's partition: "qswarm-run-" and the run id's 16 hex digits, exactly (fnmatch patterns, as
+# Fast DDS matches them: a '*' here would also match "qswarm-run-X/a5").
+HEX16 = "[0-9a-f]" * 16
+RUN = "qswarm-run-" + HEX16
+RECORD = "qswarm-record-" + HEX16
+
+
+def allow_rule(*rules):
+    # Fast DDS checks a writer against the first allow_rule naming its topic, with the partitions
+    # of every <publish> in that rule: one rule per topic keeps each topic's partitions its own.
+    domains = (f"<domains><id_range><min>{DOMAINS[0]}</min><max>{DOMAINS[1]}</max></id_range>"
+               "</domains>")
+    return f"      <allow_rule>\n        {domains}\n{''.join(rules)}      </allow_rule>\n"
+
+
+def agent_rules(agent_id):
+    mine = f"a{agent_id}"
+    return (allow_rule(rule("publish", ["qswarm/agent_state"],
+                            [RUN, f"{RUN}/{mine}", f"{RUN}/[!a]*"]),
+                       rule("subscribe", ["qswarm/agent_state", "qswarm/id_claim"],
+                            ["qswarm-run-*"])) +
+            allow_rule(rule("publish", ["qswarm/record"], [RECORD, f"{RECORD}/{mine}"])) +
+            allow_rule(rule("publish", ["qswarm/id_claim"], [RUN])))
+
+
+def member_rules():
+    # Any agent's partitions: replicas learn their id only when they claim it.
+    return allow_rule(rule("publish", ["qswarm/agent_state", "qswarm/id_claim"], ["qswarm-run-*"]),
+                      rule("publish", ["qswarm/record"], ["qswarm-record-*"]),
+                      rule("subscribe", ["qswarm/agent_state", "qswarm/id_claim"],
+                           ["qswarm-run-*"]))
+
+
 def permissions_xml(name, not_before, not_after):
     if name == "supervisor":
-        rules = rule("subscribe", ["qswarm/record"], ["qswarm-record-*"])
+        rules = allow_rule(rule("subscribe", ["qswarm/record"], ["qswarm-record-*"]))
+    elif name == MEMBER:
+        rules = member_rules()
     else:
-        rules = (rule("publish", ["qswarm/agent_state", "qswarm/id_claim"], ["qswarm-run-*"]) +
-                 rule("publish", ["qswarm/record"], ["qswarm-record-*"]) +
-                 rule("subscribe", ["qswarm/agent_state", "qswarm/id_claim"], ["qswarm-run-*"]))
+        rules = agent_rules(int(name.split("-", 1)[1]))
     stamp = "%Y-%m-%dT%H:%M:%S"
     return f"""<?xml version="1.0" encoding="UTF-8"?>
 <dds xmlns:xsi="http://www.w3.org/2001/XMLSchema-instance"
@@ -111,10 +158,7 @@ def permissions_xml(name, not_before, not_after):
         <not_before>{not_before.strftime(stamp)}</not_before>
         <not_after>{not_after.strftime(stamp)}</not_after>
       </validity>
-      <allow_rule>
-        <domains><id_range><min>{DOMAINS[0]}</min><max>{DOMAINS[1]}</max></id_range></domains>
-{rules}      </allow_rule>
-      <default>DENY</default>
+{rules}      <default>DENY</default>
     </grant>
   </permissions>
 </dds>
@@ -133,11 +177,18 @@ def sign(ca_dir, xml_path, p7s_path):
             "-inkey", os.path.join(ca_dir, "private", "ca.key.pem"))
 
 
+MEMBER = "member"
+
+
 def identity_names(ids):
     return [f"agent-{i}" for i in ids] + ["supervisor"]
 
 
-def generate(out, ids, days):
+def is_compose(keystore):
+    return os.path.isdir(os.path.join(keystore, MEMBER))
+
+
+def generate(out, ids, days, compose=False):
     if os.path.exists(out) and os.listdir(out):
         raise KeystoreError(out, "exists and is not empty (a keystore is never overwritten)")
     parent = os.path.dirname(os.path.abspath(out))
@@ -160,7 +211,7 @@ def generate(out, ids, days):
         not_after = now + datetime.timedelta(days=days)
         # Fast DDS reads the permissions' times as local time: a day's margin for any time zone.
         now -= datetime.timedelta(days=1)
-        for name in identity_names(ids):
+        for name in [MEMBER, "supervisor"] if compose else identity_names(ids):
             d = os.path.join(work, name)
             os.makedirs(d, mode=0o700)
             key = os.path.join(d, "key.pem")
@@ -193,6 +244,10 @@ def generate(out, ids, days):
 def check(keystore, ids):
     """Raises KeystoreError naming the first file that is missing, not signed by the keystore's
     authority, or not valid now."""
+    if is_compose(keystore):
+        raise KeystoreError(keystore, "a compose keystore (one member identity for replicas that "
+                            "claim their ids); a secure run needs one identity per agent "
+                            "(swarm keys SCENARIO --out DIR)")
     ca = os.path.join(keystore, "ca.cert.pem")
     need = [ca, os.path.join(keystore, "governance.p7s")]
     for name in identity_names(ids):
@@ -236,10 +291,15 @@ def main(argv=None):
     ap.add_argument("--out", help="write a new keystore here")
     ap.add_argument("--check", help="check this keystore against the scenario")
     ap.add_argument("--days", type=int, default=365, help="validity in days (default 365)")
+    ap.add_argument("--compose", action="store_true",
+                    help="one member identity for compose replicas instead of one per agent")
     try:
         a = ap.parse_args(argv)
     except SystemExit as e:
         return 0 if e.code == 0 else 2
+    if a.compose and a.check:
+        print(f"{PROG}: --compose goes with --out", file=sys.stderr)
+        return 2
     if bool(a.out) == bool(a.check):
         print(f"{PROG}: give --out DIR or --check DIR", file=sys.stderr)
         return 2
@@ -251,7 +311,10 @@ def main(argv=None):
         return 2
     try:
         ids = [int(agent["id"]) for agent in inspect(a.swarm, a.scenario)["agents"]]
-        if a.out:
+        if a.out and a.compose:
+            generate(a.out, ids, a.days, compose=True)
+            print(f"{PROG}: compose keystore (a member identity and the supervisor) in {a.out}")
+        elif a.out:
             generate(a.out, ids, a.days)
             print(f"{PROG}: keystore for {len(ids)} agents and the supervisor in {a.out}")
         else:

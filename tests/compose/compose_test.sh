@@ -4,12 +4,17 @@
 # one agent's container off the network for a window while the scenario also cuts link 1-2, and
 # checks the record on the host: converged, every agent present, the agreed point the initial
 # average (relative error < 1e-9, edge-flow), the container cut in events.csv and graph.csv, and a
-# replica given an id another one flies refused. Cleans up its containers and network.
+# replica given an id another one flies refused. Then the secure compose swarm
+# (docker-compose.secure.yml, a keystore from `swarm keys --compose`): 6 replicas sharing the
+# member identity converge, and a container without it on the same network, flying agent 3 of the
+# same scenario, moves nothing. Cleans up its containers and networks.
 #
-# Exit 77 (ctest: skipped) with the reason when there is no container engine or no way to make
-# the Debian base image. Environment: QSWARM_COMPOSE_AGENTS (default 6).
+# Usage: compose_test.sh [BIN_DIR] (where `swarm` is; default build/bin). Exit 77 (ctest: skipped)
+# with the reason when there is no container engine or no way to make the Debian base image.
+# Environment: QSWARM_COMPOSE_AGENTS (default 6).
 set -euo pipefail
 SRC="$(cd "$(dirname "$0")/../.." && pwd)"
+BIN="${1:-$SRC/build/bin}"
 N="${QSWARM_COMPOSE_AGENTS:-6}"
 CUT_AGENT=3
 skip() { echo "SKIPPED: $*"; exit 77; }
@@ -41,10 +46,18 @@ mkdir -p "$WORK/runs"
 export QSWARM_AGENTS="$N" QSWARM_RUNS="$WORK/runs" QSWARM_USER="$(id -u):$(id -g)" \
   QSWARM_SUBNET="10.89.$((100 + $$ % 100)).0/24"
 COMPOSE=(podman-compose -p "$PROJECT" -f "$SRC/docker/docker-compose.yml")
+SECURE="$PROJECT-secure"
+SECURE_COMPOSE=(podman-compose -p "$SECURE" -f "$SRC/docker/docker-compose.yml"
+                -f "$SRC/docker/docker-compose.secure.yml")
 cleanup() {
   "${COMPOSE[@]}" down >/dev/null 2>&1 || true
   podman rm -f "$PROJECT-dup" >/dev/null 2>&1 || true
   podman network rm -f "${PROJECT}_swarm" >/dev/null 2>&1 || true
+  if [[ -n "${QSWARM_KEYSTORE:-}" ]]; then
+    "${SECURE_COMPOSE[@]}" down >/dev/null 2>&1 || true
+  fi
+  podman rm -f "$SECURE-stranger" >/dev/null 2>&1 || true
+  podman network rm -f "${SECURE}_swarm" >/dev/null 2>&1 || true
   rm -rf "$WORK"
 }
 trap cleanup EXIT
@@ -115,6 +128,55 @@ check("graph.csv: the planned cut 1-2 (one edge fewer)", full - 1 in edges, sort
 check(f"graph.csv: the container cut (agent {cut}'s {n - 1} edges gone)",
       any(e <= full - (n - 1) for e in edges), min(edges, default=None))
 check("graph.csv: whole again at the end", edges and edges[-1] == full, edges[-1:])
+sys.exit(1 if bad else 0)
+PY
+
+# The secure compose swarm: the same scenario, a compose keystore (one member identity that the
+# replicas share, and the supervisor's), simple discovery; a stranger container without the
+# keystore on the same network flies agent 3 of the same scenario (the same run id) from the
+# start. Its own network, subnet and record directory.
+"$BIN/swarm" keys "$SRC/docker/scenarios/swarm.txtpb" --compose --out "$WORK/keys" >/dev/null || {
+  echo "FAIL: swarm keys --compose"; exit 1; }
+mkdir -p "$WORK/runs-secure"
+export QSWARM_KEYSTORE="$WORK/keys" QSWARM_RUNS="$WORK/runs-secure" QSWARM_DISCOVERY_SERVER=none \
+  QSWARM_SUBNET="10.89.$((200 + $$ % 50)).0/24"
+echo "compose test: secure, $N agents, project $SECURE"
+"${SECURE_COMPOSE[@]}" --podman-run-args="${RUNTIME[*]}" up -d --no-build >"$WORK/up-secure.log" 2>&1 || {
+  cat "$WORK/up-secure.log"; echo "FAIL: secure compose up"; exit 1; }
+podman "${RUNTIME[@]}" run -d --name "$SECURE-stranger" --network "${SECURE}_swarm" \
+  -e QSWARM_AGENTS="$N" localhost/qswarm:latest \
+  swarm-agent --scenario /opt/qswarm/scenarios/compose/swarm.txtpb --interface any --id 3 \
+  --start-timeout 5 >/dev/null
+ssup="${SECURE}_supervisor_1"
+scode=$(podman wait "$ssup")
+podman logs "$ssup" >"$WORK/supervisor-secure.out" 2>&1 || true
+podman stop -t 5 "$SECURE-stranger" >/dev/null 2>&1 || true
+podman logs "$SECURE-stranger" >"$WORK/stranger.log" 2>&1 || true
+echo "compose test: secure supervisor exited $scode"
+sed -n '/==/,$p' "$WORK/supervisor-secure.out"
+srun=$(find "$WORK/runs-secure" -mindepth 1 -maxdepth 1 -type d | head -1)
+check "secure: the supervisor exits 0 (converged, complete record)" '[[ $scode -eq 0 ]]'
+check "secure: the stranger heard none of the replicas" \
+  'grep -q "start timeout: 0 of" "$WORK/stranger.log"'
+PYTHONPATH="$SRC/python" /usr/bin/python3 - "$srun" "$N" <<'PY' || fail=1
+import csv, json, os, sys
+from qswarm import run_dir as names
+run, n = sys.argv[1], int(sys.argv[2])
+s = json.load(open(os.path.join(run, names.SUMMARY)))
+bad = []
+def check(name, ok, got):
+    print(("ok: " if ok else "FAIL: ") + f"secure: {name} ({got})")
+    if not ok: bad.append(name)
+check("DDS-Security on", s.get("secure") is True, s.get("secure"))
+check("converged", s.get("converged") is True, s.get("end_reason"))
+ids = sorted(a["id"] for a in s.get("agents", []))
+check(f"all {n} agents in the summary", ids == list(range(1, n + 1)), ids)
+err = s.get("average_relative_error", 1.0)
+check("agreed value = initial average to < 1e-9 (the stranger moved nothing)", err < 1e-9, err)
+check("no forgery named", not s.get("forgeries"), s.get("forgeries"))
+events = list(csv.DictReader(open(os.path.join(run, names.EVENTS))))
+odd = [e["kind"] for e in events if e["kind"] in ("forgery", "unknown_agent", "foreign_run")]
+check("no stranger, forgery or other run in events.csv", not odd, odd)
 sys.exit(1 if bad else 0)
 PY
 exit $fail

@@ -7,6 +7,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <set>
 
 #include "common/dds/dds_bus.hpp"
@@ -40,12 +41,13 @@ class Security : public ::testing::Test {
     made = true;
   }
 
-  // A participant of run kRun; `keystore` empty: a plain one.
+  // A participant of run kRun flying agent `self` (0: none); `keystore` empty: a plain one.
   static DdsOptions options(const char* name, const fs::path& keystore, const std::string& identity,
-                            bool recorder = false) {
+                            bool recorder = false, AgentId self = 0) {
     DdsOptions o = test::dds_options(name, kRun, recorder);
     o.participant.keystore = keystore.string();
     o.participant.identity = identity;
+    o.state.self = self;
     return o;
   }
 
@@ -63,8 +65,8 @@ class Security : public ::testing::Test {
   // agent 2 and the supervisor have each taken 50 of agent 1's samples: the intruder has had as
   // long to get through as the agents needed to hear each other, many times over.
   static void fly_beside(DdsBus& intruder, AgentId intruder_id) {
-    DdsBus agent1(options("agent-1", ours(), "agent-1"));
-    DdsBus agent2(options("agent-2", ours(), "agent-2"));
+    DdsBus agent1(options("agent-1", ours(), "agent-1", false, 1));
+    DdsBus agent2(options("agent-2", ours(), "agent-2", false, 2));
     DdsBus supervisor(options("supervisor", ours(), "supervisor", true));
     std::uint64_t seq = 0;
     ASSERT_TRUE(test::wait_for(
@@ -102,6 +104,76 @@ TEST_F(Security, ACertificateFromAnotherAuthorityIsRefused) {
   fly_beside(outsider, 3);
 }
 
+// A member of the run holding agent 3's certificate publishes state and record samples keyed as
+// agent 5. Its writers are in agent 3's partitions (its permissions allow no other), so every
+// reader refuses them; it still hears the run (it is a member), so it is the binding, not
+// authentication, that refuses it.
+TEST_F(Security, AMemberWithAgent3sCertificatePublishingAsAgent5IsRefusedByEveryReader) {
+  DdsBus intruder(options("agent-3-as-5", ours(), "agent-3", false, 3));
+  DdsBus agent1(options("agent-1", ours(), "agent-1", false, 1));
+  DdsBus agent2(options("agent-2", ours(), "agent-2", false, 2));
+  DdsBus supervisor(options("supervisor", ours(), "supervisor", true));
+  std::uint64_t seq = 0;
+  ASSERT_TRUE(test::wait_for(
+      [&] {
+        ++seq;
+        agent1.publish(sample(1, seq));
+        agent1.record(sample(1, seq));
+        intruder.publish(sample(5, seq));
+        intruder.record(sample(5, seq));
+        // Agent 1 heard, and the intruder's samples arrived and were refused (not lost).
+        return agent2.counters().received >= 50 && supervisor.counters().received >= 50 &&
+               agent2.counters().dropped >= 20 && supervisor.counters().dropped >= 5;
+      },
+      60.0))
+      << "agent 2 took " << agent2.counters().received << " and refused "
+      << agent2.counters().dropped << "; the supervisor took " << supervisor.counters().received
+      << " and refused " << supervisor.counters().dropped;
+  EXPECT_EQ(heard(agent2), std::set<AgentId>{1});
+  EXPECT_EQ(heard(supervisor), std::set<AgentId>{1});
+  EXPECT_EQ(agent2.suspects(), (std::map<AgentId, std::uint8_t>{{5, kBoundElsewhere}}));
+  EXPECT_EQ(supervisor.suspects(), (std::map<AgentId, std::uint8_t>{{5, kBoundElsewhere}}));
+  EXPECT_TRUE(heard(intruder).count(1)) << "a member hears the run";
+}
+
+// The same member first publishes as itself, then moves its writer into agent 5's partition and
+// publishes as 5 (and as 3). Fast DDS 2.9.1 refuses the new partitions but keeps the match it had;
+// the readers then refuse every sample of that writer, for good.
+TEST_F(Security, AWriterThatMovesIntoAnotherAgentsPartitionIsRefusedForGood) {
+  DdsBus intruder(options("agent-3", ours(), "agent-3", false, 3));
+  DdsBus agent1(options("agent-1", ours(), "agent-1", false, 1));
+  DdsBus agent2(options("agent-2", ours(), "agent-2", false, 2));
+  // Agent 2 listens to agents 1, 3 and 5 by name, so that it still matches the moved writer.
+  agent2.set_interest(Interest{{}, {"a1", "a3", "a5"}});
+  std::uint64_t seq = 0;
+  ASSERT_TRUE(test::wait_for(
+      [&] {
+        ++seq;
+        agent1.publish(sample(1, seq));
+        intruder.publish(sample(3, seq));
+        return heard(agent2) == std::set<AgentId>{1, 3};
+      },
+      60.0));
+  const std::uint64_t moved_at = seq;
+  intruder.set_interest(Interest{{"a5"}, {}});
+  const std::uint64_t received = agent2.counters().received;
+  ASSERT_TRUE(test::wait_for(
+      [&] {
+        ++seq;
+        agent1.publish(sample(1, seq));
+        intruder.publish(sample(5, seq));
+        intruder.publish(sample(3, seq));
+        return agent2.counters().received >= received + 50 && agent2.counters().dropped >= 20;
+      },
+      60.0))
+      << "refused " << agent2.counters().dropped;
+  EXPECT_EQ(heard(agent2), (std::set<AgentId>{1, 3}));
+  for (const StateMessage& m : agent2.latest(0))
+    if (m.view.id == 3) {
+      EXPECT_LE(m.seq, moved_at + 5) << "agent 3's moved writer was heard";
+    }
+}
+
 TEST_F(Security, ABadKeystoreStopsTheRunBeforeAnythingFliesNamingTheFile) {
   const fs::path runs = test::fresh_dir(mine("security-runs-"));
   fs::create_directories(runs);
@@ -126,15 +198,24 @@ TEST_F(Security, ABadKeystoreStopsTheRunBeforeAnythingFliesNamingTheFile) {
   const fs::path tampered = runs / "tampered";
   fs::copy(ours(), tampered, fs::copy_options::recursive);
   std::string p7s = test::read_file(tampered / "agent-2" / "permissions.p7s");
-  const std::size_t at = p7s.find("qswarm-record-*");
+  const std::size_t at = p7s.find("/a2<");
   ASSERT_NE(at, std::string::npos);
-  p7s.replace(at, 15, "***************");
+  p7s.replace(at, 3, "/a*");
   std::ofstream(tampered / "agent-2" / "permissions.p7s", std::ios::trunc) << p7s;
   r = secure_run(tampered, "tampered");
   EXPECT_EQ(r.code, 2) << r.output;
   EXPECT_NE(r.output.find("agent-2/permissions.p7s"), std::string::npos) << r.output;
+  // A compose keystore (one member identity, for replicas that claim their ids).
+  const fs::path compose = runs / "compose-keys";
+  const test::Result k = test::run(
+      {test::bin("swarm"), "keys", test::scenario("demo"), "--compose", "--out", compose.string()},
+      60.0);
+  ASSERT_EQ(k.code, 0) << k.output;
+  r = secure_run(compose, "compose");
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_NE(r.output.find("a compose keystore"), std::string::npos) << r.output;
   // Nothing flew: no run directory holds a record.
-  for (const char* name : {"missing", "partial", "tampered"})
+  for (const char* name : {"missing", "partial", "tampered", "compose"})
     EXPECT_FALSE(fs::exists(runs / name / "summary.json")) << name;
 }
 

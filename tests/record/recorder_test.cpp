@@ -299,5 +299,98 @@ TEST(Recorder, FedWithMessagesWritesTheRunRecordAndASummary) {
   std::filesystem::remove_all(dir);
 }
 
+// Two agents that agree while agent 1 reports that agent 2's samples come from two writers at
+// once (a plain run with an impersonator), and the supervisor's own transport refused a sample of
+// agent 1 from the future: both are named once, and the run that agreed has not converged.
+struct ForgedRun {
+  std::string text, events, end_reason;
+  records::Summary summary;
+  bool converged = false;
+};
+
+ForgedRun fly_with_suspects(std::uint8_t reported_by_agent_1) {
+  const RunConfig rc = resolve_scenario(parse_scenario_text(
+      "name: \"forged\"\nagents { id: 1 position { x: 0 } }\nagents { id: 2 position { x: 2 } }\n"
+      "weight { policy: UNWEIGHTED }\nconvergence { tolerance_m: 0.1 hold_s: 0.2 }\n",
+      "forged"));
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("qswarm-forged-" + std::to_string(::getpid()));
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  ForgedRun out;
+  {
+    Recorder rec(rc, RunDir(dir), 1.0);
+    std::int64_t wall = 1'000'000'000;
+    for (int k = 0; k <= 100 && out.end_reason.empty(); ++k) {
+      const double t = 0.02 * k;
+      const double x = 1.0 - std::exp(-5.0 * t);
+      StateMessage a = sample(1, k + 1, t, Vec3(x, 0, 0)),
+                   b = sample(2, k + 1, t, Vec3(2 - x, 0, 0));
+      a.view.q0 = Vec3(0, 0, 0);
+      b.view.q0 = Vec3(2, 0, 0);
+      a.links = a.initial_links = {{2, 1.0}};
+      b.links = b.initial_links = {{1, 1.0}};
+      if (k >= 10) a.suspects = {{2, reported_by_agent_1}};
+      rec.on_sample(a, wall);
+      rec.on_sample(b, wall);
+      if (k == 20) rec.note_suspects({{1, kFutureIncarnation}}, 0);
+      rec.tick(wall);
+      wall += 20'000'000;
+      out.end_reason = rec.end_reason_if_over();
+    }
+    const std::vector<std::string> notes = rec.take_notes();
+    EXPECT_EQ(notes.size(), static_cast<std::size_t>(1 + __builtin_popcount(reported_by_agent_1)));
+    EXPECT_TRUE(rec.take_notes().empty());
+    out.converged = rec.converged();
+    out.text = rec.finish(out.end_reason, 2.0);
+    out.summary = rec.summary();
+  }
+  std::ifstream ev(dir / "events.csv");
+  std::stringstream all;
+  all << ev.rdbuf();
+  out.events = all.str();
+  std::filesystem::remove_all(dir);
+  return out;
+}
+
+TEST(Recorder, AnAgentsSamplesFromTwoWritersAreNamedAndTheRunThatAgreedDoesNotConverge) {
+  const ForgedRun r = fly_with_suspects(kTwoWriters);
+  EXPECT_FALSE(r.converged);
+  EXPECT_FALSE(r.summary.converged());
+  EXPECT_EQ(r.summary.convergence_time_s(), -1.0);
+  EXPECT_NE(r.end_reason.find("agreed, but the samples of agent 2 came from two writers"),
+            std::string::npos)
+      << r.end_reason;
+  ASSERT_EQ(r.summary.forgeries_size(), 2);
+  EXPECT_EQ(r.summary.forgeries(0).agent(), 1u);
+  EXPECT_EQ(r.summary.forgeries(0).kind(), "future_incarnation");
+  EXPECT_EQ(r.summary.forgeries(0).noticed_by(0), 0u);  // the supervisor
+  EXPECT_EQ(r.summary.forgeries(1).agent(), 2u);
+  EXPECT_EQ(r.summary.forgeries(1).kind(), "two_writers");
+  EXPECT_EQ(r.summary.forgeries(1).noticed_by(0), 1u);
+  EXPECT_NEAR(r.summary.forgeries(1).first_t_s(), 0.2, 0.03);
+  // Named once each, however often reported; the agreement is an event, not "converged".
+  std::size_t forgery_lines = 0;
+  for (std::size_t at = r.events.find(",forgery,"); at != std::string::npos;
+       at = r.events.find(",forgery,", at + 1))
+    ++forgery_lines;
+  EXPECT_EQ(forgery_lines, 2u) << r.events;
+  EXPECT_NE(r.events.find(",agreed_forged,"), std::string::npos) << r.events;
+  EXPECT_EQ(r.events.find(",converged,"), std::string::npos) << r.events;
+  EXPECT_NE(r.text.find("NOT CONVERGED"), std::string::npos) << r.text;
+  EXPECT_NE(r.text.find("FORGED: agent 2: two_writers"), std::string::npos) << r.text;
+}
+
+TEST(Recorder, ForgeriesThatWereRefusedAreNamedButDoNotUnmakeTheConvergence) {
+  // A sequence jump and a certificate bound elsewhere are refused where they arrive.
+  const ForgedRun r = fly_with_suspects(kSequenceJump | kBoundElsewhere);
+  EXPECT_TRUE(r.converged);
+  EXPECT_TRUE(r.summary.converged());
+  EXPECT_EQ(r.end_reason, "converged");
+  EXPECT_EQ(r.summary.forgeries_size(), 3);
+  EXPECT_NE(r.events.find("sequence_jump"), std::string::npos) << r.events;
+  EXPECT_NE(r.events.find("bound_elsewhere"), std::string::npos) << r.events;
+}
+
 }  // namespace
 }  // namespace qswarm

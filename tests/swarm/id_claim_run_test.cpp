@@ -85,5 +85,79 @@ TEST(IdClaimRun, ReplicasStartedAlikeFlyDistinctIdsAndDuplicatesAreRefused) {
   EXPECT_TRUE(std::filesystem::exists(run / "scenario.txtpb"));
 }
 
+// The secure compose swarm, as processes: replicas share a compose keystore's member identity
+// (swarm keys --compose), claim their ids and fly; a stranger without it, started as agent 3 of
+// the same scenario (the same run id: compose runs have no launcher to make one), publishes as
+// agent 3 throughout and is heard by no one. A replica that claims its id with a per-agent
+// keystore is refused before it flies.
+TEST(IdClaimRun, ReplicasWithAComposeKeystoreFlyAndAStrangerWithoutItIsHeardByNoOne) {
+  const auto dir = fresh_dir("id-claim-secure");
+  std::filesystem::create_directories(dir / "runs");
+  const auto scen = dir / "swarm.txtpb";
+  std::ofstream(scen) << "name: \"claim\"\n"
+                         "random_agents { count: 4 box_m: 30 }\n"
+                         "mode: PARTICLE law: EDGE_FLOW gain: 0.3\n"
+                         "weight { policy: UNWEIGHTED }\n"
+                         "topology { policy: PROXIMITY threshold_m: 1000 }\n"
+                         "convergence { tolerance_m: 1e-8 hold_s: 1 }\n"
+                         "duration_s: 90 seed: 5\n";
+  const auto keys = [&](const std::string& name, std::vector<std::string> more) {
+    std::vector<std::string> argv = {bin("swarm"), "keys", scen.string(), "--out",
+                                     (dir / name).string()};
+    argv.insert(argv.end(), more.begin(), more.end());
+    const Result r = run(argv, 60.0);
+    EXPECT_EQ(r.code, 0) << r.output;
+    return (dir / name).string();
+  };
+  const std::string compose = keys("compose-keys", {"--compose"});
+  const std::string per_agent = keys("agent-keys", {});
+  const std::vector<std::string> common = {"--scenario",        scen.string(), "--domain",
+                                           test_domain().str(), "--agents",    "4"};
+  auto with = [&](std::vector<std::string> argv, const std::vector<std::string>& more) {
+    argv.insert(argv.end(), common.begin(), common.end());
+    argv.insert(argv.end(), more.begin(), more.end());
+    return argv;
+  };
+  // Claiming with a per-agent keystore: refused, exit 2, nothing flown.
+  const Result refused =
+      run(with({bin("swarm-agent")}, {"--id", "auto", "--keystore", per_agent}), 60.0);
+  EXPECT_EQ(refused.code, 2) << refused.output;
+  EXPECT_NE(refused.output.find("needs a compose keystore"), std::string::npos) << refused.output;
+
+  Child stranger(with({bin("swarm-agent")}, {"--id", "3", "--start-timeout", "3"}),
+                 dir / "stranger.out");
+  Child sup(with({bin("swarm-supervisor")},
+                 {"--new-run-in", (dir / "runs").string(), "--keystore", compose}),
+            dir / "supervisor.out");
+  std::vector<std::unique_ptr<Child>> agents;
+  agents.reserve(4);
+  for (int k = 0; k < 4; ++k)
+    agents.push_back(std::make_unique<Child>(
+        with({bin("swarm-agent")}, {"--id", "auto", "--wait-supervisor", "--keystore", compose}),
+        dir / ("replica-" + std::to_string(k) + ".out")));
+  ASSERT_TRUE(wait_for([&] { return ids_flown(dir, 4).size() == 4; }, 90.0))
+      << "the four replicas did not all take an id";
+  EXPECT_EQ(ids_flown(dir, 4), (std::set<unsigned>{1, 2, 3, 4}));
+  const Result s = sup.wait(180.0);
+  EXPECT_EQ(s.code, 0) << s.output;
+  for (auto& a : agents) a->signal(SIGINT);
+  for (auto& a : agents) EXPECT_EQ(a->wait(30.0).code, 0);
+  stranger.signal(SIGINT);
+  const Result st = stranger.wait(30.0);
+  // It flew alone: its barrier heard none of the replicas.
+  EXPECT_NE(st.output.find("start timeout: 0 of 3 peers ready"), std::string::npos) << st.output;
+
+  std::filesystem::path run;
+  for (const auto& entry : std::filesystem::directory_iterator(dir / "runs")) run = entry.path();
+  ASSERT_FALSE(run.empty()) << "no run directory under " << dir / "runs";
+  const records::Summary sum = read_summary(run);
+  EXPECT_TRUE(sum.secure());
+  EXPECT_TRUE(sum.converged()) << sum.end_reason();
+  EXPECT_EQ(sum.agents_size(), 4);
+  EXPECT_EQ(sum.forgeries_size(), 0);
+  EXPECT_LT(sum.average_relative_error(), 1e-9);
+  for (const auto& row : read_csv(run / "events.csv")) EXPECT_NE(row.at("kind"), "forgery");
+}
+
 }  // namespace
 }  // namespace qswarm::test

@@ -1,0 +1,79 @@
+#include "common/dds/writer_registry.hpp"
+
+#include <spdlog/spdlog.h>
+
+#include <cstring>
+
+#include "common/transport/interest.hpp"
+
+namespace qswarm {
+
+namespace rtps = eprosima::fastrtps::rtps;
+
+std::optional<AgentId> agent_named_by(const std::string& partition) {
+  // "qswarm-run-" or "qswarm-record-", the run id's 16 hex digits, '/', an agent partition.
+  std::size_t at = 0;
+  for (const char* stream : {"qswarm-run-", "qswarm-record-"}) {
+    if (partition.compare(0, std::strlen(stream), stream) == 0) at = std::strlen(stream);
+  }
+  if (at == 0 || partition.size() < at + 17 || partition[at + 16] != '/') return {};
+  for (std::size_t i = at; i < at + 16; ++i) {
+    const char c = partition[i];
+    if (!((c >= '0' && c <= '9') || (c >= 'a' && c <= 'f'))) return {};
+  }
+  return agent_of_partition(partition.substr(at + 17));
+}
+
+WriterId WriterRegistry::id_of(const rtps::GUID_t& guid) {
+  WriterId w;
+  std::memcpy(w.bytes.data(), guid.guidPrefix.value, 12);
+  std::memcpy(w.bytes.data() + 12, guid.entityId.value, 4);
+  return w;
+}
+
+std::size_t WriterRegistry::Hash::operator()(const WriterId& w) const {
+  return static_cast<std::size_t>(w.hash());
+}
+
+WriterRegistry::Binding WriterRegistry::binding(const WriterId& writer) const {
+  std::lock_guard<std::mutex> lock(mu_);
+  const auto it = writers_.find(writer);
+  return it == writers_.end() ? Binding{} : it->second;
+}
+
+void WriterRegistry::on_publisher_discovery(eprosima::fastdds::dds::DomainParticipant*,
+                                            rtps::WriterDiscoveryInfo&& info) {
+  try {
+    const std::string topic = info.info.topicName().to_string();
+    if (topic != "qswarm/agent_state" && topic != "qswarm/record") return;
+    const WriterId w = id_of(info.info.guid());
+    std::lock_guard<std::mutex> lock(mu_);
+    if (info.status == rtps::WriterDiscoveryInfo::REMOVED_WRITER) {
+      writers_.erase(w);
+      return;
+    }
+    std::set<AgentId> named;
+    for (const std::string& p : info.info.m_qos.m_partition.getNames())
+      if (const std::optional<AgentId> id = agent_named_by(p)) named.insert(*id);
+    auto [it, fresh] = writers_.try_emplace(w);
+    Binding& b = it->second;
+    if (fresh) {
+      b.known = true;
+      b.named = named;
+      if (named.size() == 1) b.agent = *named.begin();
+      return;
+    }
+    if (named != b.named && !b.changed) {
+      b.changed = true;
+      b.agent.reset();
+      spdlog::warn(
+          "dds: writer {} on {} changed the agent partitions it publishes into: its samples are "
+          "refused from now on",
+          w.str(), topic);
+    }
+  } catch (const std::exception& e) {
+    spdlog::error("dds: writer discovery listener caught: {}", e.what());
+  }
+}
+
+}  // namespace qswarm
