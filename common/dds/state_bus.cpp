@@ -67,6 +67,9 @@ struct DdsStateBus::Impl : public dds::DataReaderListener {
   mutable std::mutex mu;  // the gate, and what follows
   SampleGate gate;
   std::set<std::uint64_t> warned_writers;  // refused for their binding, logged once
+  static constexpr std::size_t kWritersWarned = 1024;
+  static constexpr int kOwnerChangesLogged = 3;
+  std::map<AgentId, int> owner_changes_logged;
   // Held while the listener runs and while it is replaced: once set_listener returns, the old
   // listener is neither running nor called again (the agent's decorator unregisters this way
   // before it is destroyed, while DDS threads still deliver).
@@ -130,7 +133,7 @@ struct DdsStateBus::Impl : public dds::DataReaderListener {
       ++gate.counters().dropped;
       // A writer not yet discovered is a race, not a forgery (its binding comes with discovery).
       if (b.known) gate.notice(m.view.id, kBoundElsewhere);
-      first = warned_writers.insert(w.hash()).second;
+      first = warned_writers.size() < kWritersWarned && warned_writers.insert(w.hash()).second;
     }
     if (first)
       spdlog::warn(
@@ -153,9 +156,19 @@ struct DdsStateBus::Impl : public dds::DataReaderListener {
       spdlog::warn("agent {}: {} (writer {}, seq {}); named in the record", m.view.id,
                    suspect_text(k), w.str(), m.seq);
     }
-    if (r.new_owner)
-      spdlog::info("agent {}: now heard from writer {} (the writer heard before went silent)",
-                   m.view.id, w.str());
+    if (r.new_owner) {
+      // A forger can make the agent change hands at its own rate: a few lines per agent, then
+      // silence (the gate's counters and the record's forgeries keep the rest).
+      int logged = 0;
+      {
+        std::lock_guard<std::mutex> lock(mu);
+        logged = owner_changes_logged[m.view.id]++;
+      }
+      if (logged < kOwnerChangesLogged)
+        spdlog::info("agent {}: now heard from writer {} (the writer heard before went silent){}",
+                     m.view.id, w.str(),
+                     logged + 1 == kOwnerChangesLogged ? "; further changes are not logged" : "");
+    }
     if (r.verdict == SampleGate::Verdict::kForeign && r.first_from) {
       spdlog::warn("samples of another run (run id {:x}) on this domain: dropped and counted",
                    m.run_id);

@@ -41,7 +41,12 @@ class Presence {
   std::size_t strangers() const { return strangers_.size(); }
   // A stranger known without a sample (the DDS roster filter dropped its samples): true the first
   // time its id is told.
-  bool note_stranger(AgentId id) { return tracks_.count(id) == 0 && strangers_.insert(id).second; }
+  // At most kMaxStrangers are kept (reports of strangers come from the network).
+  bool note_stranger(AgentId id) {
+    return tracks_.count(id) == 0 && strangers_.size() < kMaxStrangers &&
+           strangers_.insert(id).second;
+  }
+  static constexpr std::size_t kMaxStrangers = 1024;
 
  private:
   std::map<AgentId, Track> tracks_;

@@ -147,6 +147,8 @@ void Recorder::note_strangers(const std::set<AgentId>& ids) {
 void Recorder::note_suspects(const std::map<AgentId, std::uint8_t>& suspects, AgentId reporter) {
   const std::string by = reporter == 0 ? "the supervisor" : "agent " + std::to_string(reporter);
   for (const auto& [id, kinds] : suspects) {
+    // Only the scenario's agents: a report naming others would grow the record without bound.
+    if (presence_.tracks().count(id) == 0) continue;
     for (const SuspectKind k : {kTwoWriters, kSequenceJump, kFutureIncarnation, kBoundElsewhere}) {
       if ((kinds & k) == 0) continue;
       const auto [it, fresh] = tally_.forgeries.try_emplace({id, static_cast<std::uint8_t>(k)});
@@ -378,9 +380,19 @@ std::string Recorder::elsewhere_text() const {
 std::string Recorder::impersonated_text() const {
   const std::vector<AgentId> ids = tally_.impersonated();
   std::string list;
-  for (const AgentId id : ids) list += (list.empty() ? "" : ", ") + std::to_string(id);
+  std::set<AgentId> by;
+  for (const AgentId id : ids) {
+    list += (list.empty() ? "" : ", ") + std::to_string(id);
+    const auto& noticed = tally_.forgeries.at({id, static_cast<std::uint8_t>(kTwoWriters)});
+    by.insert(noticed.noticed_by.begin(), noticed.noticed_by.end());
+  }
+  // Who said so: without security a report is itself a sample anyone could have forged.
+  std::string who;
+  for (const AgentId r : by)
+    who += (who.empty() ? "" : ", ") + (r == 0 ? std::string("the supervisor") : std::to_string(r));
   return "agreed, but the samples of agent" + std::string(ids.size() > 1 ? "s " : " ") + list +
-         " came from two writers at once (an impersonator, or a relay of it): not trusted";
+         " came from two writers at once (an impersonator, or a relay of it; noticed by " + who +
+         "): not trusted";
 }
 
 std::string Recorder::end_reason_if_over() const {

@@ -44,6 +44,13 @@ bool SampleGate::behind(const StateMessage& m, const Agent& a, std::int64_t now_
   return far_ahead(a.held, m, static_cast<double>(now_wall_ns - a.held_at_ns) * 1e-9);
 }
 
+bool SampleGate::implausible(const StateMessage& m, std::int64_t now_wall_ns) {
+  if (now_wall_ns <= 0) return false;
+  const double lived_s = static_cast<double>(now_wall_ns - m.incarnation) * 1e-9;
+  return static_cast<double>(m.seq) >
+         static_cast<double>(kJumpSlack) + kMaxRatePerS * std::max(0.0, lived_s);
+}
+
 bool SampleGate::interleaved(Agent& a, const WriterId& w) {
   const std::uint64_t h = w.hash();
   ++a.samples;
@@ -52,9 +59,11 @@ bool SampleGate::interleaved(Agent& a, const WriterId& w) {
     if (s.at != 0 && s.writer == h) slot = &s;
   if (slot && a.last_writer != h && a.samples - slot->at <= kRecentSamples) ++a.returns;
   if (!slot) {
-    slot = &a.seen[0];  // the writer heard longest ago makes room
+    // The writer heard longest ago makes room, never the owner: a forger rotating more writers
+    // than there are slots would otherwise push the owner out before it is heard again.
+    const std::uint64_t owner = a.owner.hash();
     for (Agent::Seen& s : a.seen)
-      if (s.at < slot->at) slot = &s;
+      if (s.writer != owner && (!slot || s.at < slot->at)) slot = &s;
     slot->writer = h;
   }
   slot->at = a.samples;
@@ -129,7 +138,9 @@ SampleGate::Result SampleGate::admit(const StateMessage& m, const std::string& w
     }
     // The owner's numbers far ahead of this writer's in the same life: the owner forged them (a
     // relay heard before the real agent); this writer takes the agent at once.
-    const bool owner_jumped = behind(m, a, now_wall_ns);
+    // Only when the owner's number is more than its life could have reached: a forger that
+    // replays the real life with small numbers must otherwise take the agent as any other writer.
+    const bool owner_jumped = behind(m, a, now_wall_ns) && implausible(a.held, now_wall_ns);
     if (owner_jumped) r.noticed |= notice_bits(m.view.id, kSequenceJump);
     // A jump against the held sample still counts toward a takeover: the held sample may be a
     // forger's, and the real agent's numbers far from it.

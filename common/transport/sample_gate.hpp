@@ -38,8 +38,9 @@ struct WriterId {
 //   within one writer's samples.
 // - A sequence number far beyond what the agent could have sent since the held sample (a forged
 //   "newer" one) is refused and named. When the owner's own numbers are that far ahead of another
-//   writer's in the same life, the owner is the one forging them (a relay heard first): the other
-//   writer takes the agent at once. An incarnation from the future is refused and named.
+//   writer's in the same life, and beyond what that life could have sent since it began, the
+//   owner is the one forging them (a relay heard first): the other writer takes the agent at once.
+//   An incarnation from the future is refused and named.
 class SampleGate {
  public:
   enum class Verdict { kAccepted, kInvalid, kStale, kForeign, kContested };
@@ -108,6 +109,8 @@ class SampleGate {
   static bool far_ahead(const StateMessage& a, const StateMessage& b, double since_s);
   bool jumps(const StateMessage& m, const Agent& a, std::int64_t now_wall_ns) const;
   bool behind(const StateMessage& m, const Agent& a, std::int64_t now_wall_ns) const;
+  // A sequence number beyond what its life (since m.incarnation) could have reached.
+  static bool implausible(const StateMessage& m, std::int64_t now_wall_ns);
   bool interleaved(Agent& a, const WriterId& w);
   std::uint8_t notice_bits(AgentId id, std::uint8_t kinds);
 

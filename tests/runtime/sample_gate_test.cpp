@@ -139,6 +139,40 @@ TEST(SampleGate, TwoWritersAreNamedWhenOneSpeaksTwentyTimesAsOftenAndWhenThreeTa
   EXPECT_TRUE(turns.suspected(2) & kTwoWriters);
 }
 
+TEST(SampleGate, AForgerRotatingMoreWritersThanTheGateRemembersIsStillTwoWriters) {
+  // Three samples of its main writer, four of others (as many as the gate remembers), then the
+  // real agent's: without the owner's place kept, the real one is forgotten before it returns.
+  Feed f;
+  const WriterId real = writer(1), forger = writer(2);
+  std::uint64_t seq = 1, forged = 1'000'000;
+  for (; seq <= 5; ++seq) f.admit(sample(3, seq, kLife, 1.0), real);
+  for (int round = 0; round < 10; ++round) {
+    for (int k = 0; k < 3; ++k) f.admit(sample(3, forged++, kLife, 99.0), forger);
+    for (std::uint8_t x = 10; x < 14; ++x) f.admit(sample(3, forged++, kLife, 99.0), writer(x));
+    f.admit(sample(3, seq++, kLife, 1.0), real);
+  }
+  EXPECT_TRUE(f.suspected(3) & kTwoWriters);
+}
+
+TEST(SampleGate, AForgerAtHalfTheRateWithSmallNumbersInTheRealLifeNeverTakesTheAgent) {
+  // The real agent has flown ten minutes (30000 samples): a forger replaying its life from
+  // sequence 1 is far behind it, but the real numbers are ones its life could have reached.
+  Feed f;
+  const WriterId real = writer(1), forger = writer(2);
+  const std::int64_t life = kNow - 600'000'000'000;
+  std::uint64_t seq = 30'000, forged = 1;
+  for (int k = 0; k < 5; ++k) f.admit(sample(3, seq++, life, 1.0), real);
+  for (int round = 0; round < 30; ++round) {
+    f.admit(sample(3, seq++, life, 1.0), real);
+    f.admit(sample(3, seq++, life, 1.0), real);
+    EXPECT_EQ(f.admit(sample(3, forged++, life, 99.0), forger).verdict,
+              SampleGate::Verdict::kContested)
+        << "round " << round;
+    EXPECT_EQ(f.held_x(3), 1.0) << "round " << round;
+  }
+  EXPECT_TRUE(f.suspected(3) & kTwoWriters);
+}
+
 TEST(SampleGate, AJumpFromTheOwnersOwnWriterIsRefusedAndItsNextSampleIsNot) {
   // A forger that spoofs the real writer's identity (plain RTPS cannot tell) with a large number.
   Feed f;
