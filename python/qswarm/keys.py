@@ -263,10 +263,16 @@ def check(keystore, ids):
     for p7s in [os.path.join(keystore, "governance.p7s")] + [
             os.path.join(keystore, n, "permissions.p7s") for n in identity_names(ids)]:
         try:
-            openssl("smime", "-verify", "-in", p7s, "-CAfile", ca, "-out", os.devnull)
+            signed = openssl("smime", "-verify", "-in", p7s, "-CAfile", ca)
         except KeystoreError:
             raise KeystoreError(p7s, "not signed by the keystore's authority, or altered "
                                 "since") from None
+        # An agent's permissions must bind its id to its own partition: without that, readers
+        # would bind its writers to nothing, or (older keystores) any agent's key.
+        name = os.path.basename(os.path.dirname(p7s))
+        if name.startswith("agent-") and f"<partition>{RUN}/a{name[6:]}</partition>" not in signed:
+            raise KeystoreError(p7s, f"permissions that do not bind {name} to its own partition "
+                                "(made by an older swarm keys?): make a new keystore")
     for name in identity_names(ids):
         cert = os.path.join(keystore, name, "cert.pem")
         try:

@@ -205,6 +205,26 @@ TEST_F(Security, ABadKeystoreStopsTheRunBeforeAnythingFliesNamingTheFile) {
   r = secure_run(tampered, "tampered");
   EXPECT_EQ(r.code, 2) << r.output;
   EXPECT_NE(r.output.find("agent-2/permissions.p7s"), std::string::npos) << r.output;
+  // Signed by the authority, but agent 2's permissions bind it to no partition of its own (as an
+  // older `swarm keys` wrote them): readers could not tell its samples from another agent's.
+  const fs::path unbound = runs / "unbound";
+  fs::copy(ours(), unbound, fs::copy_options::recursive);
+  std::string xml = test::read_file(unbound / "agent-2" / "permissions.xml");
+  for (std::size_t a2 = xml.find("/a2<"); a2 != std::string::npos; a2 = xml.find("/a2<"))
+    xml.replace(a2, 3, "/q2");
+  std::ofstream(unbound / "agent-2" / "permissions.xml", std::ios::trunc) << xml;
+  const test::Result signed_again = test::run(
+      {"/usr/bin/openssl", "smime", "-sign", "-text", "-in",
+       (unbound / "agent-2" / "permissions.xml").string(), "-out",
+       (unbound / "agent-2" / "permissions.p7s").string(), "-signer",
+       (unbound / "ca.cert.pem").string(), "-inkey", (unbound / "private" / "ca.key.pem").string()},
+      60.0);
+  ASSERT_EQ(signed_again.code, 0) << signed_again.output;
+  r = secure_run(unbound, "unbound");
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_NE(r.output.find("agent-2/permissions.p7s: permissions that do not bind agent-2"),
+            std::string::npos)
+      << r.output;
   // A compose keystore (one member identity, for replicas that claim their ids).
   const fs::path compose = runs / "compose-keys";
   const test::Result k = test::run(
@@ -215,7 +235,7 @@ TEST_F(Security, ABadKeystoreStopsTheRunBeforeAnythingFliesNamingTheFile) {
   EXPECT_EQ(r.code, 2) << r.output;
   EXPECT_NE(r.output.find("a compose keystore"), std::string::npos) << r.output;
   // Nothing flew: no run directory holds a record.
-  for (const char* name : {"missing", "partial", "tampered", "compose"})
+  for (const char* name : {"missing", "partial", "tampered", "unbound", "compose"})
     EXPECT_FALSE(fs::exists(runs / name / "summary.json")) << name;
 }
 
