@@ -7,6 +7,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <map>
 #include <set>
 
@@ -61,27 +62,41 @@ class Security : public ::testing::Test {
     return ids;
   }
 
-  // Agent 1 publishes (state and record) beside an intruder publishing as `intruder_id`, until
-  // agent 2 and the supervisor have each taken 50 of agent 1's samples: the intruder has had as
-  // long to get through as the agents needed to hear each other, many times over.
-  static void fly_beside(DdsBus& intruder, AgentId intruder_id) {
-    DdsBus agent1(options("agent-1", ours(), "agent-1", false, 1));
-    DdsBus agent2(options("agent-2", ours(), "agent-2", false, 2));
-    DdsBus supervisor(options("supervisor", ours(), "supervisor", true));
-    std::uint64_t seq = 0;
-    ASSERT_TRUE(test::wait_for(
-        [&] {
-          ++seq;
-          agent1.publish(sample(1, seq));
-          agent1.record(sample(1, seq));
-          intruder.publish(sample(intruder_id, seq));
-          intruder.record(sample(intruder_id, seq));
-          return agent2.counters().received >= 50 && supervisor.counters().received >= 50;
-        },
-        60.0));
-    EXPECT_EQ(heard(agent2), std::set<AgentId>{1});
-    EXPECT_EQ(heard(supervisor), std::set<AgentId>{1});
-    EXPECT_EQ(agent2.counters().dropped + agent2.counters().foreign, 0u);
+  // Agents 1 and 2 and the supervisor of the run, every one with its own certificate.
+  struct Members {
+    DdsBus agent1{options("agent-1", ours(), "agent-1", false, 1)};
+    DdsBus agent2{options("agent-2", ours(), "agent-2", false, 2)};
+    DdsBus supervisor{options("supervisor", ours(), "supervisor", true)};
+
+    // Agent 1 publishes (state and record) beside an intruder publishing as `intruder_id`, until
+    // agent 2 and the supervisor have each taken 50 of agent 1's samples and `also` holds: the
+    // intruder has had as long to get through as the agents needed to hear each other, many
+    // times over. Returns whether that happened within a minute.
+    bool fly_beside(
+        DdsBus& intruder, AgentId intruder_id,
+        const std::function<bool()>& also = [] { return true; }) {
+      std::uint64_t seq = 0;
+      return test::wait_for(
+          [&] {
+            ++seq;
+            agent1.publish(sample(1, seq));
+            agent1.record(sample(1, seq));
+            intruder.publish(sample(intruder_id, seq));
+            intruder.record(sample(intruder_id, seq));
+            return agent2.counters().received >= 50 && supervisor.counters().received >= 50 &&
+                   also();
+          },
+          60.0);
+    }
+  };
+
+  // An outsider publishing as `intruder_id` reaches no one and hears nothing of the run.
+  static void expect_shut_out(DdsBus& intruder, AgentId intruder_id) {
+    Members run;
+    ASSERT_TRUE(run.fly_beside(intruder, intruder_id));
+    EXPECT_EQ(heard(run.agent2), std::set<AgentId>{1});
+    EXPECT_EQ(heard(run.supervisor), std::set<AgentId>{1});
+    EXPECT_EQ(run.agent2.counters().dropped + run.agent2.counters().foreign, 0u);
     // Nor does the intruder hear the run (only its own samples, through its own participant):
     // discovery and samples are encrypted for members only.
     EXPECT_EQ(heard(intruder), std::set<AgentId>{intruder_id});
@@ -93,7 +108,7 @@ TEST_F(Security, AStrangerWithoutCredentialsReachesNoOneAndHearsNothing) {
   DdsOptions o = options("stranger", {}, "");
   o.state.hear_all_runs = true;
   DdsBus stranger(o);
-  fly_beside(stranger, 3);
+  expect_shut_out(stranger, 3);
 }
 
 TEST_F(Security, ACertificateFromAnotherAuthorityIsRefused) {
@@ -101,7 +116,7 @@ TEST_F(Security, ACertificateFromAnotherAuthorityIsRefused) {
   DdsOptions o = options("foreign-agent-3", foreign(), "agent-3");
   o.state.hear_all_runs = true;
   DdsBus outsider(o);
-  fly_beside(outsider, 3);
+  expect_shut_out(outsider, 3);
 }
 
 // A member of the run holding agent 3's certificate publishes state and record samples keyed as
@@ -110,22 +125,13 @@ TEST_F(Security, ACertificateFromAnotherAuthorityIsRefused) {
 // authentication, that refuses it.
 TEST_F(Security, AMemberWithAgent3sCertificatePublishingAsAgent5IsRefusedByEveryReader) {
   DdsBus intruder(options("agent-3-as-5", ours(), "agent-3", false, 3));
-  DdsBus agent1(options("agent-1", ours(), "agent-1", false, 1));
-  DdsBus agent2(options("agent-2", ours(), "agent-2", false, 2));
-  DdsBus supervisor(options("supervisor", ours(), "supervisor", true));
-  std::uint64_t seq = 0;
-  ASSERT_TRUE(test::wait_for(
-      [&] {
-        ++seq;
-        agent1.publish(sample(1, seq));
-        agent1.record(sample(1, seq));
-        intruder.publish(sample(5, seq));
-        intruder.record(sample(5, seq));
-        // Agent 1 heard, and the intruder's samples arrived and were refused (not lost).
-        return agent2.counters().received >= 50 && supervisor.counters().received >= 50 &&
-               agent2.counters().dropped >= 20 && supervisor.counters().dropped >= 5;
-      },
-      60.0))
+  Members run;
+  DdsBus& agent2 = run.agent2;
+  DdsBus& supervisor = run.supervisor;
+  // Agent 1 heard, and the intruder's samples arrived and were refused (not lost).
+  ASSERT_TRUE(run.fly_beside(
+      intruder, 5,
+      [&] { return agent2.counters().dropped >= 20 && supervisor.counters().dropped >= 5; }))
       << "agent 2 took " << agent2.counters().received << " and refused "
       << agent2.counters().dropped << "; the supervisor took " << supervisor.counters().received
       << " and refused " << supervisor.counters().dropped;
