@@ -13,7 +13,7 @@ PACKAGES=(cmake g++ ninja-build pkg-config git
   libfastrtps-dev libfastcdr-dev fastddsgen fastdds-tools
   libprotobuf-dev protobuf-compiler libspdlog-dev libcli11-dev zlib1g-dev libboost-dev
   python3 python3-matplotlib python3-numpy
-  openssl iproute2 iptables procps)
+  openssl libssl-dev iproute2 iptables procps)
 # shellcheck disable=SC2206
 PACKAGES+=(${QSWARM_EXTRA_PACKAGES:-})
 

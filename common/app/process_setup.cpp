@@ -3,14 +3,18 @@
 #include "common/app/cli_checks.hpp"
 #include "common/transport/port_plan.hpp"
 
+#include <openssl/pem.h>
+#include <openssl/x509.h>
 #include <spdlog/sinks/basic_file_sink.h>
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
+#include <cerrno>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <exception>
 #include <filesystem>
 #include <new>
@@ -48,6 +52,27 @@ void add_process_options(CLI::App& app, ProcessOptions& o) {
       ->envname("QSWARM_KEYSTORE");
 }
 
+namespace {
+
+// Why the certificate in `f` cannot serve now ("" if it can).
+std::string certificate_problem(const std::filesystem::path& f) {
+  std::FILE* in = std::fopen(f.c_str(), "r");
+  if (!in) return f.string() + ": cannot be read (" + std::strerror(errno) + ")";
+  X509* cert = PEM_read_X509(in, nullptr, nullptr, nullptr);
+  std::fclose(in);
+  if (!cert) return f.string() + ": not a PEM certificate (swarm keys writes a keystore)";
+  std::string why;
+  // X509_cmp_current_time: -1 before now, 1 after, 0 on a malformed time.
+  if (X509_cmp_current_time(X509_get0_notBefore(cert)) >= 0)
+    why = ": not valid yet (its start date is in the future)";
+  else if (X509_cmp_current_time(X509_get0_notAfter(cert)) <= 0)
+    why = ": expired (swarm keys --days sets how long a keystore lasts)";
+  X509_free(cert);
+  return why.empty() ? std::string() : f.string() + why;
+}
+
+}  // namespace
+
 bool compose_keystore(const std::string& keystore) {
   return std::filesystem::is_directory(std::filesystem::path(keystore) / "member");
 }
@@ -63,6 +88,18 @@ std::string keystore_identity(const std::string& keystore, const std::string& ow
       why = f.string() + ": missing (swarm keys writes a keystore)";
       return {};
     }
+    if (std::FILE* in = std::fopen(f.c_str(), "r")) {
+      std::fclose(in);
+    } else {
+      why = f.string() + ": cannot be read (" + std::strerror(errno) + ")";
+      return {};
+    }
+  }
+  // A compose replica has no launcher to check its keystore first: an expired certificate would
+  // only surface as a participant Fast DDS cannot create.
+  for (const std::filesystem::path& f : {ks / "ca.cert.pem", ks / who / "cert.pem"}) {
+    why = certificate_problem(f);
+    if (!why.empty()) return {};
   }
   return who;
 }

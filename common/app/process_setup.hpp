@@ -48,7 +48,8 @@ std::optional<RunConfig> load_for_process(const char* prog, const ProcessOptions
 // The identity a process of a secure run speaks as in `keystore`: "member" in a compose keystore
 // (swarm keys --compose: one identity every replica shares, for replicas that claim their ids),
 // else `own` ("agent-3", "supervisor"). Empty, with `why` naming the file, when a file it needs
-// is missing.
+// is missing or unreadable, or its certificate or the authority's is expired or not yet valid
+// (signatures are Fast DDS's to check; `swarm run --secure` checks them before anything flies).
 std::string keystore_identity(const std::string& keystore, const std::string& own,
                               std::string& why);
 bool compose_keystore(const std::string& keystore);

@@ -245,5 +245,53 @@ TEST_F(Security, ABadKeystoreStopsTheRunBeforeAnythingFliesNamingTheFile) {
     EXPECT_FALSE(fs::exists(runs / name / "summary.json")) << name;
 }
 
+// A compose replica has no launcher to check its keystore: the agent itself refuses a member
+// certificate that expired or is not one, naming the file, instead of failing to make a
+// participant.
+TEST_F(Security, AComposeReplicaWithAnExpiredOrBrokenCertificateExits2NamingIt) {
+  const fs::path dir = test::fresh_dir(mine("security-member-"));
+  const fs::path ks = dir / "keys";
+  fs::create_directories(dir);
+  const test::Result k = test::run(
+      {test::bin("swarm"), "keys", test::scenario("demo"), "--compose", "--out", ks.string()},
+      60.0);
+  ASSERT_EQ(k.code, 0) << k.output;
+  const fs::path cert = ks / "member" / "cert.pem";
+  const auto replica = [&] {
+    return test::run({test::bin("swarm-agent"), "--scenario", test::scenario("demo"), "--id",
+                      "auto", "--keystore", ks.string(), "--domain", test::test_domain().str()},
+                     60.0);
+  };
+  // The member's own key, certified by the keystore's authority for one day in 2020.
+  const fs::path db = dir / "ca-db";
+  fs::create_directories(db);
+  std::ofstream(db / "index.txt");
+  std::ofstream(db / "serial") << "01\n";
+  std::ofstream(dir / "ca.cnf")
+      << "[ca]\ndefault_ca = c\n[c]\ndatabase = " << (db / "index.txt").string()
+      << "\nnew_certs_dir = " << db.string() << "\nserial = " << (db / "serial").string()
+      << "\ndefault_md = sha256\npolicy = p\n[p]\ncommonName = supplied\n";
+  const std::string openssl = "/usr/bin/openssl";
+  test::Result o = test::run({openssl, "req", "-new", "-key", (ks / "member" / "key.pem").string(),
+                              "-subj", "/CN=member", "-out", (dir / "member.csr").string()},
+                             60.0);
+  ASSERT_EQ(o.code, 0) << o.output;
+  o = test::run(
+      {openssl, "ca", "-batch", "-config", (dir / "ca.cnf").string(), "-cert",
+       (ks / "ca.cert.pem").string(), "-keyfile", (ks / "private" / "ca.key.pem").string(), "-in",
+       (dir / "member.csr").string(), "-out", cert.string(), "-startdate", "20200101000000Z",
+       "-enddate", "20200102000000Z"},
+      60.0);
+  ASSERT_EQ(o.code, 0) << o.output;
+  test::Result r = replica();
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_NE(r.output.find("member/cert.pem: expired"), std::string::npos) << r.output;
+  std::ofstream(cert, std::ios::trunc) << "not a certificate\n";
+  r = replica();
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_NE(r.output.find("member/cert.pem: not a PEM certificate"), std::string::npos) << r.output;
+  fs::remove_all(dir);
+}
+
 }  // namespace
 }  // namespace qswarm
