@@ -147,28 +147,24 @@ struct DdsStateBus::Impl : public dds::DataReaderListener {
     if (!bound(m, w)) return;
     const std::string why = check_message(m);  // pure: outside the lock the agent's tick takes
     SampleGate::Result r;
+    int owner_changes = 0;  // logged before this one
     {
       std::lock_guard<std::mutex> lock(mu);
       r = gate.admit(m, why, clock->wall_ns(), w);
+      if (r.new_owner) owner_changes = owner_changes_logged[m.view.id]++;
     }
     for (const SuspectKind k : {kTwoWriters, kSequenceJump, kFutureIncarnation}) {
       if ((r.noticed & k) == 0) continue;
       spdlog::warn("agent {}: {} (writer {}, seq {}); named in the record", m.view.id,
                    suspect_text(k), w.str(), m.seq);
     }
-    if (r.new_owner) {
-      // A forger can make the agent change hands at its own rate: a few lines per agent, then
-      // silence (the gate's counters and the record's forgeries keep the rest).
-      int logged = 0;
-      {
-        std::lock_guard<std::mutex> lock(mu);
-        logged = owner_changes_logged[m.view.id]++;
-      }
-      if (logged < kOwnerChangesLogged)
-        spdlog::info("agent {}: now heard from writer {} (the writer heard before went silent){}",
-                     m.view.id, w.str(),
-                     logged + 1 == kOwnerChangesLogged ? "; further changes are not logged" : "");
-    }
+    // A forger can make the agent change hands at its own rate: a few lines per agent, then
+    // silence (the gate's counters and the record's forgeries keep the rest).
+    if (r.new_owner && owner_changes < kOwnerChangesLogged)
+      spdlog::info(
+          "agent {}: now heard from writer {} (the writer heard before went silent){}", m.view.id,
+          w.str(),
+          owner_changes + 1 == kOwnerChangesLogged ? "; further changes are not logged" : "");
     if (r.verdict == SampleGate::Verdict::kForeign && r.first_from) {
       spdlog::warn("samples of another run (run id {:x}) on this domain: dropped and counted",
                    m.run_id);

@@ -28,10 +28,14 @@ std::uint64_t WriterId::hash() const {
   return h;
 }
 
+bool SampleGate::more_than_sent(std::uint64_t samples, double since_s) {
+  return static_cast<double>(samples) >
+         static_cast<double>(kJumpSlack) + kMaxRatePerS * std::max(0.0, since_s);
+}
+
 bool SampleGate::far_ahead(const StateMessage& a, const StateMessage& b, double since_s) {
   if (a.incarnation != b.incarnation || a.seq <= b.seq) return false;
-  return static_cast<double>(a.seq - b.seq) >
-         static_cast<double>(kJumpSlack) + kMaxRatePerS * std::max(0.0, since_s);
+  return more_than_sent(a.seq - b.seq, since_s);
 }
 
 bool SampleGate::jumps(const StateMessage& m, const Agent& a, std::int64_t now_wall_ns) const {
@@ -46,9 +50,7 @@ bool SampleGate::behind(const StateMessage& m, const Agent& a, std::int64_t now_
 
 bool SampleGate::implausible(const StateMessage& m, std::int64_t now_wall_ns) {
   if (now_wall_ns <= 0) return false;
-  const double lived_s = static_cast<double>(now_wall_ns - m.incarnation) * 1e-9;
-  return static_cast<double>(m.seq) >
-         static_cast<double>(kJumpSlack) + kMaxRatePerS * std::max(0.0, lived_s);
+  return more_than_sent(m.seq, static_cast<double>(now_wall_ns - m.incarnation) * 1e-9);
 }
 
 bool SampleGate::interleaved(Agent& a, const WriterId& w) {

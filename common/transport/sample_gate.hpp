@@ -104,6 +104,8 @@ class SampleGate {
   // A writer is heard "again" only within this many of the agent's samples since its last one: a
   // long-gone life's late sample is not a second writer.
   static constexpr std::uint64_t kRecentSamples = 256;
+  // Whether `samples` sequence numbers are more than anything could send in `since_s` seconds.
+  static bool more_than_sent(std::uint64_t samples, double since_s);
   // How far `a` is ahead of `b` in the same life beyond what the agent could have sent in
   // `since_s` (> 0: a jump).
   static bool far_ahead(const StateMessage& a, const StateMessage& b, double since_s);
