@@ -19,6 +19,7 @@
 #include <filesystem>
 #include <new>
 #include <system_error>
+#include <utility>
 
 namespace qswarm {
 
@@ -54,12 +55,18 @@ void add_process_options(CLI::App& app, ProcessOptions& o) {
 
 namespace {
 
-// Why the certificate in `f` cannot serve now ("" if it can).
-std::string certificate_problem(const std::filesystem::path& f) {
+// Why keystore file `f` cannot serve now ("" if it can): missing or unreadable, and a
+// certificate also not PEM, or not valid now. A compose replica has no launcher to check its
+// keystore first: an expired certificate would only surface as a participant Fast DDS cannot
+// create.
+std::string keystore_file_problem(const std::filesystem::path& f, bool certificate) {
+  if (!std::filesystem::is_regular_file(f))
+    return f.string() + ": missing (swarm keys writes a keystore)";
   std::FILE* in = std::fopen(f.c_str(), "r");
   if (!in) return f.string() + ": cannot be read (" + std::strerror(errno) + ")";
-  X509* cert = PEM_read_X509(in, nullptr, nullptr, nullptr);
+  X509* cert = certificate ? PEM_read_X509(in, nullptr, nullptr, nullptr) : nullptr;
   std::fclose(in);
+  if (!certificate) return {};
   if (!cert) return f.string() + ": not a PEM certificate (swarm keys writes a keystore)";
   std::string why;
   // X509_cmp_current_time: -1 before now, 1 after, 0 on a malformed time.
@@ -81,24 +88,11 @@ std::string keystore_identity(const std::string& keystore, const std::string& ow
                               std::string& why) {
   const std::filesystem::path ks(keystore);
   std::string who = own == "supervisor" || !compose_keystore(keystore) ? own : "member";
-  for (const std::filesystem::path& f :
-       {ks / "ca.cert.pem", ks / "governance.p7s", ks / who / "cert.pem", ks / who / "key.pem",
-        ks / who / "permissions.p7s"}) {
-    if (!std::filesystem::is_regular_file(f)) {
-      why = f.string() + ": missing (swarm keys writes a keystore)";
-      return {};
-    }
-    if (std::FILE* in = std::fopen(f.c_str(), "r")) {
-      std::fclose(in);
-    } else {
-      why = f.string() + ": cannot be read (" + std::strerror(errno) + ")";
-      return {};
-    }
-  }
-  // A compose replica has no launcher to check its keystore first: an expired certificate would
-  // only surface as a participant Fast DDS cannot create.
-  for (const std::filesystem::path& f : {ks / "ca.cert.pem", ks / who / "cert.pem"}) {
-    why = certificate_problem(f);
+  for (const auto& [f, certificate] :
+       {std::pair{ks / "ca.cert.pem", true}, std::pair{ks / "governance.p7s", false},
+        std::pair{ks / who / "cert.pem", true}, std::pair{ks / who / "key.pem", false},
+        std::pair{ks / who / "permissions.p7s", false}}) {
+    why = keystore_file_problem(f, certificate);
     if (!why.empty()) return {};
   }
   return who;
