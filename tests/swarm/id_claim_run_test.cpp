@@ -9,6 +9,9 @@
 #include <memory>
 #include <regex>
 #include <set>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "tests/swarm/domain_lease.hpp"
 #include "tests/swarm/harness.hpp"
@@ -27,23 +30,41 @@ std::set<unsigned> ids_flown(const std::filesystem::path& dir, int n) {
   return ids;
 }
 
-TEST(IdClaimRun, ReplicasStartedAlikeFlyDistinctIdsAndDuplicatesAreRefused) {
-  const auto dir = fresh_dir("id-claim");
-  std::filesystem::create_directories(dir / "runs");
+// The four replicas' scenario (seeded random agents) in `dir`, with `law` after the mode and
+// the duration.
+std::filesystem::path claim_scenario(const std::filesystem::path& dir, const std::string& law,
+                                     int duration_s) {
   const auto scen = dir / "swarm.txtpb";
   std::ofstream(scen) << "name: \"claim\"\n"
                          "random_agents { count: 4 box_m: 30 }\n"
-                         "mode: PARTICLE law: EDGE_FLOW\n"
+                         "mode: PARTICLE "
+                      << law
+                      << "\n"
                          "weight { policy: UNWEIGHTED }\n"
                          "topology { policy: PROXIMITY threshold_m: 1000 }\n"
                          "convergence { tolerance_m: 1e-8 hold_s: 1 }\n"
-                         "duration_s: 60 seed: 5\n";
-  const std::vector<std::string> common = {"--scenario",        scen.string(), "--domain",
-                                           test_domain().str(), "--agents",    "4"};
-  auto with = [&](std::vector<std::string> argv, const std::vector<std::string>& more) {
-    argv.insert(argv.end(), common.begin(), common.end());
-    argv.insert(argv.end(), more.begin(), more.end());
-    return argv;
+                         "duration_s: "
+                      << duration_s << " seed: 5\n";
+  return scen;
+}
+
+// `argv`, the flags every process of the claim runs shares, then `more`.
+std::vector<std::string> claim_argv(std::vector<std::string> argv,
+                                    const std::filesystem::path& scen,
+                                    const std::vector<std::string>& more) {
+  for (const std::string& a : {std::string("--scenario"), scen.string(), std::string("--domain"),
+                               test_domain().str(), std::string("--agents"), std::string("4")})
+    argv.push_back(a);
+  argv.insert(argv.end(), more.begin(), more.end());
+  return argv;
+}
+
+TEST(IdClaimRun, ReplicasStartedAlikeFlyDistinctIdsAndDuplicatesAreRefused) {
+  const auto dir = fresh_dir("id-claim");
+  std::filesystem::create_directories(dir / "runs");
+  const auto scen = claim_scenario(dir, "law: EDGE_FLOW", 60);
+  const auto with = [&](std::vector<std::string> argv, const std::vector<std::string>& more) {
+    return claim_argv(std::move(argv), scen, more);
   };
   Child sup(with({bin("swarm-supervisor")}, {"--new-run-in", (dir / "runs").string()}),
             dir / "supervisor.out");
@@ -93,14 +114,7 @@ TEST(IdClaimRun, ReplicasStartedAlikeFlyDistinctIdsAndDuplicatesAreRefused) {
 TEST(IdClaimRun, ReplicasWithAComposeKeystoreFlyAndAStrangerWithoutItIsHeardByNoOne) {
   const auto dir = fresh_dir("id-claim-secure");
   std::filesystem::create_directories(dir / "runs");
-  const auto scen = dir / "swarm.txtpb";
-  std::ofstream(scen) << "name: \"claim\"\n"
-                         "random_agents { count: 4 box_m: 30 }\n"
-                         "mode: PARTICLE law: EDGE_FLOW gain: 0.3\n"
-                         "weight { policy: UNWEIGHTED }\n"
-                         "topology { policy: PROXIMITY threshold_m: 1000 }\n"
-                         "convergence { tolerance_m: 1e-8 hold_s: 1 }\n"
-                         "duration_s: 90 seed: 5\n";
+  const auto scen = claim_scenario(dir, "law: EDGE_FLOW gain: 0.3", 90);
   const auto keys = [&](const std::string& name, std::vector<std::string> more) {
     std::vector<std::string> argv = {bin("swarm"), "keys", scen.string(), "--out",
                                      (dir / name).string()};
@@ -111,12 +125,8 @@ TEST(IdClaimRun, ReplicasWithAComposeKeystoreFlyAndAStrangerWithoutItIsHeardByNo
   };
   const std::string compose = keys("compose-keys", {"--compose"});
   const std::string per_agent = keys("agent-keys", {});
-  const std::vector<std::string> common = {"--scenario",        scen.string(), "--domain",
-                                           test_domain().str(), "--agents",    "4"};
-  auto with = [&](std::vector<std::string> argv, const std::vector<std::string>& more) {
-    argv.insert(argv.end(), common.begin(), common.end());
-    argv.insert(argv.end(), more.begin(), more.end());
-    return argv;
+  const auto with = [&](std::vector<std::string> argv, const std::vector<std::string>& more) {
+    return claim_argv(std::move(argv), scen, more);
   };
   // Claiming with a per-agent keystore: refused, exit 2, nothing flown.
   const Result refused =
