@@ -4,7 +4,9 @@
 # one agent's container off the network for a window while the scenario also cuts link 1-2, and
 # checks the record on the host: converged, every agent present, the agreed point the initial
 # average (relative error < 1e-9, edge-flow), the container cut in events.csv and graph.csv, and a
-# replica given an id another one flies refused. Then the secure compose swarm
+# replica given an id another one flies refused. The live view (docker/view.yml) is on for that
+# run: from the host's loopback, through the relay, the page and its libraries load and npm's
+# Foxglove client decodes samples of all N agents (view_check.mjs). Then the secure compose swarm
 # (docker-compose.secure.yml, a keystore from `swarm keys --compose`): 6 replicas sharing the
 # member identity converge, and a container without it on the same network, flying agent 3 of the
 # same scenario, moves nothing. Cleans up its containers and networks.
@@ -45,14 +47,17 @@ mkdir -p "$WORK/runs"
 # A subnet of its own, so that a user's compose swarm (10.89.77.0/24) and this test can coexist.
 export QSWARM_AGENTS="$N" QSWARM_RUNS="$WORK/runs" QSWARM_USER="$(id -u):$(id -g)" \
   QSWARM_SUBNET="10.89.$((100 + $$ % 100)).0/24"
-COMPOSE=(podman-compose -p "$PROJECT" -f "$SRC/docker/docker-compose.yml")
+# The view on a free port of the host's loopback.
+QSWARM_VIEW_PORT=$(/usr/bin/python3 -c 'import socket; s = socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])')
+export QSWARM_VIEW_PORT
+COMPOSE=(podman-compose -p "$PROJECT" -f "$SRC/docker/docker-compose.yml" -f "$SRC/docker/view.yml")
 SECURE="$PROJECT-secure"
 SECURE_COMPOSE=(podman-compose -p "$SECURE" -f "$SRC/docker/docker-compose.yml"
                 -f "$SRC/docker/docker-compose.secure.yml")
 cleanup() {
   "${COMPOSE[@]}" down >/dev/null 2>&1 || true
   podman rm -f "$PROJECT-dup" >/dev/null 2>&1 || true
-  podman network rm -f "${PROJECT}_swarm" >/dev/null 2>&1 || true
+  podman network rm -f "${PROJECT}_swarm" "${PROJECT}_view" >/dev/null 2>&1 || true
   if [[ -n "${QSWARM_KEYSTORE:-}" ]]; then
     "${SECURE_COMPOSE[@]}" down >/dev/null 2>&1 || true
   fi
@@ -81,6 +86,11 @@ done
   podman logs "$sup" 2>&1 | tail -20; echo "FAIL: the swarm never flew complete"; exit 1; }
 echo "compose test: recording into $run"
 
+# The live view from the host while it flies, beside the checks below.
+QSWARM_NODE_MODULES="$SRC/node/node_modules" node "$SRC/tests/compose/view_check.mjs" \
+  "http://127.0.0.1:$QSWARM_VIEW_PORT/" "$N" >"$WORK/view.log" 2>&1 &
+view_pid=$!
+
 # A replica given an id that another one flies is refused (exit 2, a message in its log).
 dup_code=0
 timeout 300 podman "${RUNTIME[@]}" run --name "$PROJECT-dup" --network "${PROJECT}_swarm" \
@@ -91,6 +101,8 @@ timeout 300 podman "${RUNTIME[@]}" run --name "$PROJECT-dup" --network "${PROJEC
 # Cut one agent's container off the network for 6 s, mid-run.
 QSWARM_ENGINE=podman "$SRC/docker/cut.sh" "$CUT_AGENT" 6 "$PROJECT"
 
+view_code=0
+wait "$view_pid" || view_code=$?
 code=$(podman wait "$sup")
 podman logs "$sup" >"$WORK/supervisor.out" 2>&1 || true
 echo "compose test: supervisor exited $code"
@@ -101,6 +113,14 @@ check() { if eval "$2"; then echo "ok: $1"; else echo "FAIL: $1"; fail=1; fi; }
 check "a replica given a flown id exits 2 (got $dup_code)" '[[ $dup_code -eq 2 ]]'
 check "its log says why" 'grep -q "agent id 2 is already held by another replica" "$WORK/dup.log"'
 check "the supervisor exits 0 (converged, complete record)" '[[ $code -eq 0 ]]'
+sed 's/^/  view: /' "$WORK/view.log"
+check "the live view, from the host through the relay (view_check.mjs exit $view_code)" \
+  '[[ $view_code -eq 0 ]]'
+sup_nets=$(podman inspect -f '{{range $k, $v := .NetworkSettings.Networks}}{{$k}} {{end}}' "$sup" 2>&1 || true)
+check "the supervisor is on the internal network only ($sup_nets)" '[[ $sup_nets == "${PROJECT}_swarm " ]]'
+relay_ps=$(podman top "${PROJECT}_view-relay_1" args 2>&1 || true)
+check "the relay, the only container with a published port, runs socat and no DDS participant" \
+  'grep -q socat <<<"$relay_ps" && ! grep -q swarm- <<<"$relay_ps"'
 PYTHONPATH="$SRC/python" /usr/bin/python3 - "$run" "$N" "$CUT_AGENT" <<'PY' || fail=1
 import csv, json, os, sys
 from qswarm import run_dir as names
