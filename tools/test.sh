@@ -2,8 +2,8 @@
 # Sets everything up (apt + build) and runs what CI runs (.ci/run calls this):
 #   1. a Release build (what users build) of everything, tests included, with warnings as errors,
 #      in build-release/; and a configure of the product alone (tests and benchmarks off);
-#   2. the core and runtime tests under AddressSanitizer + UndefinedBehaviorSanitizer (DDS off),
-#      and the runtime tests under ThreadSanitizer (DDS off);
+#   2. the core, runtime and view tests under AddressSanitizer + UndefinedBehaviorSanitizer (DDS
+#      off), and the runtime and view tests under ThreadSanitizer (DDS off);
 #   3. clang-format on every source, clang-tidy on the product's (tools/lint.sh; `--all` adds the
 #      tests' 27 files, about 4 more minutes: run it before a change to tests lands);
 #   4. every test but the `long`, `secure` and `compose` labels, then the `compose` label alone
@@ -31,24 +31,25 @@ stage "the product configured alone (tests and benchmarks off)"
 cmake -S . -B build-product -G Ninja -DCMAKE_BUILD_TYPE=Release -DQSWARM_WERROR=ON \
   -DQSWARM_BUILD_TESTS=OFF -DQSWARM_BUILD_BENCH=OFF >/dev/null
 
-stage "core and runtime tests under ASan+UBSan"
+stage "core, runtime and view tests under ASan+UBSan"
 cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=Debug -DQSWARM_WITH_DDS=OFF \
   -DQSWARM_SANITIZE=ON -DQSWARM_WERROR=ON -DQSWARM_BUILD_BENCH=OFF >/dev/null
 cmake --build build-asan --parallel "$(nproc)"
 # The closed-loop quadcopter flights of AvoidanceFlight.* and AvoidanceSwarm.* take minutes each at
 # -O0 with the sanitizers (500 Hz RK4 and the controller per quadcopter); they run in the release
 # suite below. The filter itself runs here in SafeVelocity.*.
-(cd build-asan && ctest "${ctest_args[@]}" -L "core|runtime" -E "^Avoidance(Flight|Swarm)\\.")
+(cd build-asan && ctest "${ctest_args[@]}" -L "core|runtime|view" -E "^Avoidance(Flight|Swarm)\\.")
 
 stage "in-process tests under ThreadSanitizer (DDS off)"
 # The code that runs beside a transport's threads without Fast DDS: the fault-injecting bus, the
 # agent loop, the supervisor's loop, the claim inbox (tests/runtime/concurrency_test.cpp puts real
-# threads on each), and every other in-process test. Any report fails the stage (halt_on_error).
+# threads on each), every other in-process test, and the live view's server (its asio threads
+# against hostile clients, tests/view/view_test.cpp). Any report fails the stage (halt_on_error).
 cmake -S . -B build-tsan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DQSWARM_WITH_DDS=OFF \
   -DQSWARM_TSAN=ON -DQSWARM_WERROR=ON -DQSWARM_BUILD_BENCH=OFF >/dev/null
 cmake --build build-tsan --parallel "$(nproc)"
 (cd build-tsan && TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1" \
-  ctest "${ctest_args[@]}" -L runtime)
+  ctest "${ctest_args[@]}" -L "runtime|view")
 
 stage "format and clang-tidy"
 tools/lint.sh "$BUILD"
