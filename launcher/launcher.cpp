@@ -68,7 +68,21 @@ std::vector<std::string> Launcher::supervisor_argv() const {
     a.push_back("--discovery-server");
     a.push_back(discovery_address());
   }
+  add_unicast_peers(a);
   return a;
+}
+
+void Launcher::add_unicast_peers(std::vector<std::string>& a) const {
+  // A secure run discovers by unicast within its block (ParticipantOptions::unicast_peers_*:
+  // Fast DDS 2.9.1 can leave a secure pair unpaired when multicast and unicast discovery are
+  // handled at once). The block: the supervisor, then every agent the run may start.
+  const std::string& at = spec_.rc.transport.interface;
+  if (spec_.participant_base < 0 || spec_.rc.transport.keystore.empty() || at.empty() ||
+      at == "any")
+    return;
+  a.push_back("--unicast-peers");
+  a.push_back(std::to_string(spec_.participant_base) + ":" +
+              std::to_string(spec_.rc.agents.size() + 1));
 }
 
 std::string Launcher::discovery_address() const {
@@ -124,6 +138,7 @@ std::vector<std::string> Launcher::agent_argv(AgentId id, double join_at_s, bool
     a.push_back("--participant-id");
     a.push_back(std::to_string(spec_.participant_base + 1 + index));
   }
+  add_unicast_peers(a);
   for (unsigned ign : spec_.ignore_sigterm)
     if (ign == id) a.push_back("--ignore-sigterm");
   return a;

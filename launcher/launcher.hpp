@@ -75,6 +75,7 @@ class Launcher {
   std::vector<std::string> agent_argv(AgentId id, double join_at_s, bool restart) const;
   std::vector<std::string> supervisor_argv() const;
   std::vector<std::string> discovery_argv() const;
+  void add_unicast_peers(std::vector<std::string>& argv) const;
   // "HOST:PORT" of the run's Discovery Server, "" without one.
   std::string discovery_address() const;
 

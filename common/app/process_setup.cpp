@@ -45,6 +45,13 @@ void add_process_options(CLI::App& app, ProcessOptions& o) {
   app.add_option("--participant-id", o.participant_id,
                  "DDS participant id in the port plan (swarm run gives each process its own)")
       ->check(CLI::Range(0, PortPlan::kMaxParticipantId));
+  app.add_option("--unicast-peers", o.unicast_peers,
+                 "FIRST:COUNT: discover only these participant ids of the port plan, by unicast "
+                 "(swarm run gives a secure run's processes its block)")
+      ->check([](const std::string& v) {
+        std::string why;
+        return parse_unicast_peers(v, why) ? std::string() : why;
+      });
   app.add_option("--seed", o.seed, "run seed (overrides the scenario)")
       ->check(CLI::Range(std::int64_t{0}, std::int64_t{4294967295}));
   app.add_option("--keystore", o.keystore,
@@ -164,6 +171,18 @@ const char* g_prog = "qswarm";
 }
 }  // namespace
 
+std::optional<std::pair<int, int>> parse_unicast_peers(const std::string& text, std::string& why) {
+  int first = -1, count = -1, used = 0;
+  if (std::sscanf(text.c_str(), "%d:%d%n", &first, &count, &used) != 2 ||
+      used != static_cast<int>(text.size()) || first < 0 || count < 1 ||
+      first > PortPlan::kMaxParticipantId + 1 - count) {
+    why = "\"" + text + "\": expected FIRST:COUNT, participant ids within 0.." +
+          std::to_string(PortPlan::kMaxParticipantId);
+    return std::nullopt;
+  }
+  return std::pair{first, count};
+}
+
 void exit_cleanly_on_uncaught_exceptions(const char* prog) {
   g_prog = prog;
   std::set_terminate(on_terminate);
@@ -181,6 +200,11 @@ DdsOptions dds_options(const RunConfig& rc, const std::string& participant_name,
   p.shared_memory = rc.transport.shared_memory;
   p.test_drop_data_percent = static_cast<std::uint8_t>(rc.faults.transport_drop_percent);
   p.participant_id = o.participant_id;
+  std::string why;
+  if (const auto peers = parse_unicast_peers(o.unicast_peers, why)) {
+    p.unicast_peers_first = peers->first;
+    p.unicast_peers_count = peers->second;
+  }
   p.keystore = rc.transport.keystore;  // the caller names the identity
   // Everyone hears every announcement: N^2 per period. Every second up to 25 processes, then
   // slower with the swarm (10 s at 256); lost first announcements are repeated by the quick ones.

@@ -29,7 +29,12 @@ struct ProcessOptions {
   std::string discovery_server;  // --discovery-server / QSWARM_DISCOVERY_SERVER: HOST:PORT
   int participant_id = -1;       // --participant-id: its place in the port plan (-1: Fast DDS's)
   std::string keystore;          // --keystore / QSWARM_KEYSTORE (overrides the scenario)
+  // --unicast-peers FIRST:COUNT: discover only the participant ids FIRST.. of the port plan, by
+  // unicast (ParticipantOptions::unicast_peers_*); swarm run passes its block to a secure run.
+  std::string unicast_peers;
 };
+// Parses FIRST:COUNT (ids within the port plan); nothing, with `why`, if it is not one.
+std::optional<std::pair<int, int>> parse_unicast_peers(const std::string& text, std::string& why);
 void add_process_options(CLI::App& app, ProcessOptions& o);
 
 // An exception that escapes a thread (one of Fast DDS's too: std::system_error when threads or

@@ -107,6 +107,25 @@ DdsParticipant::DdsParticipant(const ParticipantOptions& opts) : opts_(opts) {
     set("dds.sec.access.builtin.Access-Permissions.permissions", me + "permissions.p7s");
     set("dds.sec.crypto.plugin", "builtin.AES-GCM-GMAC");
   }
+  if (opts.unicast_peers_count > 0) {
+    if (opts.interface.empty() || !opts.discovery_server.empty())
+      throw std::invalid_argument(
+          "dds: unicast discovery needs one interface address and no Discovery Server");
+    if (opts.unicast_peers_first < 0 ||
+        opts.unicast_peers_first + opts.unicast_peers_count > PortPlan::kMaxParticipantId + 1)
+      throw std::invalid_argument("dds: unicast peers beyond the port plan's ids 0..544");
+    // Explicit unicast locators (port 0: the participant id's own ports) leave Fast DDS no
+    // default multicast one; the initial peers replace the multicast announcements.
+    eprosima::fastrtps::rtps::Locator_t own;
+    eprosima::fastrtps::rtps::IPLocator::setIPv4(own, opts.interface);
+    pqos.wire_protocol().builtin.metatrafficUnicastLocatorList.push_back(own);
+    pqos.wire_protocol().default_unicast_locator_list.push_back(own);
+    for (int i = 0; i < opts.unicast_peers_count; ++i) {
+      eprosima::fastrtps::rtps::Locator_t peer = own;
+      peer.port = PortPlan::discovery_port(opts.domain_id, opts.unicast_peers_first + i);
+      pqos.wire_protocol().builtin.initialPeersList.push_back(peer);
+    }
+  }
   if (!opts.discovery_server.empty()) {
     const auto [ip, port] = resolve_discovery_server(opts.discovery_server);
     discovery.discoveryProtocol = eprosima::fastrtps::rtps::DiscoveryProtocol_t::CLIENT;

@@ -35,6 +35,16 @@ struct ParticipantOptions {
   // Its participant id in the port plan (PortPlan): a given id whose ports are taken is an error;
   // -1 takes the highest id whose ports are free (runs reserve their blocks from 0 up).
   int participant_id = -1;
+  // Discovery by unicast alone, to the participant ids [first, first + count) of the port plan
+  // on `interface` (a run's block, which the launcher reserves): no multicast is sent or heard.
+  // Secure runs need it: Fast DDS 2.9.1 matches a newly authenticated peer's built-in secure
+  // endpoints through shared temporary records (SecurityManager's temp_*_proxy_data_, fixed in
+  // 2.9.2), and with multicast beside unicast two receive threads can fill them for two peers at
+  // once; the pair whose records got mixed never exchanges keys (docs/security.md, "A secure pair
+  // that never hears each other"). With one metatraffic socket they are filled one at a time.
+  // count 0: multicast discovery (simple), as Fast DDS does by default.
+  int unicast_peers_first = 0;
+  int unicast_peers_count = 0;
   // How often it announces itself after its first quick announcements (seconds): everyone hears
   // every announcement, so a large swarm announces less often.
   double announce_period_s = 1.0;

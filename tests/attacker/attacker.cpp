@@ -60,6 +60,7 @@ struct Flags {
   double learn_timeout_s = 30.0;
   std::string report;
   std::string streams = "both";
+  std::string unicast_peers;  // FIRST:COUNT: a secure run discovers by unicast within its block
 };
 
 using qswarm::AgentId;
@@ -185,6 +186,9 @@ int main(int argc, char** argv) {
   app.add_option("--for", f.for_s, "wall seconds to attack from the first sample sent");
   app.add_option("--learn-timeout", f.learn_timeout_s, "wall seconds to hear a run");
   app.add_option("--report", f.report, "write key=value lines here");
+  app.add_option("--unicast-peers", f.unicast_peers,
+                 "FIRST:COUNT: announce to these participant ids of the port plan, as a secure "
+                 "run's own processes do (they hear no multicast)");
   app.add_option("--streams", f.streams, "state, record or both")
       ->check(CLI::IsMember({"state", "record", "both"}));
   try {
@@ -206,6 +210,12 @@ int main(int argc, char** argv) {
   part.keystore = f.keystore;
   part.identity = f.identity;
   part.name = "qswarm-attacker-ear";
+  if (!f.unicast_peers.empty() &&
+      std::sscanf(f.unicast_peers.c_str(), "%d:%d", &part.unicast_peers_first,
+                  &part.unicast_peers_count) != 2) {
+    std::fprintf(stderr, "qswarm-attacker: --unicast-peers: expected FIRST:COUNT\n");
+    return 2;
+  }
   Ear ear(part);
   std::optional<std::uint64_t> given;
   if (!f.run_id.empty()) given = std::stoull(f.run_id, nullptr, 16);

@@ -127,6 +127,31 @@ TEST(Launcher, ARunsOwnDiscoveryServerStartsFirstAndEveryParticipantIsToldItsAdd
   EXPECT_EQ(l.poll(false), std::string(Launcher::kFinished));
 }
 
+TEST(Launcher, ASecureRunsProcessesDiscoverByUnicastWithinItsBlockAndAPlainRunsDoNot) {
+  LaunchSpec spec = spec_for("");
+  spec.rc.transport.keystore = "/ks";  // (the launcher only passes it on)
+  spec.participant_base = 10;          // the supervisor 10, agents 1..3 on 11..13
+  const auto peers = [](const std::vector<std::string>& argv) {
+    const auto it = std::find(argv.begin(), argv.end(), "--unicast-peers");
+    return it == argv.end() || it + 1 == argv.end() ? std::string() : *(it + 1);
+  };
+  FakeProcesses procs;
+  ManualClock clock;
+  const Launcher secure(spec, procs, clock, [] { return true; });
+  EXPECT_EQ(peers(secure.supervisor_argv()), "10:4");
+  for (AgentId id : {1u, 2u, 3u}) EXPECT_EQ(peers(secure.agent_argv(id, -1.0, false)), "10:4");
+  // Plain: multicast discovery, as Fast DDS does by default.
+  spec.rc.transport.keystore.clear();
+  const Launcher plain(spec, procs, clock, [] { return true; });
+  EXPECT_EQ(peers(plain.supervisor_argv()), "");
+  EXPECT_EQ(peers(plain.agent_argv(1, -1.0, false)), "");
+  // Secure on every interface (a container's): no block to announce to.
+  spec.rc.transport.keystore = "/ks";
+  spec.rc.transport.interface = "any";
+  const Launcher any(spec, procs, clock, [] { return true; });
+  EXPECT_EQ(peers(any.agent_argv(1, -1.0, false)), "");
+}
+
 TEST(Launcher, ADiscoveryServerThatNeverListensStartsNothingElse) {
   FakeProcesses procs;
   ManualClock clock;

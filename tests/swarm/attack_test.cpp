@@ -47,6 +47,10 @@ std::map<std::string, std::string> read_report(const fs::path& p) {
   return out;
 }
 
+// Where a secure run's processes discover each other (by unicast only): the first participant ids
+// of the port plan on the test's own domain, where the launcher reserves the run's block.
+constexpr const char* kSecureBlock = "0:32";
+
 struct Attacker {
   Attacker(const std::string& name, const fs::path& dir, std::vector<std::string> args)
       : report(dir.parent_path() / (name + "-attacker.txt")),
@@ -213,8 +217,11 @@ TEST(Attack, APlainRunUnderImpersonationNamesItAndHearsTheRealAgentAgainOnceTheF
 TEST(Attack, ASecureRunHearsNothingFromAStrangerWithoutCredentials) {
   const fs::path ks = keystore("attack-stranger");
   const fs::path dir = fresh_dir("attack-stranger");
+  // A secure run discovers by unicast within its block (the launcher's, from id 0 on this leased
+  // domain): the strangers announce to it there, as an attacker who scanned the ports would.
   Attacker learner("attack-stranger-learner", dir,
-                   {"--mode", "impersonate", "--victim", "3", "--learn-timeout", "10"});
+                   {"--mode", "impersonate", "--victim", "3", "--learn-timeout", "10",
+                    "--unicast-peers", kSecureBlock});
   Child launcher(run_argv(dir, {"--secure", ks.string(), "--time-scale", "0.25"}),
                  dir.parent_path() / "attack-stranger.log");
   int learner_code = -1;
@@ -228,7 +235,8 @@ TEST(Attack, ASecureRunHearsNothingFromAStrangerWithoutCredentials) {
   char hex[24];
   std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(run_id));
   Attacker told("attack-stranger-told", dir,
-                {"--mode", "impersonate", "--victim", "3", "--rate", "200", "--run-id", hex});
+                {"--mode", "impersonate", "--victim", "3", "--rate", "200", "--run-id", hex,
+                 "--unicast-peers", kSecureBlock});
   const Result r = launcher.wait(240.0);
   const auto forged = told.finish();
   EXPECT_EQ(forged.at("heard"), "0") << told.log;
@@ -252,7 +260,7 @@ TEST(Attack, ASecureRunRefusesAMemberWithAgent3sCertificatePublishingAsAgent5) {
   const fs::path dir = fresh_dir("attack-member");
   Attacker attacker("attack-member", dir,
                     {"--mode", "impersonate", "--as", "5", "--rate", "200", "--keystore",
-                     ks.string(), "--identity", "agent-3"});
+                     ks.string(), "--identity", "agent-3", "--unicast-peers", kSecureBlock});
   const Result r = run(run_argv(dir, {"--secure", ks.string()}), 240.0);
   const auto report = attacker.finish();
   EXPECT_EQ(report.at("learned").rfind("wildcard", 0), 0u) << attacker.log;

@@ -134,16 +134,28 @@ TEST(IdClaimRun, ReplicasWithAComposeKeystoreFlyAndAStrangerWithoutItIsHeardByNo
   EXPECT_EQ(refused.code, 2) << refused.output;
   EXPECT_NE(refused.output.find("needs a compose keystore"), std::string::npos) << refused.output;
 
-  Child stranger(with({bin("swarm-agent")}, {"--id", "3", "--start-timeout", "3"}),
+  // Secure processes on one host discover by unicast within a block of the port plan, as swarm
+  // run starts them (docs/security.md, "A secure pair that never hears each other"): the
+  // supervisor takes id 0, the replicas 1 to 4 and the stranger 5, announcing to all six.
+  const auto place = [](int id) {
+    return std::vector<std::string>{"--participant-id", std::to_string(id), "--unicast-peers",
+                                    "0:6"};
+  };
+  const auto also = [](std::vector<std::string> a, const std::vector<std::string>& b) {
+    a.insert(a.end(), b.begin(), b.end());
+    return a;
+  };
+  Child stranger(with({bin("swarm-agent")}, also({"--id", "3", "--start-timeout", "3"}, place(5))),
                  dir / "stranger.out");
   Child sup(with({bin("swarm-supervisor")},
-                 {"--new-run-in", (dir / "runs").string(), "--keystore", compose}),
+                 also({"--new-run-in", (dir / "runs").string(), "--keystore", compose}, place(0))),
             dir / "supervisor.out");
   std::vector<std::unique_ptr<Child>> agents;
   agents.reserve(4);
   for (int k = 0; k < 4; ++k)
     agents.push_back(std::make_unique<Child>(
-        with({bin("swarm-agent")}, {"--id", "auto", "--wait-supervisor", "--keystore", compose}),
+        with({bin("swarm-agent")},
+             also({"--id", "auto", "--wait-supervisor", "--keystore", compose}, place(k + 1))),
         dir / ("replica-" + std::to_string(k) + ".out")));
   ASSERT_TRUE(wait_for([&] { return ids_flown(dir, 4).size() == 4; }, 90.0))
       << "the four replicas did not all take an id";
