@@ -6,8 +6,7 @@
 #      off), and the runtime and view tests under ThreadSanitizer (DDS off);
 #   3. clang-format on every source, clang-tidy on the product's (tools/lint.sh; `--all` adds the
 #      tests' 27 files, about 4 more minutes: run it before a change to tests lands);
-#   4. every test but the `long`, `secure` and `compose` labels, then the `compose` label alone
-#      (`secure`: docs/security.md#known-problem-a-secure-pair-that-never-hears-each-other).
+#   4. every test but the `long` and `compose` labels, then the `compose` label alone.
 # With arguments, only step 1's build, then ctest with those arguments (e.g. tools/test.sh -L core).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -56,7 +55,7 @@ tools/lint.sh "$BUILD"
 
 stage "tests"
 cd "$BUILD"
-ctest "${ctest_args[@]}" -LE "long|compose|secure"
+ctest "${ctest_args[@]}" -LE "long|compose"
 
 stage "compose swarm in containers"
 # Alone: it builds an image and runs containers, which would crowd the timing of the other tests.
