@@ -277,6 +277,34 @@ TEST(Attack, ASecureRunRefusesAMemberWithAgent3sCertificatePublishingAsAgent5) {
   EXPECT_GE(files_containing(dir, "agent-", "refused samples keyed as agent 5"), 4);
 }
 
+// A secure run's processes discover by unicast within the run's block: an agent killed (SIGKILL)
+// and started again on its own participant id, and an agent that joins late, still meet every
+// other one (a new participant each, a fresh key exchange), and the average holds.
+TEST(SecureRun, AKilledAndRestartedAgentAndALateJoinerMeetEveryoneAgainAndTheAverageHolds) {
+  const fs::path dir = fresh_dir("secure-kill");
+  const fs::path scen = dir.parent_path() / "secure-kill.txtpb";
+  std::ofstream(scen) << read_file(scenario("faults_six"))
+                      << "faults { kill { agent: 2 at_s: 3 restart_at_s: 6 } "
+                         "late_join { agent: 6 at_s: 2 } }\n";
+  const fs::path ks = fresh_dir("secure-kill-keys");
+  const Result k = run({bin("swarm"), "keys", scen.string(), "--out", ks.string()}, 60.0);
+  ASSERT_EQ(k.code, 0) << k.output;
+  const Result r = run({bin("swarm"), "run", scen.string(), "--out", dir.string(), "--domain",
+                        test_domain().str(), "--quiet", "--secure", ks.string()},
+                       240.0);
+  ASSERT_EQ(r.code, 0) << r.output;
+  const records::Summary s = read_summary(dir);
+  EXPECT_TRUE(s.secure());
+  EXPECT_TRUE(s.converged()) << s.end_reason();
+  EXPECT_EQ(s.agents_size(), 6);
+  EXPECT_EQ(s.faults().kills(), 1u);
+  EXPECT_EQ(s.faults().restarts(), 1u);
+  EXPECT_EQ(s.faults().late_joins(), 1u);
+  EXPECT_LT(s.average_relative_error(), 1e-9);
+  EXPECT_LT((final_q(s, 2) - kAgreement).norm(), 1e-6);
+  EXPECT_LT((final_q(s, 6) - kAgreement).norm(), 1e-6);
+}
+
 // Every UDP datagram to a domain's ports on loopback, as a root process sees them (an AF_PACKET
 // socket on lo): what an attacker on the host, or on the radio link, captures.
 class LoopbackCapture {
