@@ -76,9 +76,8 @@ void Launcher::add_unicast_peers(std::vector<std::string>& a) const {
   // A secure run discovers by unicast within its block (ParticipantOptions::unicast_peers_*:
   // Fast DDS 2.9.1 can leave a secure pair unpaired when multicast and unicast discovery are
   // handled at once). The block: the supervisor, then every agent the run may start.
-  const std::string& at = spec_.rc.transport.interface;
-  if (spec_.participant_base < 0 || spec_.rc.transport.keystore.empty() || at.empty() ||
-      at == "any")
+  if (spec_.participant_base < 0 || spec_.rc.transport.keystore.empty() ||
+      spec_.rc.transport.interface == "any")
     return;
   a.push_back("--unicast-peers");
   a.push_back(std::to_string(spec_.participant_base) + ":" +

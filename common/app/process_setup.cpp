@@ -171,18 +171,6 @@ const char* g_prog = "qswarm";
 }
 }  // namespace
 
-std::optional<std::pair<int, int>> parse_unicast_peers(const std::string& text, std::string& why) {
-  int first = -1, count = -1, used = 0;
-  if (std::sscanf(text.c_str(), "%d:%d%n", &first, &count, &used) != 2 ||
-      used != static_cast<int>(text.size()) || first < 0 || count < 1 ||
-      first > PortPlan::kMaxParticipantId + 1 - count) {
-    why = "\"" + text + "\": expected FIRST:COUNT, participant ids within 0.." +
-          std::to_string(PortPlan::kMaxParticipantId);
-    return std::nullopt;
-  }
-  return std::pair{first, count};
-}
-
 void exit_cleanly_on_uncaught_exceptions(const char* prog) {
   g_prog = prog;
   std::set_terminate(on_terminate);

@@ -33,8 +33,6 @@ struct ProcessOptions {
   // unicast (ParticipantOptions::unicast_peers_*); swarm run passes its block to a secure run.
   std::string unicast_peers;
 };
-// Parses FIRST:COUNT (ids within the port plan); nothing, with `why`, if it is not one.
-std::optional<std::pair<int, int>> parse_unicast_peers(const std::string& text, std::string& why);
 void add_process_options(CLI::App& app, ProcessOptions& o);
 
 // An exception that escapes a thread (one of Fast DDS's too: std::system_error when threads or

@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -18,6 +19,19 @@
 #include <vector>
 
 namespace qswarm {
+
+std::optional<std::pair<int, int>> parse_unicast_peers(const std::string& text, std::string& why) {
+  int first = -1, count = -1, used = 0;
+  if (std::sscanf(text.c_str(), "%d:%d%n", &first, &count, &used) != 2 ||
+      used != static_cast<int>(text.size()) || first < 0 || count < 1 ||
+      first > PortPlan::kMaxParticipantId + 1 - count) {
+    why = "\"" + text + "\": expected FIRST:COUNT, participant ids within 0.." +
+          std::to_string(PortPlan::kMaxParticipantId);
+    return std::nullopt;
+  }
+  return std::pair{first, count};
+}
+
 namespace {
 
 // Whether a UDP port can be bound at `address` (any address when empty or "any").

@@ -3,6 +3,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <utility>
 
 namespace qswarm {
 
@@ -28,6 +29,10 @@ struct PortPlan {
     return discovery_port(domain, id) + 1;
   }
 };
+
+// Parses a block of participant ids "FIRST:COUNT" (all within 0..kMaxParticipantId): what
+// --unicast-peers takes. Nothing, with `why`, if it is not one.
+std::optional<std::pair<int, int>> parse_unicast_peers(const std::string& text, std::string& why);
 
 // Why participant `id` cannot listen on `domain` at `address` now ("" if it can): one of its two
 // unicast ports is taken (another run on this domain, or another program).

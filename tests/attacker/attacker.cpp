@@ -37,6 +37,7 @@
 #include "common/dds/dds_bus.hpp"
 #include "common/dds/idl_convert.hpp"
 #include "common/dds/qos.hpp"
+#include "common/transport/port_plan.hpp"
 
 #include "swarm_statePubSubTypes.h"
 
@@ -210,11 +211,15 @@ int main(int argc, char** argv) {
   part.keystore = f.keystore;
   part.identity = f.identity;
   part.name = "qswarm-attacker-ear";
-  if (!f.unicast_peers.empty() &&
-      std::sscanf(f.unicast_peers.c_str(), "%d:%d", &part.unicast_peers_first,
-                  &part.unicast_peers_count) != 2) {
-    std::fprintf(stderr, "qswarm-attacker: --unicast-peers: expected FIRST:COUNT\n");
-    return 2;
+  if (!f.unicast_peers.empty()) {
+    std::string why;
+    const auto peers = qswarm::parse_unicast_peers(f.unicast_peers, why);
+    if (!peers) {
+      std::fprintf(stderr, "qswarm-attacker: --unicast-peers: %s\n", why.c_str());
+      return 2;
+    }
+    part.unicast_peers_first = peers->first;
+    part.unicast_peers_count = peers->second;
   }
   Ear ear(part);
   std::optional<std::uint64_t> given;

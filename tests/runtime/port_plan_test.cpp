@@ -46,6 +46,17 @@ TEST(PortPlan, EveryDomainHoldsTheLargestSwarmAndEveryPortFitsSixteenBits) {
   EXPECT_NE(participant_ports_problem(0, 545, "127.0.0.1"), "");
 }
 
+TEST(PortPlan, UnicastPeersAreABlockOfIdsWithinThePlan) {
+  std::string why;
+  EXPECT_EQ(parse_unicast_peers("100:2", why), (std::pair{100, 2}));
+  EXPECT_EQ(parse_unicast_peers("0:545", why), (std::pair{0, 545}));
+  for (const char* bad :
+       {"", "5", "5:", ":5", "5:0", "-1:3", "544:2", "1:2:3", "a:b", "3:2x", "99999999999:1"}) {
+    EXPECT_FALSE(parse_unicast_peers(bad, why)) << bad;
+    EXPECT_NE(why.find("FIRST:COUNT"), std::string::npos) << bad;
+  }
+}
+
 TEST(PortPlan, ARunsBlockSkipsTakenPortsAndATakenIdIsNamed) {
   // Domain 19 is left to users by the tests' domain leases; ids from 480 are far from any run.
   const std::uint32_t domain = 19;
