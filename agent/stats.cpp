@@ -26,7 +26,7 @@ std::string final_report(const AgentLoop& loop, const BusCounters& c) {
 }
 
 bool write_stats(const std::filesystem::path& path, const AgentLoop& loop, const BusCounters& c,
-                 double wall_now_s) {
+                 int participants_known, double wall_now_s) {
   rusage ru{};
   getrusage(RUSAGE_SELF, &ru);
   const double cpu_s = static_cast<double>(ru.ru_utime.tv_sec + ru.ru_stime.tv_sec) +
@@ -37,7 +37,8 @@ bool write_stats(const std::filesystem::path& path, const AgentLoop& loop, const
       << loop.ticks() << "\nphysics_steps " << loop.physics_steps() << "\noverruns "
       << loop.overruns() << "\ndiscovery_s " << loop.lifecycle().discovery_s() << "\nmax_rss_kb "
       << ru.ru_maxrss << "\nreceived " << c.received << "\ndropped " << c.dropped
-      << "\ninterest_changes " << loop.interest_changes() << "\n";
+      << "\ninterest_changes " << loop.interest_changes() << "\nparticipants "
+      << participants_known << "\n";
   return static_cast<bool>(out.flush());
 }
 

@@ -201,6 +201,9 @@ DdsOptions dds_options(const RunConfig& rc, const std::string& participant_name,
   s.max_agents = static_cast<int>(std::max<std::size_t>(rc.agents.size(), 16));
   s.run_id = rc.transport.run_id;
   for (const auto& a : rc.agents) s.roster.push_back(a.id);
+  // A Discovery Server relays announcements by topic: with a topic per neighbourhood name, each
+  // agent discovers only those it may hear (StateBusOptions::topic_per_name).
+  s.topic_per_name = !p.discovery_server.empty();
   return d;
 }
 

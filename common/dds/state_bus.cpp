@@ -92,6 +92,37 @@ struct DdsStateBus::Impl : public dds::DataReaderListener {
   } writer_listener, record_listener;
   qswarm_msgs::AgentState out_sample;  // reused: publishing allocates nothing in steady state
 
+  // StateBusOptions::topic_per_name: the endpoints of each name of the interest, on the run's
+  // partition. Touched only by the thread that calls set_interest and publish.
+  dds::DataWriterQos state_writer_qos;
+  dds::DataReaderQos state_reader_qos;
+  struct NamedWriter {
+    dds::DataWriter* writer = nullptr;
+    std::unique_ptr<WriterListener> listener;
+  };
+  struct NamedReader {
+    dds::ContentFilteredTopic* filtered = nullptr;  // the roster filter on its topic
+    dds::DataReader* reader = nullptr;
+  };
+  std::map<std::string, dds::Topic*> named_topics;
+  std::map<std::string, NamedWriter> named_writers;
+  std::map<std::string, NamedReader> named_readers;
+  bool interest_told = false;
+
+  static std::string topic_of(const std::string& name) {
+    return name.empty() ? "qswarm/agent_state" : "qswarm/agent_state/" + name;
+  }
+  dds::Topic* named_topic(const std::string& name) {
+    if (name.empty()) return topic;  // created with the bus, deleted with it
+    dds::Topic*& t = named_topics[name];
+    if (!t) t = participant->create_topic(topic_of(name), type.get_type_name(), dds::TOPIC_QOS_DEFAULT);
+    if (!t) throw std::runtime_error("dds: cannot create the topic " + topic_of(name));
+    return t;
+  }
+  void set_named_interest(std::vector<std::string> pub, std::vector<std::string> sub);
+  // Deletes the name's reader and/or writer, and its topic once neither is left.
+  void drop_named(const std::string& name, bool its_reader, bool its_writer);
+
   void on_data_available(dds::DataReader* r) override {
     try {
       qswarm_msgs::AgentState s;
@@ -217,8 +248,21 @@ DdsStateBus::DdsStateBus(DdsParticipant& participant, const StateBusOptions& opt
       if (!w) throw std::runtime_error("dds: cannot create a writer in " + part);
       return w;
     };
-    d.writer = writer_in(run_partition(opts.run_id), d.publisher, d.topic, best_effort_writer_qos(),
-                         &d.writer_listener);
+    if (opts.topic_per_name && !opts.recorder) {
+      // The names' writers come with set_interest, in this publisher.
+      d.state_writer_qos = best_effort_writer_qos();
+      d.state_writer_qos.writer_resource_limits().reader_filters_allocation =
+          eprosima::fastrtps::ResourceLimitedContainerConfig(0, 0, 0);
+      d.state_writer_qos.endpoint().history_memory_policy =
+          eprosima::fastrtps::rtps::PREALLOCATED_WITH_REALLOC_MEMORY_MODE;
+      dds::PublisherQos pub_qos = dds::PUBLISHER_QOS_DEFAULT;
+      pub_qos.partition().push_back(run_partition(opts.run_id).c_str());
+      d.publisher = d.participant->create_publisher(pub_qos);
+      if (!d.publisher) throw std::runtime_error("dds: cannot create the state publisher");
+    } else {
+      d.writer = writer_in(run_partition(opts.run_id), d.publisher, d.topic,
+                           best_effort_writer_qos(), &d.writer_listener);
+    }
     d.record_writer = writer_in(record_partition(opts.run_id), d.record_publisher, d.record_topic,
                                 record_writer_qos(), &d.record_listener);
   }
@@ -237,11 +281,16 @@ DdsStateBus::DdsStateBus(DdsParticipant& participant, const StateBusOptions& opt
   rq.resource_limits().allocated_samples = 32;
   rq.endpoint().history_memory_policy =
       eprosima::fastrtps::rtps::PREALLOCATED_WITH_REALLOC_MEMORY_MODE;
+  if (!opts.roster.empty())
+    d.participant->register_content_filter_factory(RosterFilterFactory::kRosterFilterClass,
+                                                   &d.roster_factory);
+  if (opts.topic_per_name && !opts.recorder) {
+    d.state_reader_qos = rq;  // the names' readers come with set_interest
+    return;
+  }
   dds::Topic* stream = opts.recorder ? d.record_topic : d.topic;
   dds::TopicDescription* read_from = stream;
   if (!opts.roster.empty()) {
-    d.participant->register_content_filter_factory(RosterFilterFactory::kRosterFilterClass,
-                                                   &d.roster_factory);
     d.roster_topic = d.participant->create_contentfilteredtopic(
         stream->get_name() + "/roster", stream, roster_filter(opts.roster, opts.self), {},
         RosterFilterFactory::kRosterFilterClass);
@@ -261,21 +310,34 @@ DdsStateBus::~DdsStateBus() {
     d.reader->set_listener(nullptr);
     d.subscriber->delete_datareader(d.reader);
   }
+  while (!d.named_readers.empty()) d.drop_named(d.named_readers.begin()->first, true, true);
+  while (!d.named_writers.empty()) d.drop_named(d.named_writers.begin()->first, true, true);
   if (d.subscriber) d.participant->delete_subscriber(d.subscriber);
   if (d.writer) d.publisher->delete_datawriter(d.writer);
   if (d.publisher) d.participant->delete_publisher(d.publisher);
   if (d.record_writer) d.record_publisher->delete_datawriter(d.record_writer);
   if (d.record_publisher) d.participant->delete_publisher(d.record_publisher);
-  if (d.roster_topic) {
-    d.participant->delete_contentfilteredtopic(d.roster_topic);
+  if (d.roster_topic) d.participant->delete_contentfilteredtopic(d.roster_topic);
+  if (!d.opts.roster.empty())
     d.participant->unregister_content_filter_factory(RosterFilterFactory::kRosterFilterClass);
-  }
   if (d.topic) d.participant->delete_topic(d.topic);
   if (d.record_topic) d.participant->delete_topic(d.record_topic);
 }
 
 void DdsStateBus::publish(const StateMessage& msg) {
   Impl& d = *impl_;
+  if (d.opts.topic_per_name && !d.opts.recorder && d.opts.publish) {
+    if (!d.interest_told) set_interest({});
+    to_idl(msg, d.out_sample);
+    bool written = true;
+    for (auto& [name, w] : d.named_writers)  // a name nobody listens to costs nothing
+      if (w.listener->matched > 0) written = w.writer->write(&d.out_sample) && written;
+    if (written) {
+      std::lock_guard<std::mutex> lock(d.mu);
+      ++d.gate.counters().published;
+    }
+    return;
+  }
   if (!d.writer) return;
   to_idl(msg, d.out_sample);
   if (d.writer->write(&d.out_sample)) {
@@ -303,9 +365,72 @@ dds::PartitionQosPolicy partitions(const std::string& run, std::vector<std::stri
 }
 }  // namespace
 
+void DdsStateBus::Impl::drop_named(const std::string& name, bool its_reader, bool its_writer) {
+  if (auto r = named_readers.find(name); its_reader && r != named_readers.end()) {
+    r->second.reader->set_listener(nullptr);
+    subscriber->delete_datareader(r->second.reader);
+    if (r->second.filtered) participant->delete_contentfilteredtopic(r->second.filtered);
+    named_readers.erase(r);
+  }
+  if (auto w = named_writers.find(name); its_writer && w != named_writers.end()) {
+    publisher->delete_datawriter(w->second.writer);
+    named_writers.erase(w);
+  }
+  if (named_readers.count(name) || named_writers.count(name)) return;
+  if (auto t = named_topics.find(name); t != named_topics.end()) {
+    participant->delete_topic(t->second);
+    named_topics.erase(t);
+  }
+}
+
+void DdsStateBus::Impl::set_named_interest(std::vector<std::string> pub,
+                                           std::vector<std::string> sub) {
+  interest_told = true;
+  if (pub.empty()) pub.push_back("");  // the empty interest: the whole run's topic
+  if (sub.empty()) sub.push_back("");
+  const auto has = [](const std::vector<std::string>& v, const std::string& n) {
+    return std::binary_search(v.begin(), v.end(), n);
+  };
+  // The new endpoints before the old go: a sample on its way meets a reader on one or the other.
+  for (const std::string& n : sub) {
+    if (named_readers.count(n)) continue;
+    NamedReader r;
+    dds::TopicDescription* from = named_topic(n);
+    if (!opts.roster.empty()) {
+      r.filtered = participant->create_contentfilteredtopic(
+          topic_of(n) + "/roster", named_topic(n), roster_filter(opts.roster, opts.self), {},
+          RosterFilterFactory::kRosterFilterClass);
+      if (!r.filtered) throw std::runtime_error("dds: cannot create the roster filter");
+      from = r.filtered;
+    }
+    r.reader = subscriber->create_datareader(from, state_reader_qos, this);
+    if (!r.reader) throw std::runtime_error("dds: cannot create a state reader of " + topic_of(n));
+    named_readers.emplace(n, r);
+  }
+  if (opts.publish)
+    for (const std::string& n : pub) {
+      if (named_writers.count(n)) continue;
+      NamedWriter w;
+      w.listener = std::make_unique<WriterListener>();
+      w.writer = publisher->create_datawriter(named_topic(n), state_writer_qos, w.listener.get());
+      if (!w.writer) throw std::runtime_error("dds: cannot create a state writer of " + topic_of(n));
+      named_writers.emplace(n, std::move(w));
+    }
+  std::vector<std::string> gone;
+  for (const auto& [n, r] : named_readers)
+    if (!has(sub, n)) gone.push_back(n);
+  for (const auto& [n, w] : named_writers)
+    if (!has(pub, n)) gone.push_back(n);
+  for (const std::string& n : gone) drop_named(n, !has(sub, n), !has(pub, n));
+}
+
 void DdsStateBus::set_interest(const Interest& interest) {
   Impl& d = *impl_;
   if (d.opts.recorder) return;  // the supervisor hears the record stream, everyone's
+  if (d.opts.topic_per_name) {
+    d.set_named_interest(interest.publish, interest.subscribe);
+    return;
+  }
   const std::string run = run_partition(d.opts.run_id);
   if (d.publisher) {
     dds::PublisherQos q = d.publisher->get_qos();
@@ -380,6 +505,10 @@ std::set<std::uint64_t> DdsStateBus::foreign_runs() const {
   return impl_->gate.foreign_runs();
 }
 
-int DdsStateBus::matched_readers() const { return impl_->writer_listener.matched; }
+int DdsStateBus::matched_readers() const {
+  int n = impl_->writer_listener.matched;
+  for (const auto& [name, w] : impl_->named_writers) n += w.listener->matched;
+  return n;
+}
 
 }  // namespace qswarm

@@ -36,6 +36,15 @@ struct StateBusOptions {
   // (WriterRegistry): with per-agent permissions a certificate then says which agent it speaks
   // as (a compose keystore's shared member identity may name any: docs/security.md).
   AgentId self = 0;
+  // The names of an interest (set_interest) become topics of their own ("qswarm/agent_state/c.1.2.3",
+  // ".../a7"; the whole run "qswarm/agent_state"), not partitions of one topic. For a Discovery
+  // Server client: the server relays a participant's announcement only to participants with an
+  // endpoint on a topic it uses, so discovery then follows the neighbourhood instead of reaching
+  // every participant (partitions are matched by the clients, after discovery). No binding of
+  // writers to agents (the agent partitions DDS-Security's permissions name; Fast DDS 2.9 has no
+  // secure Discovery Server), and a peer listening to two names of an agent hears its samples
+  // twice (the gate drops the copy). Until set_interest the state stream has no endpoints.
+  bool topic_per_name = false;
 };
 
 // The DDS partitions of a run: the agents' state stream, and the record stream to the supervisor.
@@ -57,7 +66,8 @@ class DdsStateBus final : public NeighborBus {
 
   void publish(const StateMessage& msg) override;
   void record(const StateMessage& msg) override;
-  // Moves the state writer's and reader's partitions (DDS re-matches them with their peers).
+  // Moves the state writer's and reader's partitions (DDS re-matches them with their peers); with
+  // topic_per_name, creates and deletes the writers and readers of the names that come and go.
   void set_interest(const Interest& interest) override;
   bool recorder_confirmed() const override;
   // Readers matched to our record writer (our side of discovery only: see recorder_confirmed).
@@ -67,7 +77,8 @@ class DdsStateBus final : public NeighborBus {
   // progress to finish.
   void set_listener(Listener listener) override;
   BusCounters counters() const override;
-  // Readers matched to our writer (DDS discovery; the start barrier waits on it).
+  // Readers matched to our writer (DDS discovery; the start barrier waits on it); with
+  // topic_per_name, summed over the writers of its names.
   int matched_readers() const override;
   // Run ids of other runs heard on this domain (only a hear_all_runs bus hears them).
   std::set<std::uint64_t> foreign_runs() const override;

@@ -41,6 +41,29 @@ WriterRegistry::Binding WriterRegistry::binding(const WriterId& writer) const {
   return it == writers_.end() ? Binding{} : it->second;
 }
 
+int WriterRegistry::participants_known() const {
+  std::lock_guard<std::mutex> lock(mu_);
+  return static_cast<int>(participants_.size());
+}
+
+void WriterRegistry::on_participant_discovery(eprosima::fastdds::dds::DomainParticipant*,
+                                              rtps::ParticipantDiscoveryInfo&& info) {
+  std::array<std::uint8_t, 12> prefix;
+  std::memcpy(prefix.data(), info.info.m_guid.guidPrefix.value, prefix.size());
+  std::lock_guard<std::mutex> lock(mu_);
+  switch (info.status) {
+    case rtps::ParticipantDiscoveryInfo::DISCOVERED_PARTICIPANT:
+      participants_.insert(prefix);
+      break;
+    case rtps::ParticipantDiscoveryInfo::REMOVED_PARTICIPANT:
+    case rtps::ParticipantDiscoveryInfo::DROPPED_PARTICIPANT:
+      participants_.erase(prefix);
+      break;
+    default:
+      break;
+  }
+}
+
 void WriterRegistry::on_publisher_discovery(eprosima::fastdds::dds::DomainParticipant*,
                                             rtps::WriterDiscoveryInfo&& info) {
   try {

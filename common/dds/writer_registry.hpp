@@ -1,5 +1,6 @@
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <mutex>
 #include <optional>
@@ -42,12 +43,20 @@ class WriterRegistry final : public eprosima::fastdds::dds::DomainParticipantLis
   void on_publisher_discovery(eprosima::fastdds::dds::DomainParticipant* participant,
                               eprosima::fastrtps::rtps::WriterDiscoveryInfo&& info) override;
 
+  // The other participants discovery told it of and has not removed: every participant of the run
+  // under simple discovery, only those it shares a topic with through a Discovery Server
+  // (StateBusOptions::topic_per_name). The agents' stats report it.
+  int participants_known() const;
+  void on_participant_discovery(eprosima::fastdds::dds::DomainParticipant* participant,
+                                eprosima::fastrtps::rtps::ParticipantDiscoveryInfo&& info) override;
+
  private:
   struct Hash {
     std::size_t operator()(const WriterId& w) const;
   };
   mutable std::mutex mu_;
   std::unordered_map<WriterId, Binding, Hash> writers_;
+  std::set<std::array<std::uint8_t, 12>> participants_;  // their GUID prefixes
 };
 
 // The agent an agent partition of the state or record stream names ("qswarm-run-<16 hex>/a3"

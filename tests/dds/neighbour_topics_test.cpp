@@ -1,0 +1,128 @@
+// Through a Discovery Server, an agent whose interest names are topics (topic_per_name) discovers
+// only the participants it shares a name with, and meets a new one when its interest grows; with
+// names as partitions of one topic (the control) every participant discovers every other.
+#include <gtest/gtest.h>
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "common/dds/dds_bus.hpp"
+#include "common/dds/discovery_server.hpp"
+#include "common/transport/interest.hpp"
+#include "common/transport/port_plan.hpp"
+#include "tests/dds/test_bus.hpp"
+#include "tests/swarm/domain_lease.hpp"
+#include "tests/swarm/harness.hpp"
+
+namespace qswarm {
+namespace {
+
+constexpr std::uint64_t kRun = 0x70;
+
+struct Swarm {
+  std::unique_ptr<DiscoveryServer> server;
+  std::vector<std::unique_ptr<DdsBus>> agents;  // agents 1 to 4
+  std::uint64_t seq = 0;
+
+  explicit Swarm(bool topic_per_name) {
+    const auto domain = static_cast<std::uint32_t>(test::test_domain().domain());
+    const std::optional<int> id = free_participant_block(domain, 1, "127.0.0.1");
+    if (!id) throw std::runtime_error("no free participant id on the test's domain");
+    const auto port = static_cast<std::uint16_t>(PortPlan::discovery_port(domain, *id));
+    server = std::make_unique<DiscoveryServer>(domain, "127.0.0.1", port, *id);
+    for (AgentId a = 1; a <= 4; ++a) {
+      DdsOptions o = test::dds_options(("agent-" + std::to_string(a)).c_str(), kRun);
+      o.participant.discovery_server = "127.0.0.1:" + std::to_string(port);
+      o.state.topic_per_name = topic_per_name;
+      o.state.self = a;
+      o.state.roster = {1, 2, 3, 4};
+      agents.push_back(std::make_unique<DdsBus>(o));
+    }
+    // Two pairs: 1 and 2 hear each other by name, 3 and 4 share a cell.
+    agent(1).set_interest({{"a1"}, {"a2"}});
+    agent(2).set_interest({{"a2"}, {"a1"}});
+    agent(3).set_interest({{"a3", "c.0.0.0"}, {"c.0.0.0"}});
+    agent(4).set_interest({{"a4", "c.0.0.0"}, {"c.0.0.0"}});
+  }
+  DdsBus& agent(AgentId a) { return *agents.at(a - 1); }
+  int known(AgentId a) { return agent(a).participant().writers().participants_known(); }
+  // The sequence number of the last sample of `from` that `by` heard (0: none).
+  std::uint64_t seq_heard(AgentId by, AgentId from) {
+    for (const StateMessage& m : agent(by).latest(by))
+      if (m.view.id == from) return m.seq;
+    return 0;
+  }
+  bool heard(AgentId by, AgentId from) { return seq_heard(by, from) > 0; }
+  void publish() {
+    ++seq;
+    for (AgentId a = 1; a <= 4; ++a) agent(a).publish(test::state_sample(a, kRun, seq));
+  }
+  ~Swarm() {
+    agents.clear();  // the clients before their server
+    server.reset();
+  }
+};
+
+TEST(NeighbourTopics, ThroughADiscoveryServerAnAgentDiscoversOnlyThoseItSharesANameWith) {
+  Swarm s(/*topic_per_name=*/true);
+  ASSERT_TRUE(test::wait_for(
+      [&] {
+        s.publish();
+        return s.heard(1, 2) && s.heard(2, 1) && s.heard(3, 4) && s.heard(4, 3);
+      },
+      30.0));
+  // Each knows its partner and the server, and was sent nothing of the other pair.
+  for (AgentId a = 1; a <= 4; ++a) EXPECT_EQ(s.known(a), 2) << "agent " << a;
+  EXPECT_FALSE(s.heard(1, 3) || s.heard(1, 4) || s.heard(3, 1) || s.heard(3, 2));
+  EXPECT_EQ(s.agent(1).matched_readers(), 1);
+
+  // Agent 3 starts listening to agent 1 by name: the server introduces them, samples flow.
+  s.agent(3).set_interest({{"a3", "c.0.0.0"}, {"a1", "c.0.0.0"}});
+  ASSERT_TRUE(test::wait_for(
+      [&] {
+        s.publish();
+        return s.heard(3, 1) && s.agent(1).matched_readers() == 2;
+      },
+      30.0));
+  EXPECT_EQ(s.known(1), 3);
+  EXPECT_EQ(s.known(3), 3);
+  EXPECT_EQ(s.known(2), 2);  // agent 2 still knows only agent 1 and the server
+  EXPECT_EQ(s.known(4), 2);
+
+  // And stops: its reader goes, agent 1 sends to one reader again.
+  s.agent(3).set_interest({{"a3", "c.0.0.0"}, {"c.0.0.0"}});
+  ASSERT_TRUE(test::wait_for(
+      [&] {
+        s.publish();
+        return s.agent(1).matched_readers() == 1;
+      },
+      30.0));
+  // Nothing of agent 1 reaches agent 3 any more, while agent 4 still does.
+  const std::uint64_t stopped = s.seq;
+  ASSERT_TRUE(test::wait_for(
+      [&] {
+        s.publish();
+        return s.seq_heard(3, 4) >= stopped + 20;
+      },
+      30.0));
+  EXPECT_LE(s.seq_heard(3, 1), stopped);
+}
+
+// The control: the same interests as partitions of one topic. The server relays every participant
+// to every other, whatever the partitions (DDS matches partitions after discovery).
+TEST(NeighbourTopics, AsPartitionsOfOneTopicEveryAgentDiscoversEveryOther) {
+  Swarm s(/*topic_per_name=*/false);
+  ASSERT_TRUE(test::wait_for(
+      [&] {
+        s.publish();
+        bool all = s.heard(1, 2) && s.heard(2, 1) && s.heard(3, 4) && s.heard(4, 3);
+        for (AgentId a = 1; a <= 4; ++a) all = all && s.known(a) == 4;
+        return all;
+      },
+      30.0));
+  EXPECT_FALSE(s.heard(1, 3) || s.heard(1, 4));  // the partitions still keep the pairs apart
+}
+
+}  // namespace
+}  // namespace qswarm
