@@ -181,7 +181,7 @@ int run(const RunOptions& opt) {
     std::cerr << "swarm run: --domain " << rc.transport.domain_id << ": no room for "
               << participants
               << " more DDS participants on this host (other runs hold its ports); choose "
-                 "another --domain (0 to 51)\n";
+                 "another --domain (0 to " << PortPlan::kMaxDomain << ")\n";
     return 2;
   }
   if (opt.view_port >= 0) {
@@ -460,7 +460,7 @@ int main(int argc, char** argv) {
       ->add_option("--time-scale", ro.time_scale, "simulated seconds per wall second (default 1)")
       ->check(finite_range(0.01, 100.0));
   run_cmd->add_option("--domain", ro.domain, "DDS domain id (overrides the scenario)")
-      ->check(CLI::Range(0, 51));
+      ->check(CLI::Range(0, static_cast<int>(PortPlan::kMaxDomain)));
   run_cmd->add_option("--grace", ro.grace_s, "seconds between SIGTERM and SIGKILL at teardown")
       ->check(finite_range(0.0, 600.0));
   run_cmd->add_flag("--quiet", ro.quiet, "no progress line");
@@ -579,7 +579,7 @@ int main(int argc, char** argv) {
       ->check(finite_range(0.01, 100.0))
       ->excludes(paper_from);
   paper_cmd->add_option("--domain", po.domain, "DDS domain id for the runs")
-      ->check(CLI::Range(0, 51))
+      ->check(CLI::Range(0, static_cast<int>(PortPlan::kMaxDomain)))
       ->excludes(paper_from);
   std::string res_scenario = "scenarios/insider_seven.txtpb", res_out = "docs/resilience";
   int res_liar = 0;

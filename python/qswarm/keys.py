@@ -48,8 +48,9 @@ from qswarm.binaries import BinaryError, inspect
 
 PROG = "swarm keys"
 SUBJECT_ORG = "qswarm"
-# Every domain the port plan allows (0..51; DDS-Security names domain ranges).
-DOMAINS = (0, 51)
+# Every domain the port plan allows (0..22, common/transport/port_plan.hpp; DDS-Security names
+# domain ranges).
+DOMAINS = (0, 22)
 
 
 class KeystoreError(Exception):

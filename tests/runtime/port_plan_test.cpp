@@ -35,14 +35,15 @@ class HeldPort {
   bool held_ = false;
 };
 
-TEST(PortPlan, EveryDomainHoldsTheLargestSwarmAndEveryPortFitsSixteenBits) {
+TEST(PortPlan, EveryDomainHoldsTheLargestSwarmBelowTheEphemeralPorts) {
   EXPECT_EQ(PortPlan::discovery_port(0, 0), 7410u);     // Fast DDS's own first port on domain 0
   EXPECT_GE(PortPlan::kMaxParticipantId + 1, 512 + 1);  // 512 agents and the supervisor
   EXPECT_GE(PortPlan::kMaxParticipantId + 1, 2 * (256 + 1));  // or two runs of 256
   // The last participant of a domain stays below the next domain's multicast port.
   EXPECT_LT(PortPlan::data_port(3, PortPlan::kMaxParticipantId), PortPlan::kBase + 4 * 1100u);
-  EXPECT_LE(PortPlan::data_port(PortPlan::kMaxDomain, PortPlan::kMaxParticipantId), 65535u);
-  EXPECT_NE(participant_ports_problem(52, 0, "127.0.0.1"), "");
+  // Below Linux's ephemeral ports (32768 up), which any socket bound to port 0 may take.
+  EXPECT_LT(PortPlan::data_port(PortPlan::kMaxDomain, PortPlan::kMaxParticipantId), 32768u);
+  EXPECT_NE(participant_ports_problem(PortPlan::kMaxDomain + 1, 0, "127.0.0.1"), "");
   EXPECT_NE(participant_ports_problem(0, 545, "127.0.0.1"), "");
 }
 
