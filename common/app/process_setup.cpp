@@ -28,7 +28,7 @@ void add_process_options(CLI::App& app, ProcessOptions& o) {
   app.add_option("--time-scale", o.time_scale, "simulated seconds per wall second")
       ->check(finite_range(0.01, 100.0));
   app.add_option("--domain", o.domain, "DDS domain id (overrides the scenario)")
-      ->check(CLI::Range(0, 51));
+      ->check(CLI::Range(0, static_cast<int>(PortPlan::kMaxDomain)));
   app.add_option("--interface", o.interface,
                  "IPv4 address DDS binds to (overrides the scenario; \"any\": every interface, "
                  "as inside a container)");
@@ -201,8 +201,8 @@ DdsOptions dds_options(const RunConfig& rc, const std::string& participant_name,
   s.max_agents = static_cast<int>(std::max<std::size_t>(rc.agents.size(), 16));
   s.run_id = rc.transport.run_id;
   for (const auto& a : rc.agents) s.roster.push_back(a.id);
-  // A Discovery Server relays announcements by topic: with a topic per neighbourhood name, each
-  // agent discovers only those it may hear (StateBusOptions::topic_per_name).
+  // A Discovery Server relays announcements by topic: with a topic per agent name, an agent that
+  // hears its neighbours by name discovers only them (StateBusOptions::topic_per_name).
   s.topic_per_name = !p.discovery_server.empty();
   return d;
 }

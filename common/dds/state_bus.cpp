@@ -92,10 +92,14 @@ struct DdsStateBus::Impl : public dds::DataReaderListener {
   } writer_listener, record_listener;
   qswarm_msgs::AgentState out_sample;  // reused: publishing allocates nothing in steady state
 
-  // StateBusOptions::topic_per_name: the endpoints of each name of the interest, on the run's
-  // partition. Touched only by the thread that calls set_interest and publish.
+  // StateBusOptions::topic_per_name: the writer and reader of each agent name of the interest,
+  // on topics of their own in the run's partition; the other names (cells) stay partitions of
+  // the shared topic, in `writer` and `reader`, made when first needed. Touched only by the
+  // thread that calls set_interest and publish.
   dds::DataWriterQos state_writer_qos;
   dds::DataReaderQos state_reader_qos;
+  dds::Publisher* named_publisher = nullptr;
+  dds::Subscriber* named_subscriber = nullptr;
   struct NamedWriter {
     dds::DataWriter* writer = nullptr;
     std::unique_ptr<WriterListener> listener;
@@ -109,17 +113,18 @@ struct DdsStateBus::Impl : public dds::DataReaderListener {
   std::map<std::string, NamedReader> named_readers;
   bool interest_told = false;
 
-  static std::string topic_of(const std::string& name) {
-    return name.empty() ? "qswarm/agent_state" : "qswarm/agent_state/" + name;
-  }
+  static std::string topic_of(const std::string& name) { return "qswarm/agent_state/" + name; }
   dds::Topic* named_topic(const std::string& name) {
-    if (name.empty()) return topic;  // created with the bus, deleted with it
     dds::Topic*& t = named_topics[name];
-    if (!t) t = participant->create_topic(topic_of(name), type.get_type_name(), dds::TOPIC_QOS_DEFAULT);
+    if (!t)
+      t = participant->create_topic(topic_of(name), type.get_type_name(), dds::TOPIC_QOS_DEFAULT);
     if (!t) throw std::runtime_error("dds: cannot create the topic " + topic_of(name));
     return t;
   }
-  void set_named_interest(std::vector<std::string> pub, std::vector<std::string> sub);
+  // A reader of `topic` for the state stream, behind the roster filter if there is one.
+  dds::DataReader* state_reader(dds::Subscriber* sub, dds::Topic* on,
+                                dds::ContentFilteredTopic*& filtered);
+  void set_named_interest(const Interest& interest);
   // Deletes the name's reader and/or writer, and its topic once neither is left.
   void drop_named(const std::string& name, bool its_reader, bool its_writer);
 
@@ -131,6 +136,10 @@ struct DdsStateBus::Impl : public dds::DataReaderListener {
         if (!info.valid_data) continue;
         WriterId w;  // the publication handle is the writer's GUID
         std::memcpy(w.bytes.data(), info.publication_handle.value, w.bytes.size());
+        // With a writer per name, an agent speaks through several writers, and through new ones
+        // as it moves between cells: the gate judges its participant (a copy heard through two
+        // names is then stale, and a move is no change of owner).
+        if (opts.topic_per_name) std::fill(w.bytes.begin() + 12, w.bytes.end(), std::uint8_t{0});
         accept(from_idl(s), w);
       }
     } catch (const std::exception& e) {
@@ -249,7 +258,8 @@ DdsStateBus::DdsStateBus(DdsParticipant& participant, const StateBusOptions& opt
       return w;
     };
     if (opts.topic_per_name && !opts.recorder) {
-      // The names' writers come with set_interest, in this publisher.
+      // The writers come with set_interest: the agent names' in this publisher, in the run's
+      // partition; the shared topic's in a publisher of its own, whose partitions move.
       d.state_writer_qos = best_effort_writer_qos();
       d.state_writer_qos.writer_resource_limits().reader_filters_allocation =
           eprosima::fastrtps::ResourceLimitedContainerConfig(0, 0, 0);
@@ -257,8 +267,8 @@ DdsStateBus::DdsStateBus(DdsParticipant& participant, const StateBusOptions& opt
           eprosima::fastrtps::rtps::PREALLOCATED_WITH_REALLOC_MEMORY_MODE;
       dds::PublisherQos pub_qos = dds::PUBLISHER_QOS_DEFAULT;
       pub_qos.partition().push_back(run_partition(opts.run_id).c_str());
-      d.publisher = d.participant->create_publisher(pub_qos);
-      if (!d.publisher) throw std::runtime_error("dds: cannot create the state publisher");
+      d.named_publisher = d.participant->create_publisher(pub_qos);
+      if (!d.named_publisher) throw std::runtime_error("dds: cannot create the state publisher");
     } else {
       d.writer = writer_in(run_partition(opts.run_id), d.publisher, d.topic,
                            best_effort_writer_qos(), &d.writer_listener);
@@ -284,21 +294,29 @@ DdsStateBus::DdsStateBus(DdsParticipant& participant, const StateBusOptions& opt
   if (!opts.roster.empty())
     d.participant->register_content_filter_factory(RosterFilterFactory::kRosterFilterClass,
                                                    &d.roster_factory);
+  d.state_reader_qos = rq;
   if (opts.topic_per_name && !opts.recorder) {
-    d.state_reader_qos = rq;  // the names' readers come with set_interest
+    // The readers come with set_interest: the agent names' in this subscriber.
+    d.named_subscriber = d.participant->create_subscriber(sub_qos);
+    if (!d.named_subscriber) throw std::runtime_error("dds: cannot create the state subscriber");
     return;
   }
-  dds::Topic* stream = opts.recorder ? d.record_topic : d.topic;
-  dds::TopicDescription* read_from = stream;
+  d.reader = d.state_reader(d.subscriber, opts.recorder ? d.record_topic : d.topic, d.roster_topic);
+}
+
+dds::DataReader* DdsStateBus::Impl::state_reader(dds::Subscriber* sub, dds::Topic* on,
+                                                 dds::ContentFilteredTopic*& filtered) {
+  dds::TopicDescription* from = on;
   if (!opts.roster.empty()) {
-    d.roster_topic = d.participant->create_contentfilteredtopic(
-        stream->get_name() + "/roster", stream, roster_filter(opts.roster, opts.self), {},
-        RosterFilterFactory::kRosterFilterClass);
-    if (!d.roster_topic) throw std::runtime_error("dds: cannot create the roster filter");
-    read_from = d.roster_topic;
+    filtered = participant->create_contentfilteredtopic(on->get_name() + "/roster", on,
+                                                        roster_filter(opts.roster, opts.self), {},
+                                                        RosterFilterFactory::kRosterFilterClass);
+    if (!filtered) throw std::runtime_error("dds: cannot create the roster filter");
+    from = filtered;
   }
-  d.reader = d.subscriber->create_datareader(read_from, rq, &d);
-  if (!d.reader) throw std::runtime_error("dds: cannot create the state reader");
+  dds::DataReader* r = sub->create_datareader(from, state_reader_qos, this);
+  if (!r) throw std::runtime_error("dds: cannot create a state reader of " + on->get_name());
+  return r;
 }
 
 DdsStateBus::~DdsStateBus() {
@@ -312,6 +330,8 @@ DdsStateBus::~DdsStateBus() {
   }
   while (!d.named_readers.empty()) d.drop_named(d.named_readers.begin()->first, true, true);
   while (!d.named_writers.empty()) d.drop_named(d.named_writers.begin()->first, true, true);
+  if (d.named_subscriber) d.participant->delete_subscriber(d.named_subscriber);
+  if (d.named_publisher) d.participant->delete_publisher(d.named_publisher);
   if (d.subscriber) d.participant->delete_subscriber(d.subscriber);
   if (d.writer) d.publisher->delete_datawriter(d.writer);
   if (d.publisher) d.participant->delete_publisher(d.publisher);
@@ -326,21 +346,13 @@ DdsStateBus::~DdsStateBus() {
 
 void DdsStateBus::publish(const StateMessage& msg) {
   Impl& d = *impl_;
-  if (d.opts.topic_per_name && !d.opts.recorder && d.opts.publish) {
-    if (!d.interest_told) set_interest({});
-    to_idl(msg, d.out_sample);
-    bool written = true;
-    for (auto& [name, w] : d.named_writers)  // a name nobody listens to costs nothing
-      if (w.listener->matched > 0) written = w.writer->write(&d.out_sample) && written;
-    if (written) {
-      std::lock_guard<std::mutex> lock(d.mu);
-      ++d.gate.counters().published;
-    }
-    return;
-  }
-  if (!d.writer) return;
+  if (d.opts.topic_per_name && !d.interest_told && !d.opts.recorder) set_interest({});
+  if (!d.writer && d.named_writers.empty()) return;
   to_idl(msg, d.out_sample);
-  if (d.writer->write(&d.out_sample)) {
+  bool written = !d.writer || d.writer->write(&d.out_sample);
+  for (auto& [name, w] : d.named_writers)  // an agent name nobody listens to costs nothing
+    if (w.listener->matched > 0) written = w.writer->write(&d.out_sample) && written;
+  if (written) {
     std::lock_guard<std::mutex> lock(d.mu);
     ++d.gate.counters().published;
   }
@@ -368,12 +380,12 @@ dds::PartitionQosPolicy partitions(const std::string& run, std::vector<std::stri
 void DdsStateBus::Impl::drop_named(const std::string& name, bool its_reader, bool its_writer) {
   if (auto r = named_readers.find(name); its_reader && r != named_readers.end()) {
     r->second.reader->set_listener(nullptr);
-    subscriber->delete_datareader(r->second.reader);
+    named_subscriber->delete_datareader(r->second.reader);
     if (r->second.filtered) participant->delete_contentfilteredtopic(r->second.filtered);
     named_readers.erase(r);
   }
   if (auto w = named_writers.find(name); its_writer && w != named_writers.end()) {
-    publisher->delete_datawriter(w->second.writer);
+    named_publisher->delete_datawriter(w->second.writer);
     named_writers.erase(w);
   }
   if (named_readers.count(name) || named_writers.count(name)) return;
@@ -383,52 +395,74 @@ void DdsStateBus::Impl::drop_named(const std::string& name, bool its_reader, boo
   }
 }
 
-void DdsStateBus::Impl::set_named_interest(std::vector<std::string> pub,
-                                           std::vector<std::string> sub) {
+void DdsStateBus::Impl::set_named_interest(const Interest& interest) {
   interest_told = true;
-  if (pub.empty()) pub.push_back("");  // the empty interest: the whole run's topic
-  if (sub.empty()) sub.push_back("");
+  // Agent names are topics; the other names (cells) partitions of the shared topic, which also
+  // carries the whole run (the empty interest).
+  std::vector<std::string> agents_pub, cells_pub, agents_sub, cells_sub;
+  for (const std::string& n : interest.publish)
+    (agent_of_partition(n) ? agents_pub : cells_pub).push_back(n);
+  for (const std::string& n : interest.subscribe)
+    (agent_of_partition(n) ? agents_sub : cells_sub).push_back(n);
+  const std::string run = run_partition(opts.run_id);
+  if (opts.publish && (interest.publish.empty() || !cells_pub.empty())) {
+    const dds::PartitionQosPolicy parts = partitions(run, cells_pub);
+    if (!writer) {
+      dds::PublisherQos q = dds::PUBLISHER_QOS_DEFAULT;
+      q.partition() = parts;
+      publisher = participant->create_publisher(q);
+      writer = publisher ? publisher->create_datawriter(topic, state_writer_qos, &writer_listener)
+                         : nullptr;
+      if (!writer) throw std::runtime_error("dds: cannot create the state writer");
+    } else if (!(publisher->get_qos().partition() == parts)) {
+      dds::PublisherQos q = publisher->get_qos();
+      q.partition() = parts;
+      if (publisher->set_qos(q) != ReturnCode_t::RETCODE_OK)
+        throw std::runtime_error("dds: cannot move the state writer's partitions");
+    }
+  }
+  if (interest.subscribe.empty() || !cells_sub.empty()) {
+    if (!opts.hear_all_runs) {  // before the reader is made: it never hears the whole run
+      dds::SubscriberQos q = subscriber->get_qos();
+      q.partition() = partitions(run, cells_sub);
+      if (subscriber->set_qos(q) != ReturnCode_t::RETCODE_OK)
+        throw std::runtime_error("dds: cannot move the state reader's partitions");
+    }
+    if (!reader) reader = state_reader(subscriber, topic, roster_topic);
+  }
+  // The agent names: new endpoints first, then the old ones go.
   const auto has = [](const std::vector<std::string>& v, const std::string& n) {
-    return std::binary_search(v.begin(), v.end(), n);
+    return std::find(v.begin(), v.end(), n) != v.end();
   };
-  // The new endpoints before the old go: a sample on its way meets a reader on one or the other.
-  for (const std::string& n : sub) {
+  for (const std::string& n : agents_sub) {
     if (named_readers.count(n)) continue;
     NamedReader r;
-    dds::TopicDescription* from = named_topic(n);
-    if (!opts.roster.empty()) {
-      r.filtered = participant->create_contentfilteredtopic(
-          topic_of(n) + "/roster", named_topic(n), roster_filter(opts.roster, opts.self), {},
-          RosterFilterFactory::kRosterFilterClass);
-      if (!r.filtered) throw std::runtime_error("dds: cannot create the roster filter");
-      from = r.filtered;
-    }
-    r.reader = subscriber->create_datareader(from, state_reader_qos, this);
-    if (!r.reader) throw std::runtime_error("dds: cannot create a state reader of " + topic_of(n));
+    r.reader = state_reader(named_subscriber, named_topic(n), r.filtered);
     named_readers.emplace(n, r);
   }
   if (opts.publish)
-    for (const std::string& n : pub) {
+    for (const std::string& n : agents_pub) {
       if (named_writers.count(n)) continue;
       NamedWriter w;
       w.listener = std::make_unique<WriterListener>();
-      w.writer = publisher->create_datawriter(named_topic(n), state_writer_qos, w.listener.get());
+      w.writer =
+          named_publisher->create_datawriter(named_topic(n), state_writer_qos, w.listener.get());
       if (!w.writer) throw std::runtime_error("dds: cannot create a state writer of " + topic_of(n));
       named_writers.emplace(n, std::move(w));
     }
   std::vector<std::string> gone;
   for (const auto& [n, r] : named_readers)
-    if (!has(sub, n)) gone.push_back(n);
+    if (!has(agents_sub, n)) gone.push_back(n);
   for (const auto& [n, w] : named_writers)
-    if (!has(pub, n)) gone.push_back(n);
-  for (const std::string& n : gone) drop_named(n, !has(sub, n), !has(pub, n));
+    if (!has(agents_pub, n)) gone.push_back(n);
+  for (const std::string& n : gone) drop_named(n, !has(agents_sub, n), !has(agents_pub, n));
 }
 
 void DdsStateBus::set_interest(const Interest& interest) {
   Impl& d = *impl_;
   if (d.opts.recorder) return;  // the supervisor hears the record stream, everyone's
   if (d.opts.topic_per_name) {
-    d.set_named_interest(interest.publish, interest.subscribe);
+    d.set_named_interest(interest);
     return;
   }
   const std::string run = run_partition(d.opts.run_id);

@@ -36,14 +36,17 @@ struct StateBusOptions {
   // (WriterRegistry): with per-agent permissions a certificate then says which agent it speaks
   // as (a compose keystore's shared member identity may name any: docs/security.md).
   AgentId self = 0;
-  // The names of an interest (set_interest) become topics of their own ("qswarm/agent_state/c.1.2.3",
-  // ".../a7"; the whole run "qswarm/agent_state"), not partitions of one topic. For a Discovery
-  // Server client: the server relays a participant's announcement only to participants with an
-  // endpoint on a topic it uses, so discovery then follows the neighbourhood instead of reaching
-  // every participant (partitions are matched by the clients, after discovery). No binding of
-  // writers to agents (the agent partitions DDS-Security's permissions name; Fast DDS 2.9 has no
-  // secure Discovery Server), and a peer listening to two names of an agent hears its samples
-  // twice (the gate drops the copy). Until set_interest the state stream has no endpoints.
+  // The agent names of an interest (set_interest: "a7") become topics of their own
+  // ("qswarm/agent_state/a7"), not partitions of the shared topic; cells stay partitions. For a
+  // Discovery Server client: the server relays a participant's announcement only to participants
+  // with an endpoint on a topic it uses (partitions are matched by the clients, after discovery),
+  // so an agent that hears its neighbours by name (a FIXED graph) discovers only them, not the
+  // swarm. Cells stay partitions because a move between topics would replace the writer, and its
+  // readers would hear it only once the server has relayed the new one (a 64-agent formation lost
+  // neighbours and, once in five runs, edge-flow's exact average that way). No binding of writers
+  // to agents (the agent partitions DDS-Security's permissions name; Fast DDS 2.9 has no secure
+  // Discovery Server); the gate judges a sample's participant, not its writer, since an agent
+  // speaks through two. Until set_interest the state stream has no endpoints.
   bool topic_per_name = false;
 };
 

@@ -9,6 +9,7 @@
 #include <stdexcept>
 
 #include "common/scenario/scenario.hpp"
+#include "common/transport/port_plan.hpp"
 
 namespace qswarm {
 namespace {
@@ -374,12 +375,18 @@ void check_agent(RunConfig& rc) {
 
 // Swarms of up to this many agents hear everyone unless the scenario says otherwise.
 constexpr std::size_t kAllToAllUpTo = 8;
+// Plain swarms of more agents discover through a Discovery Server unless the scenario says
+// otherwise: there each agent discovers only the agents it may hear (StateBusOptions::
+// topic_per_name), where simple discovery has every pair match.
+constexpr std::size_t kSimpleDiscoveryUpTo = 32;
 
 void resolve_transport(const scenario::Transport& t, RunConfig& rc) {
   TransportConfig& tc = rc.transport;
   if (t.has_domain_id()) tc.domain_id = t.domain_id();
   // The port plan's domains (common/transport/port_plan.hpp): each holds 545 participants.
-  if (tc.domain_id > 51) fail("transport.domain_id", "0..51", std::to_string(tc.domain_id));
+  if (tc.domain_id > PortPlan::kMaxDomain)
+    fail("transport.domain_id", "0.." + std::to_string(PortPlan::kMaxDomain),
+         std::to_string(tc.domain_id));
   if (t.has_interface()) tc.interface = t.interface();
   if (tc.interface.empty())
     fail("transport.interface", "an IPv4 address such as 127.0.0.1", "\"\"");
@@ -410,7 +417,8 @@ void resolve_transport(const scenario::Transport& t, RunConfig& rc) {
       tc.discovery = Discovery::kSimple;
       break;
     default:
-      tc.discovery = Discovery::kSimple;
+      tc.discovery = !secure && rc.agents.size() > kSimpleDiscoveryUpTo ? Discovery::kServer
+                                                                        : Discovery::kSimple;
   }
 }
 

@@ -135,11 +135,12 @@ TEST(Scenario, SwarmsBeyondWhatTheWireCarriesAreRefusedAndTheBoundItselfIsAccept
   EXPECT_NE(error_of(beyond).find("at most 512 agents"), std::string::npos) << error_of(beyond);
 }
 
-TEST(Scenario, DiscoveryIsSimpleUnlessAServerIsAskedForAndSecureRunsCannotAskForOne) {
+TEST(Scenario, DiscoveryIsThroughAServerAbove32PlainAgentsAndSecureRunsCannotAskForOne) {
   const auto discovery = [](const std::string& text) {
     return resolve_scenario(parse_scenario_text(text, "s")).transport.discovery;
   };
-  EXPECT_EQ(discovery("random_agents { count: 64 }\n"), Discovery::kSimple);
+  EXPECT_EQ(discovery("random_agents { count: 32 }\n"), Discovery::kSimple);
+  EXPECT_EQ(discovery("random_agents { count: 33 }\n"), Discovery::kServer);
   EXPECT_EQ(discovery("random_agents { count: 33 }\ntransport { discovery: SIMPLE }\n"),
             Discovery::kSimple);
   EXPECT_EQ(discovery(kTwo + "transport { discovery: SERVER }\n"), Discovery::kServer);
@@ -148,6 +149,10 @@ TEST(Scenario, DiscoveryIsSimpleUnlessAServerIsAskedForAndSecureRunsCannotAskFor
       "transport { keystore: \"" + std::filesystem::temp_directory_path().string() + "\" ";
   EXPECT_NE(error_of(kTwo + keystore + "discovery: SERVER }\n").find("transport.discovery"),
             std::string::npos);
+  EXPECT_EQ(resolve_scenario(parse_scenario_text("random_agents { count: 64 }\n" + keystore + "}\n",
+                                                 "s"))
+                .transport.discovery,
+            Discovery::kSimple);
   // The scenario as run says which was used.
   const RunConfig rc = resolve_scenario(
       parse_scenario_text("random_agents { count: 4 }\ntransport { discovery: SERVER }\n", "s"));
