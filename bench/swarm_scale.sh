@@ -9,16 +9,21 @@
 #          swarm is dense enough that every agent is within reach of the cells every other one
 #          listens to (docs/benchmarks.md);
 #   ring   N point agents on a fixed ring graph of degree 4 (bench/ring.txtpb): the traffic each
-#          agent handles follows its degree, not N.
+#          agent handles follows its degree, not N;
+#   torus  the same agents on a fixed graph of degree 4 that mixes fast enough to agree: each
+#          linked to the next id and to the id sqrt(N) on (a 16 x 16 torus at 256), until the
+#          states are within 1 cm (it ends when they agree, or at its duration).
 # Reports per run: CPU per agent, late ticks, sample age p50/p99 at the supervisor, samples the
 # agents accepted per second, agent CPU per accepted sample, discovery time (until the last agent's
-# barrier released), RSS per agent, the supervisor's CPU (sampled from /proc every 0.2 s while it
+# barrier released), the most DDS participants any agent knew at its end (every other one under
+# simple discovery; through a Discovery Server only those it shares a topic with), RSS per agent,
+# the supervisor's CPU (sampled from /proc every 0.2 s while it
 # runs: its user + system time at the last sample over the run's wall time), and how the run ended.
 # Usage: bench/swarm_scale.sh [N ...]        (default: 8 32 64 128)
 # Environment: SCENARIOS="all range ring" DURATION=30 TIME_SCALE=1 RATE_HZ=50 BUILD_DIR=build
 #              SECURE=1: DDS-Security on every process (a `swarm keys` keystore per size)
-#              DISCOVERY=simple|server: transport.discovery (unset: the scenario's default, a
-#              Discovery Server above 32 plain agents)
+#              DISCOVERY=simple|server: transport.discovery (unset: the scenario's default, the
+#              run's own Discovery Server above 32 plain agents)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 BUILD=${BUILD_DIR:-build}
@@ -32,8 +37,8 @@ RATE_HZ=${RATE_HZ:-50}
 OUT=$BUILD/bench-runs
 mkdir -p "$OUT"
 report() { PYTHONPATH=python /usr/bin/python3 -m qswarm.report "$@"; }
-printf "| agents | scenario | consensus [Hz] | time scale | CPU per agent [%% of a core] | late ticks [%%] | sample age p50 / p99 [ms] | accepted samples [1/s] | CPU per accepted sample [us] | discovery max [s] | RSS per agent [MB] | supervisor CPU [%% of a core] | end |\n"
-printf "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n"
+printf "| agents | scenario | consensus [Hz] | time scale | CPU per agent [%% of a core] | late ticks [%%] | sample age p50 / p99 [ms] | accepted samples [1/s] | CPU per accepted sample [us] | discovery max [s] | participants known [max] | RSS per agent [MB] | supervisor CPU [%% of a core] | end |\n"
+printf "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n"
 domain=${DOMAIN:-12}  # one run at a time: each reuses the domain the last one left
 for kind in "${KINDS[@]}"; do
   for n in "${SIZES[@]}"; do
@@ -57,7 +62,19 @@ for kind in "${KINDS[@]}"; do
             print " }" }'
         } >"$scen"
         ;;
-      *) echo "swarm_scale: unknown scenario $kind (all, range, ring)" >&2; exit 2 ;;
+      torus)
+        {
+          sed -e "s/consensus_hz: 50/consensus_hz: $RATE_HZ/" -e 's/name: "ring"/name: "torus"/' \
+            -e 's/tolerance_m: 1e-12 hold_s: 1000/tolerance_m: 0.01 hold_s: 1/' bench/ring.txtpb
+          awk -v n="$n" 'BEGIN {
+            s = int(sqrt(n) + 0.5); if (s < 2) s = 2
+            printf "topology { policy: FIXED"
+            for (i = 1; i <= n; i++) printf " edges { a: %d b: %d } edges { a: %d b: %d }",
+              i, i % n + 1, i, (i + s - 1) % n + 1
+            print " }" }'
+        } >"$scen"
+        ;;
+      *) echo "swarm_scale: unknown scenario $kind (all, range, ring, torus)" >&2; exit 2 ;;
     esac
     if [[ -n ${DISCOVERY:-} ]]; then
       echo "transport { discovery: ${DISCOVERY^^} }" >>"$scen"
@@ -88,18 +105,18 @@ for kind in "${KINDS[@]}"; do
       'BEGIN { printf "%.1f", 100 * t / hz / (e - s) }')
     if ! row=$(report "$dir" cpu_per_agent_pct late_ticks_pct messages.age_p50_ms \
       messages.age_p99_ms delivered_per_s cpu_us_per_delivered stats.discovery_s.max \
-      stats.max_rss_kb.median end_reason 2>/dev/null); then
+      stats.participants.max stats.max_rss_kb.median end_reason 2>/dev/null); then
       printf "| %d | %s | %s | %s | (no record: %s) |\n" "$n" "$kind" "$RATE_HZ" "$TIME_SCALE" \
         "$(tail -1 "$dir.log")"
       continue
     fi
-    IFS=$'\t' read -r cpu late p50 p99 per_s cpu_per disc rss end <<<"$row"
+    IFS=$'\t' read -r cpu late p50 p99 per_s cpu_per disc known rss end <<<"$row"
     [[ ${SECURE:-0} == 1 ]] && kind_shown="$kind, secure" || kind_shown=$kind
     [[ -n ${DISCOVERY:-} ]] && kind_shown="$kind_shown, ${DISCOVERY,,}"
     awk -v n="$n" -v k="$kind_shown" -v hz="$RATE_HZ" -v ts="$TIME_SCALE" -v cpu="$cpu" -v late="$late" \
-      -v p50="$p50" -v p99="$p99" -v s="$per_s" -v cs="$cpu_per" -v d="$disc" -v rss="$rss" \
+      -v p50="$p50" -v p99="$p99" -v s="$per_s" -v cs="$cpu_per" -v d="$disc" -v kn="$known" -v rss="$rss" \
       -v sup="$sup_cpu" -v end="$end" 'BEGIN {
-        printf "| %d | %s | %s | %s | %.2f | %.2f | %.1f / %.1f | %.0f | %.1f | %.2f | %.1f | %s | %s |\n",
-          n, k, hz, ts, cpu, late, p50, p99, s, cs, d, rss / 1024, sup, end }'
+        printf "| %d | %s | %s | %s | %.2f | %.2f | %.1f / %.1f | %.0f | %.1f | %.2f | %s | %.1f | %s | %s |\n",
+          n, k, hz, ts, cpu, late, p50, p99, s, cs, d, kn, rss / 1024, sup, end }'
   done
 done
