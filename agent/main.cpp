@@ -128,7 +128,7 @@ int main(int argc, char** argv) {
     loop.stop();
     log->info(final_report(loop, bus.counters()));
     if (!dir.empty() && !write_stats(dir.agent_stats(id), loop, bus.counters(),
-                                         participant.writers().participants_known(), clock.now_s())) {
+                                     participant.writers().participants_known(), clock.now_s())) {
       log->error("cannot write {}", dir.agent_stats(id).string());
       exit_code = 3;  // the record is incomplete: say so, as the supervisor does
     }

@@ -37,8 +37,8 @@ bool write_stats(const std::filesystem::path& path, const AgentLoop& loop, const
       << loop.ticks() << "\nphysics_steps " << loop.physics_steps() << "\noverruns "
       << loop.overruns() << "\ndiscovery_s " << loop.lifecycle().discovery_s() << "\nmax_rss_kb "
       << ru.ru_maxrss << "\nreceived " << c.received << "\ndropped " << c.dropped
-      << "\ninterest_changes " << loop.interest_changes() << "\nparticipants "
-      << participants_known << "\n";
+      << "\ninterest_changes " << loop.interest_changes() << "\nparticipants " << participants_known
+      << "\n";
   return static_cast<bool>(out.flush());
 }
 

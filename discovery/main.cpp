@@ -28,7 +28,8 @@ int main(int argc, char** argv) {
   app.add_option("--listen", listen,
                  "IPv4 address or host name to listen on (default: this host's name)");
   app.add_option("--port", port, "UDP port")->check(CLI::Range(1, 65535));
-  app.add_option("--domain", domain, "DDS domain id")->check(CLI::Range(0, static_cast<int>(qswarm::PortPlan::kMaxDomain)));
+  app.add_option("--domain", domain, "DDS domain id")
+      ->check(CLI::Range(0, static_cast<int>(qswarm::PortPlan::kMaxDomain)));
   app.add_option("--participant-id", participant_id,
                  "its participant id in the port plan (swarm run's own server; its ports are "
                  "taken exactly, a taken one is an error)")

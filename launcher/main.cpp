@@ -181,7 +181,8 @@ int run(const RunOptions& opt) {
     std::cerr << "swarm run: --domain " << rc.transport.domain_id << ": no room for "
               << participants
               << " more DDS participants on this host (other runs hold its ports); choose "
-                 "another --domain (0 to " << PortPlan::kMaxDomain << ")\n";
+                 "another --domain (0 to "
+              << PortPlan::kMaxDomain << ")\n";
     return 2;
   }
   if (opt.view_port >= 0) {

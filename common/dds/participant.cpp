@@ -69,7 +69,8 @@ DdsParticipant::DdsParticipant(const ParticipantOptions& opts) : opts_(opts) {
   ports.participantIDGain = PortPlan::kParticipantGain;
   if (opts.domain_id > PortPlan::kMaxDomain)
     throw std::invalid_argument("dds: domain " + std::to_string(opts.domain_id) +
-                                " is beyond the port plan's 0.." + std::to_string(PortPlan::kMaxDomain));
+                                " is beyond the port plan's 0.." +
+                                std::to_string(PortPlan::kMaxDomain));
   // Fast DDS's own choice of ports (its id 0, then the next ports while taken) would take the ports
   // of a run's reserved ids; every participant gets an id whose ports it checks first, so that a
   // taken one is said (Fast DDS would otherwise come up without them and hear nobody).

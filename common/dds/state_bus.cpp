@@ -39,6 +39,17 @@ std::string partition(const char* stream, std::uint64_t run_id) {
                 static_cast<unsigned long long>(run_id));
   return buf;
 }
+
+// A state or record writer's settings: no filtering on the writer's side (it would evaluate each
+// sample for every filtering reader and send per reader: 64 agents on 2 cores fell behind with
+// it; readers filter), and a history that allocates nothing in steady state.
+dds::DataWriterQos unfiltered(dds::DataWriterQos wq) {
+  wq.writer_resource_limits().reader_filters_allocation =
+      eprosima::fastrtps::ResourceLimitedContainerConfig(0, 0, 0);
+  wq.endpoint().history_memory_policy =
+      eprosima::fastrtps::rtps::PREALLOCATED_WITH_REALLOC_MEMORY_MODE;
+  return wq;
+}
 }  // namespace
 
 std::string run_partition(std::uint64_t run_id) { return partition("run", run_id); }
@@ -240,31 +251,21 @@ DdsStateBus::DdsStateBus(DdsParticipant& participant, const StateBusOptions& opt
 
   if (opts.publish) {
     const auto writer_in = [&](const std::string& part, dds::Publisher*& pub, dds::Topic* topic,
-                               dds::DataWriterQos wq, dds::DataWriterListener* listener) {
+                               const dds::DataWriterQos& wq, dds::DataWriterListener* listener) {
       // The stream's partition, and this agent's own under it (which binds the writer to it).
-      // No filtering on the writer's side: it would evaluate each sample for every filtering
-      // reader and send per reader (64 agents on 2 cores fell behind with it); readers filter.
-      wq.writer_resource_limits().reader_filters_allocation =
-          eprosima::fastrtps::ResourceLimitedContainerConfig(0, 0, 0);
-      wq.endpoint().history_memory_policy =
-          eprosima::fastrtps::rtps::PREALLOCATED_WITH_REALLOC_MEMORY_MODE;
       dds::PublisherQos pub_qos = dds::PUBLISHER_QOS_DEFAULT;
       pub_qos.partition().push_back(part.c_str());
       if (opts.self != 0)
         pub_qos.partition().push_back((part + '/' + agent_partition(opts.self)).c_str());
       pub = d.participant->create_publisher(pub_qos);
-      dds::DataWriter* w = pub ? pub->create_datawriter(topic, wq, listener) : nullptr;
+      dds::DataWriter* w = pub ? pub->create_datawriter(topic, unfiltered(wq), listener) : nullptr;
       if (!w) throw std::runtime_error("dds: cannot create a writer in " + part);
       return w;
     };
     if (opts.topic_per_name && !opts.recorder) {
       // The writers come with set_interest: the agent names' in this publisher, in the run's
       // partition; the shared topic's in a publisher of its own, whose partitions move.
-      d.state_writer_qos = best_effort_writer_qos();
-      d.state_writer_qos.writer_resource_limits().reader_filters_allocation =
-          eprosima::fastrtps::ResourceLimitedContainerConfig(0, 0, 0);
-      d.state_writer_qos.endpoint().history_memory_policy =
-          eprosima::fastrtps::rtps::PREALLOCATED_WITH_REALLOC_MEMORY_MODE;
+      d.state_writer_qos = unfiltered(best_effort_writer_qos());
       dds::PublisherQos pub_qos = dds::PUBLISHER_QOS_DEFAULT;
       pub_qos.partition().push_back(run_partition(opts.run_id).c_str());
       d.named_publisher = d.participant->create_publisher(pub_qos);
@@ -447,7 +448,8 @@ void DdsStateBus::Impl::set_named_interest(const Interest& interest) {
       w.listener = std::make_unique<WriterListener>();
       w.writer =
           named_publisher->create_datawriter(named_topic(n), state_writer_qos, w.listener.get());
-      if (!w.writer) throw std::runtime_error("dds: cannot create a state writer of " + topic_of(n));
+      if (!w.writer)
+        throw std::runtime_error("dds: cannot create a state writer of " + topic_of(n));
       named_writers.emplace(n, std::move(w));
     }
   std::vector<std::string> gone;

@@ -55,7 +55,9 @@ bool port_free(std::uint32_t port, const std::string& address, std::string* why)
 }  // namespace
 
 std::string participant_ports_problem(std::uint32_t domain, int id, const std::string& address) {
-  if (domain > PortPlan::kMaxDomain) return "domain " + std::to_string(domain) + " is beyond " + std::to_string(PortPlan::kMaxDomain);
+  if (domain > PortPlan::kMaxDomain)
+    return "domain " + std::to_string(domain) + " is beyond " +
+           std::to_string(PortPlan::kMaxDomain);
   if (id < 0 || id > PortPlan::kMaxParticipantId)
     return "participant id " + std::to_string(id) + " is outside 0..544";
   for (const std::uint32_t port :

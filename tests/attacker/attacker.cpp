@@ -169,7 +169,9 @@ void sleep_s(double s) {
 int main(int argc, char** argv) {
   CLI::App app{"qswarm-attacker: forges samples on a run's DDS domain (tests only)"};
   Flags f;
-  app.add_option("--domain", f.domain, "the DDS domain")->required()->check(CLI::Range(0, static_cast<int>(qswarm::PortPlan::kMaxDomain)));
+  app.add_option("--domain", f.domain, "the DDS domain")
+      ->required()
+      ->check(CLI::Range(0, static_cast<int>(qswarm::PortPlan::kMaxDomain)));
   app.add_option("--mode", f.mode, "relay or impersonate")
       ->check(CLI::IsMember({"relay", "impersonate"}));
   app.add_option("--victim", f.victim, "the agent relayed or impersonated")

@@ -149,10 +149,10 @@ TEST(Scenario, DiscoveryIsThroughAServerAbove32PlainAgentsAndSecureRunsCannotAsk
       "transport { keystore: \"" + std::filesystem::temp_directory_path().string() + "\" ";
   EXPECT_NE(error_of(kTwo + keystore + "discovery: SERVER }\n").find("transport.discovery"),
             std::string::npos);
-  EXPECT_EQ(resolve_scenario(parse_scenario_text("random_agents { count: 64 }\n" + keystore + "}\n",
-                                                 "s"))
-                .transport.discovery,
-            Discovery::kSimple);
+  EXPECT_EQ(
+      resolve_scenario(parse_scenario_text("random_agents { count: 64 }\n" + keystore + "}\n", "s"))
+          .transport.discovery,
+      Discovery::kSimple);
   // The scenario as run says which was used.
   const RunConfig rc = resolve_scenario(
       parse_scenario_text("random_agents { count: 4 }\ntransport { discovery: SERVER }\n", "s"));

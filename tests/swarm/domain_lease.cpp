@@ -14,7 +14,7 @@ namespace qswarm::test {
 namespace {
 // Leave 0..9 to users and hand-run scenarios; the port plan ends at 22 (PortPlan::kMaxDomain).
 constexpr int kFirst = 10, kLast = 22;
-}
+}  // namespace
 
 DomainLease::DomainLease(const std::string& key) {
   const std::filesystem::path dir = "/tmp/qswarm-test-domains";

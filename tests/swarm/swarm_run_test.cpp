@@ -216,6 +216,36 @@ TEST(SwarmRun, ASwarmDiscoveringThroughItsOwnServerConvergesAndTheServerStopsWit
   EXPECT_NE(read_file(dir / "scenario.txtpb").find("discovery: SERVER"), std::string::npos);
 }
 
+// Through the server, an agent that hears its neighbours by name (a FIXED graph) is introduced to
+// them, the supervisor and the server alone: on a 12-agent ring of degree 4 no agent ever knew
+// more than those 6 participants (simple discovery: all 12 others).
+TEST(SwarmRun, ThroughItsServerAnAgentOnAFixedGraphMeetsOnlyItsNeighbours) {
+  const auto dir = fresh_dir("ring-server");
+  const auto scen = dir.parent_path() / "ring-server.txtpb";
+  {
+    std::ofstream f(scen);
+    f << "random_agents { count: 12 box_m: 10 }\nmode: PARTICLE\nlaw: EDGE_FLOW\n"
+         "weight { policy: UNWEIGHTED }\n"
+         "convergence { tolerance_m: 0.01 hold_s: 0.5 }\nduration_s: 60\nseed: 5\n"
+         "transport { discovery: SERVER }\ntopology { policy: FIXED";
+    for (int i = 1; i <= 12; ++i)
+      f << " edges { a: " << i << " b: " << i % 12 + 1 << " } edges { a: " << i
+        << " b: " << (i + 1) % 12 + 1 << " }";
+    f << " }\n";
+  }
+  const Result r = run({bin("swarm"), "run", scen.string(), "--out", dir.string(), "--domain",
+                        test_domain().str(), "--time-scale", "2", "--quiet"},
+                       240.0);
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_TRUE(read_summary(dir).converged());
+  for (int id = 1; id <= 12; ++id) {
+    const std::string stats = read_file(dir / ("agent-" + std::to_string(id) + ".stats"));
+    const std::size_t at = stats.find("\nparticipants ");
+    ASSERT_NE(at, std::string::npos) << stats;
+    EXPECT_LE(std::atoi(stats.c_str() + at + 14), 6) << "agent " << id << ":\n" << stats;
+  }
+}
+
 // scenarios/formation_grid16.txtpb: 16 quadcopter processes agree on a centre (the average of their
 // estimates, position minus slot) and fly to a 4 x 4 grid, 3 m apart, about it, over 8 m radio
 // links, with collision avoidance (on by default for quadcopters).
