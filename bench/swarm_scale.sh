@@ -37,6 +37,14 @@ RATE_HZ=${RATE_HZ:-50}
 OUT=$BUILD/bench-runs
 mkdir -p "$OUT"
 report() { PYTHONPATH=python /usr/bin/python3 -m qswarm.report "$@"; }
+# A FIXED graph on agents 1..N: each linked to the next id and to the id OFFSET on.
+circulant() {
+  awk -v n="$1" -v s="$2" 'BEGIN {
+    printf "topology { policy: FIXED"
+    for (i = 1; i <= n; i++) printf " edges { a: %d b: %d } edges { a: %d b: %d }",
+      i, i % n + 1, i, (i + s - 1) % n + 1
+    print " }" }'
+}
 printf "| agents | scenario | consensus [Hz] | time scale | CPU per agent [%% of a core] | late ticks [%%] | sample age p50 / p99 [ms] | accepted samples [1/s] | CPU per accepted sample [us] | discovery max [s] | participants known [max] | RSS per agent [MB] | supervisor CPU [%% of a core] | end |\n"
 printf "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n"
 domain=${DOMAIN:-12}  # one run at a time: each reuses the domain the last one left
@@ -55,23 +63,14 @@ for kind in "${KINDS[@]}"; do
       ring)
         {
           sed "s/consensus_hz: 50/consensus_hz: $RATE_HZ/" bench/ring.txtpb
-          awk -v n="$n" 'BEGIN {
-            printf "topology { policy: FIXED"
-            for (i = 1; i <= n; i++) for (k = 1; k <= 2; k++)
-              printf " edges { a: %d b: %d }", i, (i + k - 1) % n + 1
-            print " }" }'
+          circulant "$n" 2
         } >"$scen"
         ;;
       torus)
         {
           sed -e "s/consensus_hz: 50/consensus_hz: $RATE_HZ/" -e 's/name: "ring"/name: "torus"/' \
             -e 's/tolerance_m: 1e-12 hold_s: 1000/tolerance_m: 0.01 hold_s: 1/' bench/ring.txtpb
-          awk -v n="$n" 'BEGIN {
-            s = int(sqrt(n) + 0.5); if (s < 2) s = 2
-            printf "topology { policy: FIXED"
-            for (i = 1; i <= n; i++) printf " edges { a: %d b: %d } edges { a: %d b: %d }",
-              i, i % n + 1, i, (i + s - 1) % n + 1
-            print " }" }'
+          circulant "$n" "$(awk -v n="$n" 'BEGIN { s = int(sqrt(n) + 0.5); print (s < 2 ? 2 : s) }')"
         } >"$scen"
         ;;
       *) echo "swarm_scale: unknown scenario $kind (all, range, ring, torus)" >&2; exit 2 ;;

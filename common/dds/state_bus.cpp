@@ -132,6 +132,10 @@ struct DdsStateBus::Impl : public dds::DataReaderListener {
     if (!t) throw std::runtime_error("dds: cannot create the topic " + topic_of(name));
     return t;
   }
+  // Moves the shared topic's writer into the partitions of these names (and of its agent, `self`;
+  // 0: none), and its reader, unless it hears all runs.
+  void move_writer(const std::vector<std::string>& names, AgentId self);
+  void move_reader(const std::vector<std::string>& names);
   // A reader of `topic` for the state stream, behind the roster filter if there is one.
   dds::DataReader* state_reader(dds::Subscriber* sub, dds::Topic* on,
                                 dds::ContentFilteredTopic*& filtered);
@@ -269,7 +273,9 @@ DdsStateBus::DdsStateBus(DdsParticipant& participant, const StateBusOptions& opt
       dds::PublisherQos pub_qos = dds::PUBLISHER_QOS_DEFAULT;
       pub_qos.partition().push_back(run_partition(opts.run_id).c_str());
       d.named_publisher = d.participant->create_publisher(pub_qos);
-      if (!d.named_publisher) throw std::runtime_error("dds: cannot create the state publisher");
+      d.publisher = d.participant->create_publisher(pub_qos);
+      if (!d.named_publisher || !d.publisher)
+        throw std::runtime_error("dds: cannot create the state publishers");
     } else {
       d.writer = writer_in(run_partition(opts.run_id), d.publisher, d.topic,
                            best_effort_writer_qos(), &d.writer_listener);
@@ -378,6 +384,22 @@ dds::PartitionQosPolicy partitions(const std::string& run, std::vector<std::stri
 }
 }  // namespace
 
+void DdsStateBus::Impl::move_writer(const std::vector<std::string>& names, AgentId self) {
+  if (!publisher) return;
+  dds::PublisherQos q = publisher->get_qos();
+  q.partition() = partitions(run_partition(opts.run_id), names, self);
+  if (publisher->set_qos(q) != ReturnCode_t::RETCODE_OK)
+    throw std::runtime_error("dds: cannot move the state writer's partitions");
+}
+
+void DdsStateBus::Impl::move_reader(const std::vector<std::string>& names) {
+  if (opts.hear_all_runs) return;
+  dds::SubscriberQos q = subscriber->get_qos();
+  q.partition() = partitions(run_partition(opts.run_id), names);
+  if (subscriber->set_qos(q) != ReturnCode_t::RETCODE_OK)
+    throw std::runtime_error("dds: cannot move the state reader's partitions");
+}
+
 void DdsStateBus::Impl::drop_named(const std::string& name, bool its_reader, bool its_writer) {
   if (auto r = named_readers.find(name); its_reader && r != named_readers.end()) {
     r->second.reader->set_listener(nullptr);
@@ -405,30 +427,15 @@ void DdsStateBus::Impl::set_named_interest(const Interest& interest) {
     (agent_of_partition(n) ? agents_pub : cells_pub).push_back(n);
   for (const std::string& n : interest.subscribe)
     (agent_of_partition(n) ? agents_sub : cells_sub).push_back(n);
-  const std::string run = run_partition(opts.run_id);
+  // The shared topic's endpoints are made once needed, after their partitions are set: they
+  // never hear the whole run on the way.
   if (opts.publish && (interest.publish.empty() || !cells_pub.empty())) {
-    const dds::PartitionQosPolicy parts = partitions(run, cells_pub);
-    if (!writer) {
-      dds::PublisherQos q = dds::PUBLISHER_QOS_DEFAULT;
-      q.partition() = parts;
-      publisher = participant->create_publisher(q);
-      writer = publisher ? publisher->create_datawriter(topic, state_writer_qos, &writer_listener)
-                         : nullptr;
-      if (!writer) throw std::runtime_error("dds: cannot create the state writer");
-    } else if (!(publisher->get_qos().partition() == parts)) {
-      dds::PublisherQos q = publisher->get_qos();
-      q.partition() = parts;
-      if (publisher->set_qos(q) != ReturnCode_t::RETCODE_OK)
-        throw std::runtime_error("dds: cannot move the state writer's partitions");
-    }
+    move_writer(cells_pub, 0);
+    if (!writer) writer = publisher->create_datawriter(topic, state_writer_qos, &writer_listener);
+    if (!writer) throw std::runtime_error("dds: cannot create the state writer");
   }
   if (interest.subscribe.empty() || !cells_sub.empty()) {
-    if (!opts.hear_all_runs) {  // before the reader is made: it never hears the whole run
-      dds::SubscriberQos q = subscriber->get_qos();
-      q.partition() = partitions(run, cells_sub);
-      if (subscriber->set_qos(q) != ReturnCode_t::RETCODE_OK)
-        throw std::runtime_error("dds: cannot move the state reader's partitions");
-    }
+    move_reader(cells_sub);
     if (!reader) reader = state_reader(subscriber, topic, roster_topic);
   }
   // The agent names: new endpoints first, then the old ones go.
@@ -467,19 +474,8 @@ void DdsStateBus::set_interest(const Interest& interest) {
     d.set_named_interest(interest);
     return;
   }
-  const std::string run = run_partition(d.opts.run_id);
-  if (d.publisher) {
-    dds::PublisherQos q = d.publisher->get_qos();
-    q.partition() = partitions(run, interest.publish, d.opts.self);
-    if (d.publisher->set_qos(q) != ReturnCode_t::RETCODE_OK)
-      throw std::runtime_error("dds: cannot move the state writer's partitions");
-  }
-  if (!d.opts.hear_all_runs) {
-    dds::SubscriberQos q = d.subscriber->get_qos();
-    q.partition() = partitions(run, interest.subscribe);
-    if (d.subscriber->set_qos(q) != ReturnCode_t::RETCODE_OK)
-      throw std::runtime_error("dds: cannot move the state reader's partitions");
-  }
+  d.move_writer(interest.publish, d.opts.self);
+  d.move_reader(interest.subscribe);
 }
 
 void DdsStateBus::record(const StateMessage& msg) {
