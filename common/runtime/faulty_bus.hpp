@@ -11,7 +11,10 @@ namespace qswarm {
 
 // The fault-injecting decorator of a NeighborBus: it registers itself as the inner bus's listener,
 // passes every sample through LinkFaults (drop, or hold until a delay elapses) and serves latest()
-// from what survived. Publishing goes straight to the inner bus. Thread-safe: samples may arrive
+// from what survived. Publishing goes straight to the inner bus. With no link faults planned it
+// stands aside: samples go straight to its listener and latest() is the inner bus's (the same
+// newest accepted sample per agent), so an agent pays no copy and no lock per sample for faults
+// nobody planned. Thread-safe: samples may arrive
 // on a transport thread. The destructor unregisters first, so no sample reaches a destroyed bus.
 class FaultyBus final : public NeighborBus {
  public:
@@ -39,6 +42,7 @@ class FaultyBus final : public NeighborBus {
   NeighborBus& inner_;
   LinkFaults faults_;
   AgentId self_;
+  bool direct_ = false;  // no link faults planned: pass samples through
   mutable std::mutex mu_;
   double t_s_ = 0.0;
   // A sample the transport accepted, in the order it did: the transport (SampleGate) judges which

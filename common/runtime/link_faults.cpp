@@ -27,6 +27,11 @@ LinkFaults::Link& LinkFaults::link(AgentId from) {
   return it->second;
 }
 
+bool LinkFaults::none() const {
+  return plan_.cut.empty() && plan_.partition.empty() && plan_.loss.empty() &&
+         plan_.burst.empty() && plan_.delay.empty();
+}
+
 bool LinkFaults::cut_now(AgentId from, double t) const {
   for (const FaultPlan::Cut& c : plan_.cut) {
     if (!active(c.start_s, c.end_s, t)) continue;

@@ -21,6 +21,8 @@ class LinkFaults {
   };
   Verdict on_receive(AgentId from, double t_s);
   const FaultCounters& counters() const { return counters_; }
+  // The plan injects nothing on any link (no cut, partition, loss, burst or delay).
+  bool none() const;
   bool cut_now(AgentId from, double t_s) const;
 
  private:

@@ -89,6 +89,24 @@ TEST(Concurrency, AFaultyBusFedFromAnotherThreadServesItsOwnerAndUnregistersSafe
   EXPECT_GT(heard.load(), 0);
 }
 
+TEST(Concurrency, AFaultyBusWithNoFaultsPlannedPassesSamplesThroughFromAnotherThread) {
+  ThreadFedBus inner;
+  std::atomic<int> heard{0}, heard_self{0};
+  {
+    FaultyBus bus(inner, LinkFaults(FaultPlan{}, 1, 7), 1);
+    bus.set_listener([&](const StateMessage& m) { ++(m.view.id == 1 ? heard_self : heard); });
+    Feeder feeder(inner, {1, 2, 3});
+    feeder.wait_for_rounds(50);
+    for (int k = 0; k < 2000; ++k) {
+      bus.set_time(0.001 * k);
+      for (const StateMessage& m : bus.latest(1)) EXPECT_NE(m.view.id, 1u);
+    }
+    bus.set_listener(nullptr);
+  }
+  EXPECT_GT(heard.load(), 0);
+  EXPECT_EQ(heard_self.load(), 0);
+}
+
 TEST(Concurrency, AnAgentLoopFliesWhileItsTransportDeliversFromAnotherThread) {
   // Given agent 1 of a two-agent run, and agent 2's samples arriving on a transport thread
   const RunConfig rc = resolve_scenario(parse_scenario_text(

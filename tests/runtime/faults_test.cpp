@@ -115,6 +115,40 @@ TEST(FaultyBus, ItsListenerHearsWhatSurvivesAndNothingOnceUnregistered) {
   EXPECT_EQ(heard, 2);
 }
 
+TEST(FaultyBus, WithNoLinkFaultsPlannedItPassesEverySampleThroughUnchanged) {
+  // Given a plan with only a kill (no link fault): the decorator stands aside
+  InMemoryNetwork net;
+  InMemoryBus inner(net), sender(net), other(net);
+  FaultPlan plan;
+  plan.kill.push_back({3, 10.0, 20.0});
+  ASSERT_TRUE(LinkFaults(plan, 1, 5).none());
+  FaultyBus bus(inner, LinkFaults(plan, 1, 5), 1);
+  std::vector<std::uint64_t> heard;
+  bus.set_listener([&](const StateMessage& m) { heard.push_back(m.seq); });
+  StateMessage m;
+  m.view.id = 2;
+  for (std::uint64_t k = 1; k <= 3; ++k) {
+    bus.set_time(0.5 * static_cast<double>(k));
+    m.seq = k;
+    sender.publish(m);
+    net.deliver();
+  }
+  StateMessage mine;  // a sample keyed as the decorated agent itself is never its neighbour
+  mine.view.id = 1;
+  mine.seq = 1;
+  other.publish(mine);
+  net.deliver();
+  // Then its listener heard every sample at once, and latest() is the transport's newest
+  EXPECT_EQ(heard, (std::vector<std::uint64_t>{1, 2, 3}));
+  const auto got = bus.latest(1);
+  ASSERT_EQ(got.size(), 1u);
+  EXPECT_EQ(got[0].seq, 3u);
+  EXPECT_EQ(bus.fault_counters(), FaultCounters{});
+  // And any link fault, even one that starts later, puts it back in the path
+  plan.loss.push_back({0.5, 0, 0, 100.0, 0.0});
+  EXPECT_FALSE(LinkFaults(plan, 1, 5).none());
+}
+
 TEST(FaultPlan, TimelineAndLastFaultEnd) {
   FaultPlan plan;
   plan.cut.push_back({1, 2, 5.0, 15.0, false});
