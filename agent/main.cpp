@@ -20,6 +20,9 @@ void on_signal(int) { g_stop = true; }
 constexpr double kMaxSleepS = 0.05;
 }  // namespace
 
+// How much nicer Fast DDS's threads run than the agent's tick (ParticipantOptions::threads_nice).
+constexpr int kDdsThreadsNice = 15;
+
 int main(int argc, char** argv) {
   using namespace qswarm;
   exit_cleanly_on_uncaught_exceptions("swarm-agent");
@@ -68,6 +71,8 @@ int main(int argc, char** argv) {
     SteadyClock clock;
     DdsOptions dopt = dds_options(*rc, "swarm-agent", f.process);
     dopt.participant.identity = identity;
+    // The tick is this process's deadline; hearing neighbours may wait (docs/benchmarks.md).
+    dopt.participant.threads_nice = kDdsThreadsNice;
     DdsParticipant participant(dopt.participant);
     // A replica claims its id before it reads or writes any state: the state reader then leaves
     // out its own samples from the start.

@@ -9,6 +9,7 @@
 #include <fastdds/rtps/transport/test_UDPv4TransportDescriptor.h>
 #include <fastrtps/utils/IPLocator.h>
 #include <netdb.h>
+#include <sys/resource.h>
 #include <sys/socket.h>
 #include <unistd.h>
 #include <atomic>
@@ -16,8 +17,10 @@
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
 
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
 #include <cstdlib>
+#include <exception>
 #include <mutex>
 #include <stdexcept>
 #include <thread>
@@ -169,8 +172,31 @@ DdsParticipant::DdsParticipant(const ParticipantOptions& opts) : opts_(opts) {
       const CreatingParticipant creating;
       // The writer registry listens from the start: it must hear every writer before a reader
       // can match it. Discovery callbacks only (no entity status goes to it).
-      participant_ = dds::DomainParticipantFactory::get_instance()->create_participant(
-          opts.domain_id, pqos, writers_.get(), dds::StatusMask::none());
+      const auto create = [&] {
+        participant_ = dds::DomainParticipantFactory::get_instance()->create_participant(
+            opts.domain_id, pqos, writers_.get(), dds::StatusMask::none());
+      };
+      if (opts.threads_nice > 0) {
+        // Threads inherit their creator's nice value, and an unprivileged process cannot take a
+        // raised one back: a helper thread made nicer creates the participant (and so starts
+        // its threads), while this thread keeps its priority.
+        std::exception_ptr failed;
+        std::thread helper([&] {
+          try {
+            const auto tid = static_cast<id_t>(::gettid());
+            errno = 0;
+            const int base = ::getpriority(PRIO_PROCESS, tid);
+            if (errno == 0) (void)::setpriority(PRIO_PROCESS, tid, base + opts.threads_nice);
+            create();
+          } catch (...) {
+            failed = std::current_exception();
+          }
+        });
+        helper.join();
+        if (failed) std::rethrow_exception(failed);
+      } else {
+        create();
+      }
     }
     if (!participant_)
       throw std::runtime_error("dds: cannot create a participant on domain " +

@@ -48,6 +48,10 @@ struct ParticipantOptions {
   // How often it announces itself after its first quick announcements (seconds): everyone hears
   // every announcement, so a large swarm announces less often.
   double announce_period_s = 1.0;
+  // Fast DDS's threads (receive, events, discovery) run this much nicer than the thread that
+  // creates the participant: when the CPU is short, that thread (an agent's tick) goes first and
+  // samples wait in their sockets, where the newest one wins anyway. 0: the same priority.
+  int threads_nice = 0;
   // DDS-Security: a keystore written by `swarm keys` and the identity in it this participant
   // speaks as ("agent-3", "supervisor"). Empty keystore: a plain participant. Fast DDS 2.9 has no
   // secure Discovery Server: the two together are refused.

@@ -15,9 +15,15 @@
 #include <fastdds/dds/domain/DomainParticipantListener.hpp>
 #include <fastdds/dds/domain/qos/DomainParticipantQos.hpp>
 
+#include <unistd.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
 #include <map>
 #include <memory>
 #include <mutex>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -125,6 +131,42 @@ TEST(ParticipantPorts, AnExplicitIdHoldsItsPortsAndASecondOneOnThemIsRefusedNami
     const std::string port = std::to_string(PortPlan::discovery_port(o.domain_id, 530));
     EXPECT_NE(std::string(e.what()).find(port), std::string::npos) << e.what();
   }
+}
+
+// The nice value of each of this process's threads (/proc/self/task/*/stat, field 19).
+std::map<int, int> thread_nice_values() {
+  std::map<int, int> out;
+  for (const auto& t : std::filesystem::directory_iterator("/proc/self/task")) {
+    std::ifstream stat(t.path() / "stat");
+    std::string line;
+    std::getline(stat, line);
+    std::istringstream rest(line.substr(line.rfind(')') + 2));  // after "pid (comm) "
+    std::string field;
+    for (int i = 3; i <= 19 && rest >> field; ++i) {
+    }
+    out[std::stoi(t.path().filename().string())] = std::stoi(field);
+  }
+  return out;
+}
+
+// An agent's tick goes first when the CPU is short: the threads Fast DDS starts run nicer, and
+// the thread that created the participant keeps its priority.
+TEST(ParticipantThreads, FastDdsThreadsRunNicerThanTheThreadThatCreatedThem) {
+  const std::map<int, int> before = thread_nice_values();
+  const int self = before.at(static_cast<int>(::gettid()));
+  ParticipantOptions o;
+  o.domain_id = static_cast<std::uint32_t>(test::test_domain().domain());
+  o.name = "nicer-threads";
+  o.threads_nice = 3;
+  const DdsParticipant p(o);
+  int started = 0;
+  for (const auto& [tid, nice] : thread_nice_values()) {
+    if (before.count(tid)) continue;
+    ++started;
+    EXPECT_EQ(nice, std::min(self + 3, 19)) << "thread " << tid;
+  }
+  EXPECT_GE(started, 2);  // at least a receive thread and the event thread
+  EXPECT_EQ(thread_nice_values().at(static_cast<int>(::gettid())), self);
 }
 
 }  // namespace
