@@ -71,8 +71,11 @@ int main(int argc, char** argv) {
     SteadyClock clock;
     DdsOptions dopt = dds_options(*rc, "swarm-agent", f.process);
     dopt.participant.identity = identity;
-    // The tick is this process's deadline; hearing neighbours may wait (docs/benchmarks.md).
-    dopt.participant.threads_nice = kDdsThreadsNice;
+    // The tick is this process's deadline; hearing neighbours may wait (docs/benchmarks.md). Not
+    // under DDS-Security: Fast DDS 2.9.1's handshakes race between its receive threads (see
+    // ParticipantOptions::unicast_peers_first), and with them slowed a secure compose swarm
+    // lost a pair of replicas that never heard each other.
+    if (rc->transport.keystore.empty()) dopt.participant.threads_nice = kDdsThreadsNice;
     DdsParticipant participant(dopt.participant);
     // A replica claims its id before it reads or writes any state: the state reader then leaves
     // out its own samples from the start.
