@@ -24,16 +24,14 @@ struct PortPlan {
   static constexpr int kMaxParticipantId = 544;
 
   // The discovery (metatraffic) and data unicast ports of participant `id` on `domain`.
-  static std::uint32_t discovery_port(std::uint32_t domain, int id) {
+  static constexpr std::uint32_t discovery_port(std::uint32_t domain, int id) {
     return kBase + kDomainGain * domain + 10 + kParticipantGain * static_cast<std::uint32_t>(id);
   }
-  static std::uint32_t data_port(std::uint32_t domain, int id) {
+  static constexpr std::uint32_t data_port(std::uint32_t domain, int id) {
     return discovery_port(domain, id) + 1;
   }
 };
-static_assert(PortPlan::kBase + PortPlan::kDomainGain * PortPlan::kMaxDomain + 10 +
-                      PortPlan::kParticipantGain * PortPlan::kMaxParticipantId + 1 <
-                  32768,
+static_assert(PortPlan::data_port(PortPlan::kMaxDomain, PortPlan::kMaxParticipantId) < 32768,
               "the port plan must stay below Linux's ephemeral ports");
 
 // Parses a block of participant ids "FIRST:COUNT" (all within 0..kMaxParticipantId): what
