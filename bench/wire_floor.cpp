@@ -95,12 +95,26 @@ int main(int argc, char** argv) {
   const int n = std::atoi(argv[1]);
   const double seconds = argc > 2 ? std::atof(argv[2]) : 20.0;
   const double hz = argc > 3 ? std::atof(argv[3]) : 50.0;
-  const bool drain = argc > 4 && std::string(argv[4]) == "drain";
+  const std::string mode = argc > 4 ? argv[4] : "thread";
+  const bool drain = mode == "drain";
   const int degree = argc > 5 ? std::atoi(argv[5]) : 4;
-  const std::size_t bytes = argc > 6 ? static_cast<std::size_t>(std::atoi(argv[6])) : 600;
-  if (n < 2 || n > 4096 || !(seconds > 0.0) || !(hz > 0.0) || degree < 1 || degree >= n ||
-      bytes < 1 || bytes > 60000) {
-    std::fprintf(stderr, "wire_floor: out of range (2 <= N <= 4096, 1 <= DEGREE < N)\n");
+  const long bytes = argc > 6 ? std::atol(argv[6]) : 600;
+  const char* bad = nullptr;
+  if (n < 2 || n > 4096) {
+    bad = "N: 2 to 4096 processes";
+  } else if (!(seconds > 0.0 && seconds <= 3600.0)) {
+    bad = "SECONDS: above 0, at most 3600";
+  } else if (!(hz > 0.0 && hz <= 1000.0)) {
+    bad = "RATE_HZ: above 0, at most 1000";
+  } else if (mode != "thread" && mode != "drain") {
+    bad = "the receive mode: thread or drain";
+  } else if (degree < 1 || degree >= n) {
+    bad = "DEGREE: 1 to N - 1";
+  } else if (bytes < 1 || bytes > 60000) {
+    bad = "BYTES: 1 to 60000";
+  }
+  if (bad) {
+    std::fprintf(stderr, "wire_floor: %s\n", bad);
     return 2;
   }
   // Every socket is bound (to a port the kernel picks) before any process starts, so that each
@@ -138,7 +152,8 @@ int main(int argc, char** argv) {
       const int off = (d + 1) / 2 * (d % 2 ? 1 : -1);
       to.push_back(addr[static_cast<std::size_t>(((i + off) % n + n) % n)]);
     }
-    const Result r = fly(fds[static_cast<std::size_t>(i)], to, start, seconds, hz, drain, bytes);
+    const Result r = fly(fds[static_cast<std::size_t>(i)], to, start, seconds, hz, drain,
+                         static_cast<std::size_t>(bytes));
     if (write(pipe_fd[1], &r, sizeof r) != static_cast<ssize_t>(sizeof r)) _exit(1);
     _exit(0);
   }
