@@ -46,9 +46,8 @@ Spectrum analyze(const Eigen::MatrixXd& L) {
   const int n = static_cast<int>(L.rows());
   Spectrum s;
   if (n == 0) return s;
-  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> solver(L);
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> solver(L, Eigen::EigenvaluesOnly);
   s.eigenvalues = solver.eigenvalues();
-  s.eigenvectors = solver.eigenvectors();
   std::vector<Edge> edges;
   for (int i = 0; i < n; ++i)
     for (int j = i + 1; j < n; ++j)

@@ -28,13 +28,13 @@ Eigen::MatrixXd laplacian(int n, const std::vector<Edge>& edges);
 
 struct Spectrum {
   Eigen::VectorXd eigenvalues;    // ascending
-  Eigen::MatrixXd eigenvectors;   // orthonormal columns, same order
   double lambda2 = 0.0;           // algebraic connectivity (0 if disconnected)
   int components = 0;             // connected components of the graph
   std::vector<int> component_of;  // component index per vertex
 };
 
-// Eigen-decomposition (self-adjoint solver) plus connected components from the edge structure.
+// The eigenvalues (self-adjoint solver without eigenvectors: less than half the work at 256
+// vertices, a quarter at 512) plus connected components from the edge structure.
 Spectrum analyze(const Eigen::MatrixXd& L);
 std::vector<int> connected_components(int n, const std::vector<Edge>& edges, int* count);
 

@@ -60,13 +60,19 @@ void measure_trimmed(records::GraphSnapshot& g, const std::vector<AgentId>& ids,
     g.set_outside_initial_box_m(outside_box_m({average(rest)}, kept(w.q0, keep)));
 }
 
+bool same_edges(const std::vector<Edge>& a, const std::vector<Edge>& b) {
+  return std::equal(a.begin(), a.end(), b.begin(), b.end(), [](const Edge& x, const Edge& y) {
+    return x.i == y.i && x.j == y.j && x.weight == y.weight;
+  });
+}
+
 }  // namespace
 
 records::GraphSnapshot measure_graph(double t_s, const std::vector<AgentId>& ids,
                                      const Positions& q, const Positions& p,
                                      const LinksOf& links_of, const Vec3& initial_average,
                                      const Positions& offsets, const std::vector<bool>& held,
-                                     const WmsrMeasure* wmsr) {
+                                     const WmsrMeasure* wmsr, SpectrumMemo* memo) {
   records::GraphSnapshot g;
   g.set_t_s(t_s);
   g.set_agents(static_cast<std::uint32_t>(ids.size()));
@@ -91,9 +97,27 @@ records::GraphSnapshot measure_graph(double t_s, const std::vector<AgentId>& ids
     min_degree = std::min(min_degree, degree);
   }
   g.set_min_degree(static_cast<std::uint32_t>(min_degree));
-  const Spectrum s = analyze(laplacian(n, edges));
-  g.set_lambda2(s.lambda2);
-  g.set_components(static_cast<std::uint32_t>(s.components));
+  double lambda2 = 0.0;
+  int components = 0;
+  if (memo && memo->valid && memo->ids == ids && same_edges(memo->edges, edges)) {
+    ++memo->reused;
+    lambda2 = memo->lambda2;
+    components = memo->components;
+  } else {
+    const Spectrum s = analyze(laplacian(n, edges));
+    lambda2 = s.lambda2;
+    components = s.components;
+    if (memo) {
+      memo->ids = ids;
+      memo->edges = edges;
+      memo->lambda2 = lambda2;
+      memo->components = components;
+      memo->valid = true;
+      ++memo->computed;
+    }
+  }
+  g.set_lambda2(lambda2);
+  g.set_components(static_cast<std::uint32_t>(components));
   const Vec3 qbar = average(q);
   g.set_disagreement_m(disagreement(q));
   g.set_mean_drift_m((qbar - initial_average).norm());

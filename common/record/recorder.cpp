@@ -256,7 +256,8 @@ void Recorder::snapshot() {
   last_ = measure_graph(
       t_s_, ids, q, p,
       [&](int i) -> const auto& { return presence_.track(ids[static_cast<size_t>(i)]).last.links; },
-      rc_.initial_average(), offsets, held, rc_.agent.law.kind == LawKind::kWmsr ? &wmsr : nullptr);
+      rc_.initial_average(), offsets, held, rc_.agent.law.kind == LawKind::kWmsr ? &wmsr : nullptr,
+      &spectrum_);
   last_->set_held_speed_mps(held_speed);
   // Judged once the whole swarm has started: a swarm still starting lacks links it will have.
   if (tally_.resilience && first_full_) judge_resilience(*last_, ids);

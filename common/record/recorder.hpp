@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "common/record/convergence.hpp"
+#include "common/record/graph_metrics.hpp"
 #include "common/record/presence.hpp"
 #include "common/record/record_sinks.hpp"
 #include "common/record/run_dir.hpp"
@@ -93,6 +94,7 @@ class Recorder {
   std::int64_t t_wall_ns_ = 0;  // wall time when t_s_ last advanced
   double next_snapshot_s_ = 0.0;
   std::optional<records::GraphSnapshot> first_full_, last_;
+  SpectrumMemo spectrum_;  // the snapshots' graph, decomposed again only when it changes
   std::vector<FaultPlan::Event> timeline_;
   size_t next_timeline_ = 0;
   std::map<AgentId, double> killed_at_;  // planned kill time, until the departure is seen

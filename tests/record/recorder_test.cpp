@@ -81,6 +81,41 @@ TEST(GraphMetrics, ThePapersWeightedNetworkHasItsSpectrum) {
   EXPECT_NEAR(g.min_separation_m(), std::sqrt(77.0), 1e-12);  // agents 2 and 4
 }
 
+TEST(GraphMetrics, AGraphThatHasNotChangedIsNotDecomposedAgainButAChangedOneIs) {
+  const std::vector<AgentId> ids{1, 2, 3, 4};
+  std::vector<std::vector<std::pair<AgentId, double>>> links(4);
+  for (const auto& [a, b] : paper::kGraph1) links[a - 1].emplace_back(b, 1.0);
+  const auto links_of = [&](int i) -> const auto& { return links[static_cast<size_t>(i)]; };
+  const Positions q = paper::kWeightedQ0;
+  SpectrumMemo memo;
+  const double fresh = measure_graph(0.0, ids, q, q, links_of, Vec3::Zero()).lambda2();
+  for (int k = 0; k < 3; ++k)
+    EXPECT_EQ(
+        measure_graph(0.1 * k, ids, q, q, links_of, Vec3::Zero(), {}, {}, nullptr, &memo).lambda2(),
+        fresh);
+  EXPECT_EQ(memo.computed, 1u);
+  EXPECT_EQ(memo.reused, 2u);
+  // A weight that moved, an edge that went, an agent that left: each is a new graph.
+  links[0][0].second = 2.0;
+  const double heavier = measure_graph(0.3, ids, q, q, links_of, Vec3::Zero()).lambda2();
+  EXPECT_GT(heavier, fresh);
+  EXPECT_EQ(measure_graph(0.3, ids, q, q, links_of, Vec3::Zero(), {}, {}, nullptr, &memo).lambda2(),
+            heavier);
+  links[0].clear();
+  const records::GraphSnapshot cut =
+      measure_graph(0.4, ids, q, q, links_of, Vec3::Zero(), {}, {}, nullptr, &memo);
+  EXPECT_EQ(cut.lambda2(), measure_graph(0.4, ids, q, q, links_of, Vec3::Zero()).lambda2());
+  const std::vector<AgentId> three{1, 2, 3};
+  const Positions q3(q.begin(), q.begin() + 3);
+  const records::GraphSnapshot fewer =
+      measure_graph(0.5, three, q3, q3, links_of, Vec3::Zero(), {}, {}, nullptr, &memo);
+  EXPECT_EQ(fewer.components(),
+            measure_graph(0.5, three, q3, q3, links_of, Vec3::Zero()).components());
+  EXPECT_EQ(fewer.lambda2(), measure_graph(0.5, three, q3, q3, links_of, Vec3::Zero()).lambda2());
+  EXPECT_EQ(memo.computed, 4u);
+  EXPECT_EQ(memo.reused, 2u);
+}
+
 TEST(ConvergenceJudge, HoldsForHoldSecondsAndWaitsForThePlanAndDueAgents) {
   FaultPlan plan;
   plan.kill.push_back({2, 1.0, 3.0});  // agent 2 killed at 1 s, back at 3 s
