@@ -163,6 +163,18 @@ void Recorder::note_suspects(const std::map<AgentId, std::uint8_t>& suspects, Ag
   }
 }
 
+void Recorder::note_unrecorded(std::uint64_t n) {
+  if (n == 0) return;
+  if (tally_.unrecorded == 0) {
+    const std::string detail =
+        "samples arrive faster than the supervisor records them: those that find its inbox full "
+        "are not recorded (counted in the summary as unrecorded, and as gaps)";
+    event("supervisor_behind", 0, detail);
+    notes_.push_back(detail);
+  }
+  tally_.unrecorded += n;
+}
+
 std::vector<std::string> Recorder::take_notes() {
   std::vector<std::string> out;
   out.swap(notes_);

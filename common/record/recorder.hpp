@@ -42,6 +42,9 @@ class Recorder {
   void note_suspects(const std::map<AgentId, std::uint8_t>& suspects, AgentId reporter);
   // Lines for the supervisor's log since the last call (forgeries first noticed).
   std::vector<std::string> take_notes();
+  // `n` more samples arrived than the supervisor could hold: said once in the record's events and
+  // the log, counted in the summary.
+  void note_unrecorded(std::uint64_t n);
   // Periodic work (departures, fault windows, graph snapshots, convergence); call every few tens
   // of ms.
   void tick(std::int64_t now_wall_ns);
@@ -58,6 +61,7 @@ class Recorder {
   std::string end_reason_if_over() const;
   bool duration_reached() const { return t_s_ >= rc_.judge.duration_s; }
   std::string progress_line() const;
+  std::uint32_t departures() const { return tally_.departures; }
   int edges_now() const { return last_ ? last_->edges_size() : 0; }
   // Writes the end event and summary.json and flushes every file; returns the summary for people.
   std::string finish(const std::string& end_reason, double wall_time_s);

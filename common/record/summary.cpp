@@ -132,6 +132,7 @@ records::Summary build_summary(const RunConfig& rc, const Presence& presence,
   msg.set_age_p50_ms(percentile(tally.ages_ms, 0.50));
   msg.set_age_p99_ms(percentile(tally.ages_ms, 0.99));
   msg.set_rate_hz(rate_n ? rate_sum / rate_n : 0.0);
+  msg.set_unrecorded(count32(tally.unrecorded));
   const Vec3 mean = average(final_q);
   put_vec3(s.mutable_final_consensus_mean(), mean);
   // Every agent's slot about the agreed centre, and how far from it the agent ended.
@@ -255,6 +256,9 @@ std::string summary_text(const records::Summary& s, const RunConfig& rc, const s
   h << "messages: published " << msg.published() << ", received " << msg.received() << ", dropped "
     << msg.dropped() << ", gaps " << msg.seq_gaps() << ", age p50 " << fmt("%.3f", msg.age_p50_ms())
     << " ms p99 " << fmt("%.3f", msg.age_p99_ms()) << " ms\n";
+  if (msg.unrecorded() > 0)
+    h << "BEHIND: " << msg.unrecorded()
+      << " samples arrived while the supervisor's inbox was full and were not recorded\n";
   h << "joins " << s.joins() << ", departures " << s.departures() << "\n";
   if (s.has_agreed_elsewhere_m() && rc.agent.law.kind == LawKind::kWmsr) {
     h << "MOVED: the agents agreed " << fmt("%.3g", s.agreed_elsewhere_m())

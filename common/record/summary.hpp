@@ -27,6 +27,7 @@ struct RunTally {
   std::uint32_t joins = 0, departures = 0, fault_events = 0;
   std::uint64_t foreign_samples = 0;      // samples of other runs on this domain, refused
   std::uint64_t implausible_samples = 0;  // stamped far ahead of the swarm's clock, refused
+  std::uint64_t unrecorded = 0;           // arrived while the supervisor's inbox was full
   double min_separation_m = 1e300;        // over every sample (SeparationMonitor)
   double min_separation_t_s = 0.0;
   AgentId min_separation_a = 0, min_separation_b = 0;

@@ -15,10 +15,33 @@ SupervisorLoop::SupervisorLoop(const RunConfig& rc, RunDir dir, SupervisorOption
       recorder_(rc, dir_, opts.time_scale) {
   if (opts_.start_timeout_s < 0.0) opts_.start_timeout_s = rc.start_timeout_s();
   bus_.set_listener([this](const StateMessage& m) {
-    const std::int64_t recv_ns = clock_.wall_ns();
-    std::lock_guard<std::mutex> lock(mu_);
-    recorder_.on_sample(m, recv_ns);
+    // The clock is read under the lock, so that the inbox is in order of arrival time and a
+    // swap (record_inbox) splits it at one instant.
+    std::lock_guard<std::mutex> lock(inbox_mu_);
+    if (inbox_.size() < opts_.inbox_max) {
+      inbox_.push_back({m, clock_.wall_ns()});
+    } else {
+      ++overflow_;
+    }
   });
+}
+
+std::int64_t SupervisorLoop::record_inbox() {
+  std::uint64_t overflow = 0;
+  std::int64_t taken_ns = 0;
+  {
+    std::lock_guard<std::mutex> lock(inbox_mu_);
+    batch_.swap(inbox_);
+    overflow = overflow_;
+    taken_ns = clock_.wall_ns();
+  }
+  for (const Arrival& a : batch_) recorder_.on_sample(a.m, a.recv_wall_ns);
+  batch_.clear();  // keeps its capacity for the next swap
+  if (overflow > overflow_said_) {
+    recorder_.note_unrecorded(overflow - overflow_said_);
+    overflow_said_ = overflow;
+  }
+  return taken_ns;
 }
 
 SupervisorLoop::~SupervisorLoop() { bus_.set_listener(nullptr); }
@@ -34,7 +57,10 @@ SupervisorLoop::Poll SupervisorLoop::poll(bool interrupted) {
   const double now = clock_.now_s();
   p.wake_at_s = now + opts_.poll_period_s;
   std::lock_guard<std::mutex> lock(mu_);
-  recorder_.tick(clock_.wall_ns());
+  // Departures are judged at the instant the inbox was taken: every sample that arrived before it
+  // has been recorded, however long recording took (a supervisor starved of CPU records seconds
+  // late, and silence is not judged from the time it caught up).
+  recorder_.tick(record_inbox());
   recorder_.note_foreign_runs(bus_.foreign_runs(), bus_.counters().foreign);
   recorder_.note_strangers(bus_.strangers());
   recorder_.note_suspects(bus_.suspects(), 0);
@@ -59,6 +85,7 @@ SupervisorLoop::Poll SupervisorLoop::poll(bool interrupted) {
 std::string SupervisorLoop::finish(const std::string& reason) {
   bus_.set_listener(nullptr);  // no sample arrives while the record is written
   std::lock_guard<std::mutex> lock(mu_);
+  record_inbox();
   finished_ = true;
   return recorder_.finish(reason, clock_.now_s() - start_s_);
 }

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <mutex>
 #include <optional>
@@ -22,6 +23,8 @@ struct SupervisorOptions {
   bool progress = false;        // a live line once a second and whenever the graph changes
   double poll_period_s = 0.02;  // how often the recorder does its periodic work
   double progress_period_s = 1.0;
+  // Samples the inbox holds between two polls (see SupervisorLoop).
+  std::size_t inbox_max = std::size_t{1} << 16;
 };
 
 // The supervisor as a unit: it listens on a transport it only reads (a DDS participant without a
@@ -30,6 +33,13 @@ struct SupervisorOptions {
 // why, and writes the record at the end. swarm-supervisor polls it on a SteadyClock over DDS; the
 // in-process swarm polls it on the swarm's ManualClock, so in-process tests end with the real
 // convergence judgement and summary.
+//
+// A sample is stamped with its arrival time and put in an inbox; each poll records the inbox first.
+// So the transport's thread never waits for the recorder (a graph snapshot of hundreds of agents
+// takes milliseconds, its files may block): a supervisor short of CPU falls behind in memory, on
+// the samples' own arrival times, instead of leaving datagrams to overflow its sockets. The inbox
+// holds at most SupervisorOptions::inbox_max samples; beyond that they are counted, said, and not
+// recorded (the record counts them as gaps).
 class SupervisorLoop {
  public:
   SupervisorLoop(const RunConfig& rc, RunDir dir, SupervisorOptions opts, NeighborBus& bus,
@@ -61,6 +71,12 @@ class SupervisorLoop {
     recorder_.set_observer(observer);
   }
 
+  // Samples that found the inbox full (not recorded).
+  std::uint64_t inbox_overflow() const {
+    std::lock_guard<std::mutex> lock(inbox_mu_);
+    return overflow_;
+  }
+
   // 0 converged with a complete record, 1 not converged, 3 the record is incomplete.
   int exit_code() const;
   bool complete() const { return recorder_.complete(); }
@@ -77,7 +93,17 @@ class SupervisorLoop {
   double start_s_;
   double next_progress_s_ = 0.0;
   int last_edges_ = -1;
-  mutable std::mutex mu_;  // the recorder: samples arrive on transport threads
+  struct Arrival {
+    StateMessage m;
+    std::int64_t recv_wall_ns = 0;
+  };
+  // Records the inbox's samples in their order of arrival; returns the wall time at which it took
+  // them (every sample that arrived before it is recorded). Called with mu_ held.
+  std::int64_t record_inbox();
+  mutable std::mutex inbox_mu_;  // the inbox: samples arrive on transport threads
+  std::vector<Arrival> inbox_, batch_;
+  std::uint64_t overflow_ = 0, overflow_said_ = 0;
+  mutable std::mutex mu_;  // the recorder
   Recorder recorder_;
   bool finished_ = false;
 };

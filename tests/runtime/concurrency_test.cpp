@@ -5,11 +5,14 @@
 
 #include <atomic>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <thread>
 
 #include <unistd.h>
 
 #include "common/claim/claim_bus.hpp"
+#include "common/record/run_observer.hpp"
 #include "common/record/supervisor_loop.hpp"
 #include "common/runtime/agent_loop.hpp"
 #include "common/runtime/faulty_bus.hpp"
@@ -47,6 +50,7 @@ class Feeder {
               bus.feed(running_sample(id, seq, 0.01 * static_cast<double>(seq)));
             fed_ = seq;
           }
+          samples_ = seq * ids.size();
         }) {}
   ~Feeder() { stop(); }
   void stop() {
@@ -57,9 +61,12 @@ class Feeder {
   void wait_for_rounds(std::uint64_t n) const {
     while (fed_ < n) std::this_thread::yield();
   }
+  // Samples fed, once stopped.
+  std::uint64_t samples() const { return samples_; }
 
  private:
   std::atomic<bool> stop_{false};
+  std::atomic<std::uint64_t> samples_{0};
   std::atomic<std::uint64_t> fed_{0};
   std::thread thread_;
 };
@@ -160,6 +167,103 @@ TEST(Concurrency, TheSupervisorRecordsSamplesArrivingWhileItPolls) {
   EXPECT_TRUE(sup.complete());
   EXPECT_EQ(sup.exit_code(), 1);
   EXPECT_GT(std::filesystem::file_size(run.telemetry()), 100u);
+  std::filesystem::remove_all(dir);
+}
+
+TEST(Concurrency, ASupervisorThatFallsBehindHoldsAtMostItsInboxAndSaysWhatItDidNotRecord) {
+  // Given the supervisor's loop with an inbox of 40 samples, on a transport fed from another thread
+  const RunConfig rc =
+      resolve_scenario(parse_scenario_text("agents { id: 1 position { x: 0 y: 0 z: 10 } }\n"
+                                           "agents { id: 2 position { x: 2 y: 0 z: 10 } }\n"
+                                           "duration_s: 1000\n",
+                                           "two"));
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("qswarm-behind-" + std::to_string(::getpid()));
+  std::filesystem::remove_all(dir);
+  const RunDir run = RunDir::claim(dir.string(), "two", "t");
+  ThreadFedBus bus;
+  SteadyClock clock;
+  SupervisorOptions so;
+  so.inbox_max = 40;
+  SupervisorLoop sup(rc, run, so, bus, clock);
+  // When 200 samples or more arrive before it polls
+  std::uint64_t fed = 0;
+  {
+    Feeder feeder(bus, {1, 2});
+    feeder.wait_for_rounds(100);
+    feeder.stop();
+    fed = feeder.samples();
+  }
+  ASSERT_GE(fed, 200u);
+  EXPECT_EQ(sup.inbox_overflow(), fed - 40);
+  const SupervisorLoop::Poll p = sup.poll(false);
+  // Then it recorded the 40 its inbox held, in order, and says once that it fell behind
+  ASSERT_EQ(p.warnings.size(), 1u);
+  EXPECT_NE(p.warnings[0].find("faster than the supervisor records them"), std::string::npos);
+  EXPECT_TRUE(sup.poll(false).warnings.empty());
+  const std::string text = sup.finish("interrupted");
+  EXPECT_NE(text.find("received 40,"), std::string::npos) << text;
+  EXPECT_NE(text.find("BEHIND: " + std::to_string(fed - 40) + " samples"), std::string::npos)
+      << text;
+  std::ifstream summary(run.summary());
+  const std::string json((std::istreambuf_iterator<char>(summary)), {});
+  EXPECT_NE(json.find("\"unrecorded\": " + std::to_string(fed - 40)), std::string::npos);
+  std::ifstream events(run.events());
+  const std::string csv((std::istreambuf_iterator<char>(events)), {});
+  EXPECT_NE(csv.find("supervisor_behind"), std::string::npos);
+  EXPECT_EQ(sup.exit_code(), 1);
+  std::filesystem::remove_all(dir);
+}
+
+// A watcher of the record that makes recording slow: each sample it is shown moves the clock on.
+class SlowRecording final : public RunObserver {
+ public:
+  SlowRecording(ManualClock& clock, double per_record_s) : clock_(clock), dt_(per_record_s) {}
+  void on_record(const records::Record& r, std::int64_t) noexcept override {
+    if (r.has_sample()) clock_.advance(dt_);
+  }
+  void on_summary(const records::Summary&) noexcept override {}
+
+ private:
+  ManualClock& clock_;
+  double dt_;
+};
+
+TEST(Concurrency, ASupervisorThatRecordsSlowlyJudgesSilenceWhenTheSamplesArrivedNotWhenItCaughtUp) {
+  // Given the supervisor on a manual clock, its agents heard every 0.1 s for 2 s
+  const RunConfig rc =
+      resolve_scenario(parse_scenario_text("agents { id: 1 position { x: 0 y: 0 z: 10 } }\n"
+                                           "agents { id: 2 position { x: 2 y: 0 z: 10 } }\n"
+                                           "duration_s: 1000\n",
+                                           "two"));
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("qswarm-slow-" + std::to_string(::getpid()));
+  std::filesystem::remove_all(dir);
+  const RunDir run = RunDir::claim(dir.string(), "two", "t");
+  ThreadFedBus bus;
+  ManualClock clock;
+  SupervisorOptions so;
+  so.inbox_max = 1000;
+  SupervisorLoop sup(rc, run, so, bus, clock);
+  std::uint64_t seq = 0;
+  for (; seq < 20; ++seq) {
+    for (const AgentId id : {1u, 2u})
+      bus.feed(running_sample(id, seq + 1, 0.1 * static_cast<double>(seq)));
+    clock.advance(0.1);
+  }
+  // When recording them takes 0.2 s a sample (8 s in all, eight neighbour timeouts)
+  SlowRecording slow(clock, 0.2);
+  sup.set_observer(&slow);
+  (void)sup.poll(false);
+  sup.set_observer(nullptr);
+  EXPECT_GT(clock.now_s(), 9.0);
+  // Then nobody departed: both were heard until the instant the samples were taken
+  EXPECT_EQ(sup.recorder().departures(), 0u);
+  // And silence is still silence: two seconds on with nothing heard, both have departed
+  clock.advance(0.1);
+  (void)sup.poll(false);
+  EXPECT_EQ(sup.recorder().departures(), 2u);
+  sup.finish("interrupted");
   std::filesystem::remove_all(dir);
 }
 
