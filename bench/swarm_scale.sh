@@ -18,7 +18,10 @@
 # barrier released), the most DDS participants any agent knew at its end (every other one under
 # simple discovery; through a Discovery Server only those it shares a topic with), RSS per agent,
 # the supervisor's CPU (sampled from /proc every 0.2 s while it
-# runs: its user + system time at the last sample over the run's wall time), and how the run ended.
+# runs: its user + system time at the last sample over the run's wall time), the datagrams its
+# sockets dropped at full receive buffers (/proc/net/udp, by the inodes of its sockets, at the last
+# sample), the host's UDP receive-buffer errors during the run (/proc/net/snmp), and how the run
+# ended.
 # Usage: bench/swarm_scale.sh [N ...]        (default: 8 32 64 128)
 # Environment: SCENARIOS="all range ring" DURATION=30 TIME_SCALE=1 RATE_HZ=50 BUILD_DIR=build
 #              SECURE=1: DDS-Security on every process (a `swarm keys` keystore per size)
@@ -37,6 +40,15 @@ RATE_HZ=${RATE_HZ:-50}
 OUT=$BUILD/bench-runs
 mkdir -p "$OUT"
 report() { PYTHONPATH=python /usr/bin/python3 -m qswarm.report "$@"; }
+# Datagrams dropped at full receive buffers by the sockets of process $1, so far.
+socket_drops() {
+  local inodes
+  inodes=$(find "/proc/$1/fd" -lname 'socket:*' -printf '%l ' 2>/dev/null | tr -dc '0-9 ')
+  awk -v list="$inodes" 'BEGIN { n = split(list, a, " "); for (i = 1; i <= n; i++) want[a[i]] = 1 }
+    FNR > 1 && ($10 in want) { d += $NF } END { print d + 0 }' /proc/net/udp /proc/net/udp6
+}
+# The host's UDP receive-buffer errors so far (every socket, every process).
+rcvbuf_errors() { awk '$1 == "Udp:" && $2 ~ /^[0-9]/ { print $6 }' /proc/net/snmp; }
 # A FIXED graph on agents 1..N: each linked to the next id and to the id OFFSET on.
 circulant() {
   awk -v n="$1" -v s="$2" 'BEGIN {
@@ -45,8 +57,8 @@ circulant() {
       i, i % n + 1, i, (i + s - 1) % n + 1
     print " }" }'
 }
-printf "| agents | scenario | consensus [Hz] | time scale | CPU per agent [%% of a core] | late ticks [%%] | sample age p50 / p99 [ms] | accepted samples [1/s] | CPU per accepted sample [us] | discovery max [s] | participants known [max] | RSS per agent [MB] | supervisor CPU [%% of a core] | end |\n"
-printf "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n"
+printf "| agents | scenario | consensus [Hz] | time scale | CPU per agent [%% of a core] | late ticks [%%] | sample age p50 / p99 [ms] | accepted samples [1/s] | CPU per accepted sample [us] | discovery max [s] | participants known [max] | RSS per agent [MB] | supervisor CPU [%% of a core] | supervisor socket drops | host UDP receive-buffer errors | end |\n"
+printf "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n"
 domain=${DOMAIN:-12}  # one run at a time: each reuses the domain the last one left
 for kind in "${KINDS[@]}"; do
   for n in "${SIZES[@]}"; do
@@ -91,15 +103,17 @@ for kind in "${KINDS[@]}"; do
       --time-scale "$TIME_SCALE" --out "$dir" --domain "$domain" --quiet "${secure[@]}" \
       >"$dir.log" 2>&1 &
     launcher=$!
-    sup_ticks=0 sup_pid="" started=$(date +%s.%N)
+    sup_ticks=0 sup_pid="" sup_drops=0 errors_before=$(rcvbuf_errors) started=$(date +%s.%N)
     while kill -0 "$launcher" 2>/dev/null; do
       [[ -n $sup_pid ]] || sup_pid=$(awk -F, '$1 == "supervisor" { print $3 }' "$dir/processes.csv" 2>/dev/null || true)
       if [[ -n $sup_pid ]] && t=$(awk '{ print $14 + $15 }' "/proc/$sup_pid/stat" 2>/dev/null); then
         sup_ticks=$t
+        sup_drops=$(socket_drops "$sup_pid")
       fi
       sleep 0.2
     done
     wait "$launcher" || true
+    host_errors=$(($(rcvbuf_errors) - errors_before))
     sup_cpu=$(awk -v t="$sup_ticks" -v hz="$(getconf CLK_TCK)" -v s="$started" -v e="$(date +%s.%N)" \
       'BEGIN { printf "%.1f", 100 * t / hz / (e - s) }')
     if ! row=$(report "$dir" cpu_per_agent_pct late_ticks_pct messages.age_p50_ms \
@@ -114,8 +128,8 @@ for kind in "${KINDS[@]}"; do
     [[ -n ${DISCOVERY:-} ]] && kind_shown="$kind_shown, ${DISCOVERY,,}"
     awk -v n="$n" -v k="$kind_shown" -v hz="$RATE_HZ" -v ts="$TIME_SCALE" -v cpu="$cpu" -v late="$late" \
       -v p50="$p50" -v p99="$p99" -v s="$per_s" -v cs="$cpu_per" -v d="$disc" -v kn="$known" -v rss="$rss" \
-      -v sup="$sup_cpu" -v end="$end" 'BEGIN {
-        printf "| %d | %s | %s | %s | %.2f | %.2f | %.1f / %.1f | %.0f | %.1f | %.2f | %s | %.1f | %s | %s |\n",
-          n, k, hz, ts, cpu, late, p50, p99, s, cs, d, kn, rss / 1024, sup, end }'
+      -v sup="$sup_cpu" -v sd="$sup_drops" -v he="$host_errors" -v end="$end" 'BEGIN {
+        printf "| %d | %s | %s | %s | %.2f | %.2f | %.1f / %.1f | %.0f | %.1f | %.2f | %s | %.1f | %s | %s | %s | %s |\n",
+          n, k, hz, ts, cpu, late, p50, p99, s, cs, d, kn, rss / 1024, sup, sd, he, end }'
   done
 done
