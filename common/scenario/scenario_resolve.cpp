@@ -337,6 +337,16 @@ void resolve_law(const scenario::Scenario& s, RunConfig& rc) {
   }
 }
 
+// Unset, the record's rate keeps the supervisor's share of the swarm's traffic bounded: every
+// agent's records reach the one supervisor, so 10 Hz up to 128 agents, then
+// kRecordSamplesPerS over the agents (5 Hz at 256, 2.5 Hz at 512).
+constexpr double kRecordSamplesPerS = 1280.0;
+void default_record_rate(const scenario::Scenario& s, RunConfig& rc) {
+  if (s.record().has_rate_hz() || rc.agents.empty()) return;
+  rc.judge.record_hz =
+      std::min(rc.judge.record_hz, kRecordSamplesPerS / static_cast<double>(rc.agents.size()));
+}
+
 // What holds between fields: rates a tick can keep, a controller and airframe that fly, a timeout a
 // neighbour can meet.
 void check_agent(RunConfig& rc) {
@@ -592,6 +602,7 @@ RunConfig resolve_scenario(scenario::Scenario s, const ScenarioOverrides& o) {
   check_start_separation(s, rc);
   resolve_formation(s, rc);
   resolve_law(s, rc);
+  default_record_rate(s, rc);
   check_agent(rc);
   resolve_transport(s.transport(), rc);
   resolve_faults(s.faults(), rc);

@@ -161,6 +161,24 @@ TEST(Scenario, DiscoveryIsThroughAServerAbove32PlainAgentsAndSecureRunsCannotAsk
             scenario::Transport::SIMPLE);
 }
 
+TEST(Scenario, TheRecordRateFallsAbove128AgentsUnlessTheScenarioSetsIt) {
+  const auto record_hz = [](const std::string& text) {
+    return resolve_scenario(parse_scenario_text(text, "s")).judge.record_hz;
+  };
+  // 50 Hz consensus: the supervisor gets every k-th sample, k = 50 / rate rounded.
+  const std::string rates = "rates { consensus_hz: 50 physics_hz: 50 }\n";
+  EXPECT_EQ(record_hz("random_agents { count: 8 }\n" + rates), 10.0);
+  EXPECT_EQ(record_hz("random_agents { count: 128 }\n" + rates), 10.0);
+  EXPECT_EQ(record_hz("random_agents { count: 256 }\n" + rates), 5.0);
+  EXPECT_EQ(record_hz("random_agents { count: 512 }\n" + rates), 2.5);
+  EXPECT_EQ(record_hz("random_agents { count: 512 }\n" + rates + "record { rate_hz: 10 }\n"), 10.0);
+  // Written back, so the agents (which resolve the scenario as run) send at the same rate.
+  const RunConfig rc =
+      resolve_scenario(parse_scenario_text("random_agents { count: 256 }\n" + rates, "s"));
+  EXPECT_EQ(rc.resolved.record().rate_hz(), 5.0);
+  EXPECT_EQ(rc.record_every(), 10u);
+}
+
 TEST(Scenario, DefaultsAreWrittenBackSoTheRecordSaysWhatRan) {
   const RunConfig rc = resolve_scenario(parse_scenario_text(kTwo, "s"));
   EXPECT_DOUBLE_EQ(rc.resolved.rates().consensus_hz(), 50.0);
