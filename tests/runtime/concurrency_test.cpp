@@ -38,6 +38,23 @@ StateMessage running_sample(AgentId id, std::uint64_t seq, double t_s) {
   return m;
 }
 
+// Two agents 2 m apart, for the supervisor's loop.
+RunConfig two_agents() {
+  return resolve_scenario(
+      parse_scenario_text("agents { id: 1 position { x: 0 y: 0 z: 10 } }\n"
+                          "agents { id: 2 position { x: 2 y: 0 z: 10 } }\n"
+                          "duration_s: 1000\n",
+                          "two"));
+}
+
+// An empty directory of this test process's own under the temporary directory.
+std::filesystem::path fresh_dir(const std::string& tag) {
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("qswarm-" + tag + "-" + std::to_string(::getpid()));
+  std::filesystem::remove_all(dir);
+  return dir;
+}
+
 // Feeds running samples of `ids` into `bus` from its own thread until stopped.
 class Feeder {
  public:
@@ -142,14 +159,8 @@ TEST(Concurrency, AnAgentLoopFliesWhileItsTransportDeliversFromAnotherThread) {
 
 TEST(Concurrency, TheSupervisorRecordsSamplesArrivingWhileItPolls) {
   // Given the supervisor's loop on a transport fed from another thread
-  const RunConfig rc =
-      resolve_scenario(parse_scenario_text("agents { id: 1 position { x: 0 y: 0 z: 10 } }\n"
-                                           "agents { id: 2 position { x: 2 y: 0 z: 10 } }\n"
-                                           "duration_s: 1000\n",
-                                           "two"));
-  const std::filesystem::path dir =
-      std::filesystem::temp_directory_path() / ("qswarm-concurrency-" + std::to_string(::getpid()));
-  std::filesystem::remove_all(dir);
+  const RunConfig rc = two_agents();
+  const std::filesystem::path dir = fresh_dir("concurrency");
   const RunDir run = RunDir::claim(dir.string(), "two", "t");
   ThreadFedBus bus;
   SteadyClock clock;  // read on the feeder's thread too, as DDS threads do
@@ -172,14 +183,8 @@ TEST(Concurrency, TheSupervisorRecordsSamplesArrivingWhileItPolls) {
 
 TEST(Concurrency, ASupervisorThatFallsBehindHoldsAtMostItsInboxAndSaysWhatItDidNotRecord) {
   // Given the supervisor's loop with an inbox of 40 samples, on a transport fed from another thread
-  const RunConfig rc =
-      resolve_scenario(parse_scenario_text("agents { id: 1 position { x: 0 y: 0 z: 10 } }\n"
-                                           "agents { id: 2 position { x: 2 y: 0 z: 10 } }\n"
-                                           "duration_s: 1000\n",
-                                           "two"));
-  const std::filesystem::path dir =
-      std::filesystem::temp_directory_path() / ("qswarm-behind-" + std::to_string(::getpid()));
-  std::filesystem::remove_all(dir);
+  const RunConfig rc = two_agents();
+  const std::filesystem::path dir = fresh_dir("behind");
   const RunDir run = RunDir::claim(dir.string(), "two", "t");
   ThreadFedBus bus;
   SteadyClock clock;
@@ -231,14 +236,8 @@ class SlowRecording final : public RunObserver {
 
 TEST(Concurrency, ASupervisorThatRecordsSlowlyJudgesSilenceWhenTheSamplesArrivedNotWhenItCaughtUp) {
   // Given the supervisor on a manual clock, its agents heard every 0.1 s for 2 s
-  const RunConfig rc =
-      resolve_scenario(parse_scenario_text("agents { id: 1 position { x: 0 y: 0 z: 10 } }\n"
-                                           "agents { id: 2 position { x: 2 y: 0 z: 10 } }\n"
-                                           "duration_s: 1000\n",
-                                           "two"));
-  const std::filesystem::path dir =
-      std::filesystem::temp_directory_path() / ("qswarm-slow-" + std::to_string(::getpid()));
-  std::filesystem::remove_all(dir);
+  const RunConfig rc = two_agents();
+  const std::filesystem::path dir = fresh_dir("slow");
   const RunDir run = RunDir::claim(dir.string(), "two", "t");
   ThreadFedBus bus;
   ManualClock clock;
