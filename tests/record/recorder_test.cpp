@@ -207,9 +207,9 @@ TEST(ConvergenceJudge, AgentsStillAtTheirStartBarrierAreNotMissingAndHoldTheVerd
   agree.set_agents(1);
   for (int k = 0; k <= 40; ++k) {
     const double t = 0.1 * k;
-    p.on_sample(sample(1, static_cast<std::uint64_t>(k + 1), t, Vec3::Zero(), Phase::kWaiting), t);
-    p.on_sample(sample(3, static_cast<std::uint64_t>(k + 1), t, Vec3::Zero(), Phase::kReady), t);
-    p.on_sample(sample(2, static_cast<std::uint64_t>(k + 2), t, Vec3::Zero()), t);
+    p.on_sample(sample(1, static_cast<std::uint64_t>(k) + 1, t, Vec3::Zero(), Phase::kWaiting), t);
+    p.on_sample(sample(3, static_cast<std::uint64_t>(k) + 1, t, Vec3::Zero(), Phase::kReady), t);
+    p.on_sample(sample(2, static_cast<std::uint64_t>(k) + 2, t, Vec3::Zero()), t);
     EXPECT_EQ(ConvergenceJudge::Verdict::kNone, judge.update(t, agree, p)) << t;
   }
   agree.set_agents(3);

@@ -49,7 +49,7 @@ RunConfig two_agents() {
 
 // An empty directory of this test process's own under the temporary directory.
 std::filesystem::path fresh_dir(const std::string& tag) {
-  const std::filesystem::path dir =
+  std::filesystem::path dir =
       std::filesystem::temp_directory_path() / ("qswarm-" + tag + "-" + std::to_string(::getpid()));
   std::filesystem::remove_all(dir);
   return dir;
