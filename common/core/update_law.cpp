@@ -85,6 +85,7 @@ std::vector<double> UpdateLaw::update_links(const std::vector<NeighborView>& nei
     const bool by_range = cfg_.topology.policy == TopologyPolicy::kRange;
     // Under kRange a view without a physical distance (not set by the runtime) is not linked.
     if (by_range && !(n.link_distance_m >= 0.0)) continue;
+    if (!n.current && !links_.count(n.id)) continue;
     if (!tracker_.update(n.id, by_range ? n.link_distance_m : d)) continue;
     // The paper's "weights due to initial distance" use |q_i(0) - q_j(0)|, whenever the link forms.
     const double w = weight_for_distance(
@@ -220,6 +221,15 @@ std::vector<FlowEntry> EdgeFlowLaw::held_copies() const {
   return out;
 }
 
+std::set<AgentId> EdgeFlowLaw::settling() const {
+  std::set<AgentId> out;
+  for (const auto& [peer, o] : owned_)
+    if (!o.entry.active && !o.settled) out.insert(peer);
+  for (const auto& [owner, c] : copies_)
+    if (!c.linked && !c.quiet) out.insert(owner);
+  return out;
+}
+
 std::vector<AgentId> EdgeFlowLaw::asking() const {
   return {unanswered_.begin(), unanswered_.end()};
 }
@@ -297,7 +307,8 @@ void EdgeFlowLaw::integrate(const Tick& t) {
       // An edge never linked and never announced costs no entry.
       if (it == copies_.end() && coef[k] <= 0.0 && (!e || e->flow.isZero())) continue;
       Copy& c = it != copies_.end() ? it->second : copies_[n.id];
-      if (!c.seen || n.seq != c.seq) {  // a new message (or a restarted owner: seq from 1)
+      const bool fresh = !c.seen || n.seq != c.seq;  // a new message (or a restarted owner)
+      if (fresh) {
         if (e) c.flow = e->flow;
         c.announced = e != nullptr;
         c.predicted.setZero();
@@ -305,6 +316,11 @@ void EdgeFlowLaw::integrate(const Tick& t) {
         c.seen = true;
       }
       c.linked = coef[k] > 0.0;
+      if (c.linked || (fresh && e)) {
+        c.quiet = false;
+      } else if (fresh) {
+        c.quiet = true;
+      }
       if (c.linked) c.predicted += coef[k] * (n.q - q);
     }
   }

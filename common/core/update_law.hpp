@@ -35,6 +35,13 @@ struct NeighborView {
   // Not on the wire: under TopologyPolicy::kRange the receiver's runtime sets the physical distance
   // between the two agents here, and links follow it instead of the states' distance.
   double link_distance_m = -1.0;
+  // Not on the wire: whether the receiver's runtime heard this view lately (within two ticks, or a
+  // quarter of the neighbour timeout if longer). A link forms only on a current view: a stale one
+  // may show the neighbour where it no longer is (under neighbourhood delivery a neighbour that
+  // moved out of reach falls silent, and the receiver, moving toward where it was last heard, would
+  // link a ghost). A link that exists outlives a stale view until the neighbour timeout, as under
+  // loss.
+  bool current = true;
 };
 
 // Returns an empty string if a received view is usable, else why not (NaN, absurd magnitude, ...).
@@ -101,6 +108,10 @@ class UpdateLaw {
   virtual int recovered_count() const { return 0; }
   // Neighbour values the law ignored since it started (W-MSR's trimming; 0 for the others).
   virtual std::uint64_t trimmed_total() const { return 0; }
+  // Peers whose link is gone but whose exchange with this agent is not settled yet (edge-flow: a
+  // flow the other end has not shown back, a copy its owner still announces): the two must keep
+  // hearing each other until it is, or the swarm's total moves.
+  virtual std::set<AgentId> settling() const { return {}; }
 
  protected:
   // What a tick moves along: `coef[k]` is c for neighbours[k] (0 when not linked), `weight[k]`
@@ -189,6 +200,7 @@ class EdgeFlowLaw final : public UpdateLaw {
   Vec3 state() const override;
   std::vector<FlowEntry> owned_flows() const override;
   std::vector<FlowEntry> held_copies() const override;
+  std::set<AgentId> settling() const override;
   void recover(const std::vector<NeighborView>& neighbors) override;
   int recovered_count() const override { return recovered_; }
   bool owns(AgentId peer) const { return self_ < peer; }
@@ -211,6 +223,9 @@ class EdgeFlowLaw final : public UpdateLaw {
     bool seen = false;
     bool announced = false;  // the owner's newest message carried this edge's flow
     bool linked = false;     // linked on the last tick
+    // Since the link last ended, a message of the owner's carried no flow for this edge: the owner
+    // has settled it (or never moved on it), nothing is left to hear.
+    bool quiet = false;
   };
   std::map<AgentId, Owned> owned_;  // edges this agent owns (peer id > self)
   std::map<AgentId, Copy> copies_;  // flows neighbours own toward us

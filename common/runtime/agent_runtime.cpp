@@ -80,6 +80,16 @@ void AgentRuntime::set_suspects(const std::map<AgentId, std::uint8_t>& suspects)
   }
 }
 
+bool AgentRuntime::current(const Peer& p, double t) const {
+  const double tick_s = static_cast<double>(steps_per_tick_) / p_.config.physics_hz;
+  return t - p.last_new_s <= std::max(2.0 * tick_s, 0.25 * p_.config.neighbor_timeout_s) + 1e-9;
+}
+
+bool AgentRuntime::hears(AgentId peer) const {
+  const auto it = peers_.find(peer);
+  return it != peers_.end() && current(it->second, time_s());
+}
+
 void AgentRuntime::consensus_tick(std::vector<AgentEvent>& events) {
   const double t = time_s();
   std::vector<NeighborView> views;
@@ -108,6 +118,7 @@ void AgentRuntime::consensus_tick(std::vector<AgentEvent>& events) {
       continue;
     }
     views.push_back(m.view);
+    views.back().current = current(st, t);
     // Radio range: the physical distance as this agent sees it (its own position, the
     // neighbour's last sample).
     if (p_.config.law.topology.policy == TopologyPolicy::kRange)

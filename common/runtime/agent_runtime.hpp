@@ -72,6 +72,9 @@ class AgentRuntime {
   }
   const QuadState& quad() const { return quad_; }
   Vec3 consensus() const { return law_->state(); }
+  // Whether this agent heard a new sample of the peer since its last tick or the one before (the
+  // view its law then gets is current: NeighborView::current).
+  bool hears(AgentId peer) const;
   Vec3 position() const;
   const UpdateLaw& law() const { return *law_; }
   const AgentParams& params() const { return p_; }
@@ -122,6 +125,9 @@ class AgentRuntime {
     Vec3 p_W = Vec3::Zero(), v_W = Vec3::Zero();
     double at_s = 0.0;  // the swarm time p_W is for
   };
+  // Heard anew within two ticks, or a quarter of the neighbour timeout if that is longer (samples
+  // run late on a loaded host; a link must still form).
+  bool current(const Peer& p, double t) const;
   std::map<AgentId, Peer> peers_;
   std::set<AgentId> live_;
   std::vector<std::pair<AgentId, double>> initial_links_;  // links at the law's first tick

@@ -204,6 +204,43 @@ TEST(EdgeFlowLaw, LostMessagesDelayButNeverShiftTheTotal) {
   EXPECT_NEAR(b.state().x(), 5.0, 1e-9);
 }
 
+// When a link ends, both ends know whether the exchange on it is still open (settling()): the owner
+// until the other end shows its flow back, the other end until a message of the owner's carries
+// no flow for the edge, even when the one message that carried it was lost. The runtime keeps
+// the two in touch for that long (Neighbourhood's inbox pushes).
+TEST(EdgeFlowLaw, BothEndsKnowAnExchangeIsOpenUntilItIsSettled) {
+  LawConfig cfg;
+  cfg.weight.policy = WeightPolicy::kUnweighted;
+  cfg.topology.policy = TopologyPolicy::kRange;
+  cfg.topology.threshold_m = 4.5;
+  EdgeFlowLaw a(1, Vec3(0, 0, 0), cfg), b(2, Vec3(1, 0, 0), cfg);  // a owns the edge
+  const auto at = [](NeighborView v, double d) {
+    v.link_distance_m = d;
+    return v;
+  };
+  a.observe({at(b.message(), 1.0)});
+  b.observe({at(a.message(), 1.0)});
+  // One linked tick each: a moves the flow; a's message carrying it is lost.
+  const NeighborView a0 = a.message();
+  a.step(0.1, {at(b.message(), 1.0)});
+  b.step(0.1, {at(a0, 1.0)});
+  EXPECT_TRUE(a.settling().empty() && b.settling().empty());  // linked: not settling
+  // The two fly apart: no link, and b never heard the flow.
+  const NeighborView a1 = a.message(), b1 = b.message();
+  a.step(0.1, {at(b1, 20.0)});
+  b.step(0.1, {at(a0, 20.0)});  // still a's old message (the new one was lost)
+  EXPECT_EQ(a.settling(), std::set<AgentId>{2});
+  EXPECT_EQ(b.settling(), std::set<AgentId>{1});
+  // b hears a's flow at last and shows it back; a sees it and settles; b hears that a stopped.
+  b.step(0.1, {at(a1, 20.0)});
+  EXPECT_EQ(b.settling(), std::set<AgentId>{1});
+  a.step(0.1, {at(b.message(), 20.0)});
+  EXPECT_TRUE(a.settling().empty());
+  b.step(0.1, {at(a.message(), 20.0)});
+  EXPECT_TRUE(b.settling().empty());
+  EXPECT_NEAR(a.state().x() + b.state().x(), 1.0, 1e-12);
+}
+
 // Six edge-flow agents whose links come and go by radio range (each pair's "physical" distance
 // switches between in and out of range on a seeded schedule) while 30 % of messages are lost and
 // one agent restarts from scratch. Settled edges stop riding on the messages (their size follows

@@ -157,5 +157,33 @@ TEST(Topology, RangeLinksFollowThePhysicalDistanceAndWeightsTheStates) {
   EXPECT_EQ(parse_topology_policy("range"), TopologyPolicy::kRange);
 }
 
+TEST(Topology, ALinkFormsOnlyOnACurrentViewAndOutlivesAStaleOne) {
+  // A neighbour last heard a second ago, where the agent now is: it may be anywhere since (under
+  // neighbourhood delivery a neighbour that moved out of reach falls silent), so no link forms on
+  // that view; heard anew, it does; a stale view then keeps the link, as under loss.
+  for (const TopologyPolicy policy : {TopologyPolicy::kRange, TopologyPolicy::kProximity}) {
+    LawConfig cfg;
+    cfg.topology.policy = policy;
+    cfg.topology.threshold_m = 4.5;
+    cfg.topology.hysteresis_m = 0.5;
+    const std::unique_ptr<UpdateLaw> law = make_law(1, Vec3(0, 0, 0), cfg);
+    NeighborView v;
+    v.id = 2;
+    v.q = Vec3(1, 0, 0);
+    v.q0 = v.q;
+    v.link_distance_m = 1.0;
+    v.current = false;
+    law->observe({v});
+    law->step(0.02, {v});
+    EXPECT_TRUE(law->links().empty()) << to_string(policy);
+    v.current = true;
+    law->step(0.02, {v});
+    EXPECT_EQ(law->links().size(), 1u) << to_string(policy);
+    v.current = false;
+    law->step(0.02, {v});
+    EXPECT_EQ(law->links().size(), 1u) << to_string(policy);
+  }
+}
+
 }  // namespace
 }  // namespace qswarm
