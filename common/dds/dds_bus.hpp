@@ -40,6 +40,7 @@ class DdsBus final : public NeighborBus {
   // The claim topic (DdsOptions::id_claims; std::logic_error without it).
   ClaimBus& claim_bus();
   DdsParticipant& participant() { return participant_; }
+  DdsStateBus& state() { return state_; }
 
  private:
   DdsParticipant participant_;

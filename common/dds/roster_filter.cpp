@@ -4,7 +4,11 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
 #include <limits>
+#include <sstream>
 
 namespace qswarm {
 
@@ -21,43 +25,200 @@ std::uint64_t read_uint(const unsigned char* d, std::size_t at, std::size_t byte
   return v;
 }
 
+Vec3 read_vec3(const unsigned char* d, std::size_t at, bool little) {
+  Vec3 v;
+  for (int k = 0; k < 3; ++k) {
+    const std::uint64_t bits = read_uint(d, at + 8 * static_cast<std::size_t>(k), 8, little);
+    double x = 0.0;
+    std::memcpy(&x, &bits, sizeof x);
+    v[k] = x;
+  }
+  return v;
+}
+
+bool in_ranges(const std::vector<std::pair<AgentId, AgentId>>& ranges, AgentId id) {
+  return std::any_of(ranges.begin(), ranges.end(),
+                     [id](const auto& r) { return id >= r.first && id <= r.second; });
+}
+
+// A read position in a plain CDR sample: alignment counts from the end of the 4-byte
+// encapsulation header.
+struct Cdr {
+  const unsigned char* d;
+  std::size_t length;
+  bool little;
+  std::size_t at = 4;
+  bool ok = true;
+  void align(std::size_t n) { at = 4 + (at - 4 + n - 1) / n * n; }
+  void skip(std::size_t n) {
+    if (at + n > length) ok = false;
+    at = ok ? at + n : length;
+  }
+  std::uint32_t u32() {
+    align(4);
+    if (at + 4 > length) ok = false;
+    if (!ok) return 0;
+    const auto v = static_cast<std::uint32_t>(read_uint(d, at, 4, little));
+    at += 4;
+    return v;
+  }
+  // A sequence's length, no more than the IDL's bound.
+  std::uint32_t count(std::uint32_t bound) {
+    const std::uint32_t n = u32();
+    if (n > bound) ok = false;
+    return ok ? n : 0;
+  }
+};
+
+constexpr std::size_t kStrangersOffset = 4 + 304;  // after the fixed fields (idl/swarm_state.idl)
+constexpr std::uint32_t kMaxEntries = 511;
+
+// The ids a serialized sample mentions (its links, flows, copies and asking), in order; nothing
+// if it does not parse.
+std::vector<AgentId> mentioned_ids(const unsigned char* d, std::size_t length) {
+  std::vector<AgentId> out;
+  if (d == nullptr || length < kStrangersOffset) return out;
+  Cdr c{d, length, (d[1] & 1) != 0};
+  c.at = kStrangersOffset;
+  c.skip(4 * std::size_t{c.count(16)});                      // strangers
+  for (std::uint32_t n = c.count(16); c.ok && n > 0; --n) {  // suspects: {id, kinds}
+    c.u32();
+    c.skip(1);
+  }
+  const auto links = [&](bool keep) {
+    for (std::uint32_t n = c.count(kMaxEntries); c.ok && n > 0; --n) {
+      const AgentId peer = c.u32();
+      c.align(8);
+      c.skip(8);  // weight
+      if (keep && c.ok) out.push_back(peer);
+    }
+  };
+  const auto flows = [&] {
+    for (std::uint32_t n = c.count(kMaxEntries); c.ok && n > 0; --n) {
+      const AgentId peer = c.u32();
+      c.align(8);
+      c.skip(8 * 4 + 1);  // flow[3], weight, active
+      if (c.ok) out.push_back(peer);
+    }
+  };
+  links(true);   // links
+  links(false);  // initial_links: the initial graph, no bond now
+  flows();       // flows
+  flows();       // copies
+  for (std::uint32_t n = c.count(kMaxEntries); c.ok && n > 0; --n) {  // asking
+    const AgentId peer = c.u32();
+    if (c.ok) out.push_back(peer);
+  }
+  if (!c.ok) out.clear();
+  return out;
+}
+
+// What the last sample judged on this thread mentions: a writer judges each sample once per
+// reader, one after the other, and the sample is parsed once. A reader's sample identities are
+// not reliable (Fast DDS leaves them unset, or as a writer's related identity said): `cache`
+// only on the writer's side.
+bool mentioned(const dds::IContentFilter::SerializedPayload& payload,
+               const dds::IContentFilter::FilterSampleInfo& info, AgentId id, bool cache) {
+  if (!cache) {
+    const std::vector<AgentId> ids = mentioned_ids(payload.data, payload.length);
+    return std::find(ids.begin(), ids.end(), id) != ids.end();
+  }
+  struct Last {
+    eprosima::fastrtps::rtps::SampleIdentity sample;
+    const unsigned char* data = nullptr;
+    std::uint32_t length = 0;
+    std::vector<AgentId> ids;
+  };
+  thread_local Last last;
+  const auto& sample = info.sample_identity;
+  // An unknown identity (a reader's, when the writer sent none) is never taken for another.
+  const bool known =
+      sample.sequence_number() != eprosima::fastrtps::rtps::SequenceNumber_t::unknown();
+  if (!known || !(last.sample == sample) || last.data != payload.data ||
+      last.length != payload.length) {
+    last.ids = mentioned_ids(payload.data, payload.length);
+    last.sample = known ? sample : eprosima::fastrtps::rtps::SampleIdentity{};
+    last.data = known ? payload.data : nullptr;
+    last.length = payload.length;
+  }
+  return std::find(last.ids.begin(), last.ids.end(), id) != last.ids.end();
+}
+
 class RosterFilter final : public dds::IContentFilter {
  public:
-  RosterFilter(RosterExpression expr, StrangerTally& tally)
-      : expr_(std::move(expr)), tally_(tally) {}
-  bool evaluate(const SerializedPayload& payload, const FilterSampleInfo&,
-                const GUID_t&) const override {
+  RosterFilter(RosterExpression expr, PlaceFilter place, RosterFilterFactory& factory)
+      : expr_(std::move(expr)), place_(std::move(place)), factory_(factory) {}
+  bool evaluate(const SerializedPayload& payload, const FilterSampleInfo& info,
+                const GUID_t& reader) const override {
     if (payload.data == nullptr || payload.length < kRosterIdOffset + 4) return false;
     const unsigned char* d = payload.data;
     const bool little = (d[1] & 1) != 0;  // CDR_LE / PL_CDR_LE
     const auto id = static_cast<AgentId>(read_uint(d, kRosterIdOffset, 4, little));
-    bool known = false;
-    for (const auto& [lo, hi] : expr_.ranges) known |= id >= lo && id <= hi;
-    if (!known) {
-      std::lock_guard<std::mutex> lock(tally_.mu);
-      ++tally_.samples;
-      if (tally_.ids.size() < StrangerTally::kMaxIds) tally_.ids.insert(id);
+    if (!in_ranges(expr_.ranges, id)) {
+      if (std::memcmp(reader.guidPrefix.value, factory_.local.data(), factory_.local.size()) != 0)
+        return false;  // a peer's reader, evaluated by our writer: not ours to count
+      StrangerTally& tally = factory_.tally;
+      std::lock_guard<std::mutex> lock(tally.mu);
+      ++tally.samples;
+      if (tally.ids.size() < StrangerTally::kMaxIds) tally.ids.insert(id);
       return false;
     }
-    return id != expr_.self;
+    if (id == expr_.self) return false;
+    std::lock_guard<std::mutex> lock(mu_);
+    if (place_.near.empty()) return true;
+    const bool ours =
+        std::memcmp(reader.guidPrefix.value, factory_.local.data(), factory_.local.size()) == 0;
+    if (ours) factory_.judged_on_arrival.fetch_add(1, std::memory_order_relaxed);
+    if (in_ranges(place_.names, id)) return true;
+    if (payload.length < kPositionOffset + 24) return false;
+    const Vec3 q = read_vec3(d, kConsensusOffset, little),
+               p = read_vec3(d, kPositionOffset, little);
+    if (std::any_of(place_.near.begin(), place_.near.end(),
+                    [&](const Reach& r) { return r.contains(r.space == 'q' ? q : p); }))
+      return true;
+    // A bond, whatever the place: the same verdict on the writer's side and on the reader's.
+    return expr_.self != 0 && mentioned(payload, info, expr_.self, /*cache=*/!ours);
+  }
+  const RosterExpression& expression() const { return expr_; }
+  void set_place(PlaceFilter place) {
+    std::lock_guard<std::mutex> lock(mu_);
+    place_ = std::move(place);
   }
 
  private:
-  RosterExpression expr_;
-  StrangerTally& tally_;
+  const RosterExpression expr_;
+  mutable std::mutex mu_;  // place_: changed while DDS threads evaluate
+  PlaceFilter place_;
+  RosterFilterFactory& factory_;  // its tally and counts (evaluate is const to Fast DDS only)
 };
+
+std::vector<std::string> parameters(const dds::IContentFilterFactory::ParameterSeq& params) {
+  std::vector<std::string> out;
+  for (dds::IContentFilterFactory::ParameterSeq::size_type i = 0; i < params.length(); ++i)
+    out.emplace_back(params[i] ? params[i] : "");
+  return out;
+}
 
 }  // namespace
 
 RosterFilterFactory::ReturnCode_t RosterFilterFactory::create_content_filter(
     const char*, const char*, const dds::TopicDataType*, const char* expression,
-    const ParameterSeq&, dds::IContentFilter*& filter) {
+    const ParameterSeq& params, dds::IContentFilter*& filter) {
+  auto place = parse_place_filter(parameters(params));
+  if (!place) return ReturnCode_t::RETCODE_BAD_PARAMETER;
+  if (filter != nullptr) {
+    // New parameters (nullptr: the expression stays): changed in place, since Fast DDS would
+    // otherwise swap the filter while its receive threads evaluate it. The expression (the
+    // roster) is made once, with the reader's topic, and never changes.
+    auto* mine = static_cast<RosterFilter*>(filter);  // this factory makes no other kind
+    if (expression != nullptr && parse_roster_filter(expression) != mine->expression())
+      return ReturnCode_t::RETCODE_UNSUPPORTED;
+    mine->set_place(std::move(*place));
+    return ReturnCode_t::RETCODE_OK;
+  }
   auto expr = parse_roster_filter(expression ? expression : "");
   if (!expr) return ReturnCode_t::RETCODE_BAD_PARAMETER;
-  // Made once, with the reader's topic: the project never changes a filter's expression (Fast DDS
-  // would swap the filter while its receive threads evaluate it).
-  if (filter != nullptr) return ReturnCode_t::RETCODE_UNSUPPORTED;
-  filter = new RosterFilter(std::move(*expr), tally);
+  filter = new RosterFilter(std::move(*expr), std::move(*place), *this);
   return ReturnCode_t::RETCODE_OK;
 }
 
@@ -81,6 +242,69 @@ std::string roster_filter(std::vector<AgentId> roster, AgentId self) {
   }
   if (self != 0) expr += ";self=" + std::to_string(self);
   return expr;
+}
+
+namespace {
+constexpr std::size_t kMaxParameter = 255;  // Fast DDS's string_255
+constexpr std::size_t kMaxPlaceParameters = 64;
+}  // namespace
+
+bool serialized_mentions(const unsigned char* data, std::size_t length, AgentId id) {
+  const std::vector<AgentId> ids = mentioned_ids(data, length);
+  return std::find(ids.begin(), ids.end(), id) != ids.end();
+}
+
+std::vector<std::string> place_filter(const std::vector<Reach>& near,
+                                      const std::vector<AgentId>& names) {
+  std::vector<std::string> out;
+  if (near.empty()) return out;
+  for (const Reach& r : near) {
+    // %.17g: a double read back is the double written, so the filter hears what the Reach says.
+    char buf[kMaxParameter];
+    std::snprintf(buf, sizeof buf, "%c %.17g %.17g %.17g %.17g %.17g %.17g %.17g", r.space,
+                  r.lo.x(), r.lo.y(), r.lo.z(), r.hi.x(), r.hi.y(), r.hi.z(), r.radius_m);
+    out.emplace_back(buf);
+  }
+  // The names as ranges, cut at commas into parameters Fast DDS can carry.
+  const std::string all = roster_filter(names);
+  constexpr std::size_t kRoom = kMaxParameter - 5;  // after "n "
+  for (std::size_t at = 0; at < all.size();) {
+    std::size_t end = all.size();
+    if (end - at > kRoom) end = all.rfind(',', at + kRoom);
+    out.push_back("n " + all.substr(at, end - at));
+    at = end + 1;
+  }
+  return out;
+}
+
+std::optional<PlaceFilter> parse_place_filter(const std::vector<std::string>& params) {
+  PlaceFilter out;
+  if (params.size() > kMaxPlaceParameters) return std::nullopt;
+  for (const std::string& p : params) {
+    if (p.size() < 3 || p.size() > kMaxParameter || p[1] != ' ') return std::nullopt;
+    if (p[0] == 'n') {
+      const auto ids = parse_roster_filter(p.substr(2));
+      if (!ids) return std::nullopt;
+      out.names.insert(out.names.end(), ids->ranges.begin(), ids->ranges.end());
+      continue;
+    }
+    if (p[0] != 'p' && p[0] != 'q') return std::nullopt;
+    std::istringstream in(p.substr(2));
+    in.imbue(std::locale::classic());
+    Reach r;
+    r.space = p[0];
+    double v[7];
+    for (double& x : v)
+      if (!(in >> x) || !std::isfinite(x)) return std::nullopt;
+    if (!(in >> std::ws).eof()) return std::nullopt;
+    r.lo = Vec3(v[0], v[1], v[2]);
+    r.hi = Vec3(v[3], v[4], v[5]);
+    r.radius_m = v[6];
+    if (r.radius_m < 0.0 || (r.lo.array() > r.hi.array()).any()) return std::nullopt;
+    out.near.push_back(r);
+  }
+  if (out.near.empty() && !out.names.empty()) return std::nullopt;
+  return out;
 }
 
 std::optional<RosterExpression> parse_roster_filter(const std::string& text) {

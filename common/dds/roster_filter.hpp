@@ -1,5 +1,7 @@
 #pragma once
 
+#include <array>
+#include <atomic>
 #include <cstdint>
 #include <mutex>
 #include <optional>
@@ -11,6 +13,7 @@
 #include <fastdds/dds/topic/IContentFilterFactory.hpp>
 
 #include "common/core/agent.hpp"
+#include "common/transport/interest.hpp"
 
 namespace qswarm {
 
@@ -29,8 +32,33 @@ std::string roster_filter(std::vector<AgentId> roster, AgentId self = 0);
 std::optional<RosterExpression> parse_roster_filter(const std::string& text);
 
 // Where the filter reads the id in a sample (idl/swarm_state.idl, plain CDR: a 4-byte
-// encapsulation header, then the id): checked against a serialized sample by a test.
+// encapsulation header, then the id), its consensus state and its physical position (the fixed
+// fields before them, each aligned to its size from the end of the header): checked against a
+// serialized sample by a test.
 inline constexpr std::size_t kRosterIdOffset = 4;
+inline constexpr std::size_t kConsensusOffset = 4 + 64;
+inline constexpr std::size_t kPositionOffset = 4 + 120;
+
+// Whether a serialized sample names agent `id` among its links, the flows and copies it carries,
+// or the peers it asks (mentions() of common/transport/state_message.hpp, read from plain CDR
+// without decoding the rest): false for anything that does not parse.
+bool serialized_mentions(const unsigned char* data, std::size_t length, AgentId id);
+
+// Where a reader hears by place (Interest::near), in the filter's parameters, which the reader
+// may change while it runs (its peers' writers learn them through discovery and filter with
+// them): one parameter per Reach ("p LO.x LO.y LO.z HI.x HI.y HI.z RADIUS", 'q' for consensus
+// states) and the agents it hears by name as ranges ("n 1-3,9"; several parameters when that is
+// longer than Fast DDS's 255 characters a parameter). No parameter: no place filter.
+struct PlaceFilter {
+  std::vector<Reach> near;
+  std::vector<std::pair<AgentId, AgentId>> names;  // inclusive
+  bool operator==(const PlaceFilter&) const = default;
+};
+std::vector<std::string> place_filter(const std::vector<Reach>& near,
+                                      const std::vector<AgentId>& names);
+// Nothing for anything malformed: an unknown kind, a number that is not finite, a negative radius,
+// a box upside down, more than 64 parameters, names with no place.
+std::optional<PlaceFilter> parse_place_filter(const std::vector<std::string>& params);
 
 // What a reader's roster filter turned away: the first ids, and every sample.
 struct StrangerTally {
@@ -41,15 +69,24 @@ struct StrangerTally {
 };
 
 // The factory of the content filter class kRosterFilterClass, registered on the participant whose
-// state reader reads through it: the filter reads the key, the agent id, straight from the
-// serialized sample (CDR: a 4-byte encapsulation header, then the id) and admits only the run's
-// ids, so a stranger publishing many keys cannot fill the reader's instances. Fast DDS's SQL
-// filter was not used: it needs the type's description and decodes every sample in full (a
-// 32-agent swarm fell behind real time with it). Counts into its tally.
+// state reader reads through it, and on every agent's, whose state writer evaluates its peers'
+// readers' filters: the filter reads the key, the agent id, straight from the serialized sample
+// (CDR: a 4-byte encapsulation header, then the id) and admits only the run's ids, so a stranger
+// publishing many keys cannot fill the reader's instances; with a place filter in its parameters,
+// only the senders heard by name or by place. Fast DDS's SQL filter was not used: it needs the
+// type's description and decodes every sample in full (a 32-agent swarm fell behind real time
+// with it). The parameters change in place (receive threads and writers evaluate the filter
+// meanwhile); the expression never does. Counts strangers into its tally for the readers of the
+// participant `local` names (a writer evaluating a peer's filter counts nothing).
 class RosterFilterFactory final : public eprosima::fastdds::dds::IContentFilterFactory {
  public:
   static constexpr const char* kRosterFilterClass = "QSWARM_ROSTER";
   StrangerTally tally;
+  std::array<std::uint8_t, 12> local{};  // the GUID prefix of the participant it serves
+  // Samples the local readers' place filters judged on arrival: none once the writers filter for
+  // them (a sample a writer judged carries its verdict), only those of writers that do not.
+  std::atomic<std::uint64_t> judged_on_arrival{0};
+
   ReturnCode_t create_content_filter(const char* filter_class_name, const char* type_name,
                                      const eprosima::fastdds::dds::TopicDataType* data_type,
                                      const char* expression, const ParameterSeq& params,

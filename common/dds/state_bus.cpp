@@ -107,7 +107,8 @@ struct DdsStateBus::Impl : public dds::DataReaderListener {
   // on topics of their own in the run's partition; the other names (cells) stay partitions of
   // the shared topic, in `writer` and `reader`, made when first needed. Touched only by the
   // thread that calls set_interest and publish.
-  dds::DataWriterQos state_writer_qos;
+  dds::DataWriterQos state_writer_qos;   // the names' writers
+  dds::DataWriterQos shared_writer_qos;  // the shared topic's, filtering for its readers if asked
   dds::DataReaderQos state_reader_qos;
   dds::Publisher* named_publisher = nullptr;
   dds::Subscriber* named_subscriber = nullptr;
@@ -123,6 +124,7 @@ struct DdsStateBus::Impl : public dds::DataReaderListener {
   std::map<std::string, NamedWriter> named_writers;
   std::map<std::string, NamedReader> named_readers;
   bool interest_told = false;
+  std::vector<std::string> place_params;  // the shared topic's reader's place filter, as told
 
   static std::string topic_of(const std::string& name) { return "qswarm/agent_state/" + name; }
   dds::Topic* named_topic(const std::string& name) {
@@ -136,9 +138,14 @@ struct DdsStateBus::Impl : public dds::DataReaderListener {
   // 0: none), and its reader, unless it hears all runs.
   void move_writer(const std::vector<std::string>& names, AgentId self);
   void move_reader(const std::vector<std::string>& names);
-  // A reader of `topic` for the state stream, behind the roster filter if there is one.
+  // A reader of `topic` for the state stream, behind the roster filter if there is one (with
+  // these place filter parameters).
   dds::DataReader* state_reader(dds::Subscriber* sub, dds::Topic* on,
-                                dds::ContentFilteredTopic*& filtered);
+                                dds::ContentFilteredTopic*& filtered,
+                                const std::vector<std::string>& place = {});
+  // Tells the shared topic's reader where it hears by place (and, with names as partitions of
+  // the same topic, whom by name).
+  void set_place(const Interest& interest, const std::vector<std::string>& names);
   void set_named_interest(const Interest& interest);
   // Deletes the name's reader and/or writer, and its topic once neither is left.
   void drop_named(const std::string& name, bool its_reader, bool its_writer);
@@ -262,14 +269,21 @@ DdsStateBus::DdsStateBus(DdsParticipant& participant, const StateBusOptions& opt
       if (opts.self != 0)
         pub_qos.partition().push_back((part + '/' + agent_partition(opts.self)).c_str());
       pub = d.participant->create_publisher(pub_qos);
-      dds::DataWriter* w = pub ? pub->create_datawriter(topic, unfiltered(wq), listener) : nullptr;
+      dds::DataWriter* w = pub ? pub->create_datawriter(topic, wq, listener) : nullptr;
       if (!w) throw std::runtime_error("dds: cannot create a writer in " + part);
       return w;
     };
+    dds::DataWriterQos state_qos = unfiltered(best_effort_writer_qos());
+    if (opts.filter_at_writer && !opts.recorder) {
+      const auto readers = static_cast<std::size_t>(opts.max_agents) + 16;
+      state_qos.writer_resource_limits().reader_filters_allocation =
+          eprosima::fastrtps::ResourceLimitedContainerConfig(0, readers, 1);
+    }
     if (opts.topic_per_name && !opts.recorder) {
       // The writers come with set_interest: the agent names' in this publisher, in the run's
       // partition; the shared topic's in a publisher of its own, whose partitions move.
       d.state_writer_qos = unfiltered(best_effort_writer_qos());
+      d.shared_writer_qos = state_qos;
       dds::PublisherQos pub_qos = dds::PUBLISHER_QOS_DEFAULT;
       pub_qos.partition().push_back(run_partition(opts.run_id).c_str());
       d.named_publisher = d.participant->create_publisher(pub_qos);
@@ -277,11 +291,11 @@ DdsStateBus::DdsStateBus(DdsParticipant& participant, const StateBusOptions& opt
       if (!d.named_publisher || !d.publisher)
         throw std::runtime_error("dds: cannot create the state publishers");
     } else {
-      d.writer = writer_in(run_partition(opts.run_id), d.publisher, d.topic,
-                           best_effort_writer_qos(), &d.writer_listener);
+      d.writer = writer_in(run_partition(opts.run_id), d.publisher, d.topic, state_qos,
+                           &d.writer_listener);
     }
     d.record_writer = writer_in(record_partition(opts.run_id), d.record_publisher, d.record_topic,
-                                record_writer_qos(), &d.record_listener);
+                                unfiltered(record_writer_qos()), &d.record_listener);
   }
 
   dds::SubscriberQos sub_qos = dds::SUBSCRIBER_QOS_DEFAULT;
@@ -298,7 +312,9 @@ DdsStateBus::DdsStateBus(DdsParticipant& participant, const StateBusOptions& opt
   rq.resource_limits().allocated_samples = 32;
   rq.endpoint().history_memory_policy =
       eprosima::fastrtps::rtps::PREALLOCATED_WITH_REALLOC_MEMORY_MODE;
-  if (!opts.roster.empty())
+  std::memcpy(d.roster_factory.local.data(), d.own_prefix.data(), d.own_prefix.size());
+  // A writer that filters for its readers finds their filter's class here.
+  if (!opts.roster.empty() || opts.filter_at_writer)
     d.participant->register_content_filter_factory(RosterFilterFactory::kRosterFilterClass,
                                                    &d.roster_factory);
   d.state_reader_qos = rq;
@@ -312,12 +328,13 @@ DdsStateBus::DdsStateBus(DdsParticipant& participant, const StateBusOptions& opt
 }
 
 dds::DataReader* DdsStateBus::Impl::state_reader(dds::Subscriber* sub, dds::Topic* on,
-                                                 dds::ContentFilteredTopic*& filtered) {
+                                                 dds::ContentFilteredTopic*& filtered,
+                                                 const std::vector<std::string>& place) {
   dds::TopicDescription* from = on;
   if (!opts.roster.empty()) {
-    filtered = participant->create_contentfilteredtopic(on->get_name() + "/roster", on,
-                                                        roster_filter(opts.roster, opts.self), {},
-                                                        RosterFilterFactory::kRosterFilterClass);
+    filtered = participant->create_contentfilteredtopic(
+        on->get_name() + "/roster", on, roster_filter(opts.roster, opts.self), place,
+        RosterFilterFactory::kRosterFilterClass);
     if (!filtered) throw std::runtime_error("dds: cannot create the roster filter");
     from = filtered;
   }
@@ -420,23 +437,30 @@ void DdsStateBus::Impl::drop_named(const std::string& name, bool its_reader, boo
 
 void DdsStateBus::Impl::set_named_interest(const Interest& interest) {
   interest_told = true;
-  // Agent names are topics; the other names (cells) partitions of the shared topic, which also
-  // carries the whole run (the empty interest).
+  // Agent names and inboxes are topics; the other names (cells) partitions of the shared topic,
+  // which also carries the whole run (the empty interest).
+  const auto named = [](const std::string& n) {
+    return agent_of_partition(n).has_value() || inbox_of_partition(n).has_value();
+  };
   std::vector<std::string> agents_pub, cells_pub, agents_sub, cells_sub;
-  for (const std::string& n : interest.publish)
-    (agent_of_partition(n) ? agents_pub : cells_pub).push_back(n);
-  for (const std::string& n : interest.subscribe)
-    (agent_of_partition(n) ? agents_sub : cells_sub).push_back(n);
+  for (const std::string& n : interest.publish) (named(n) ? agents_pub : cells_pub).push_back(n);
+  for (const std::string& n : interest.subscribe) (named(n) ? agents_sub : cells_sub).push_back(n);
   // The shared topic's endpoints are made once needed, after their partitions are set: they
   // never hear the whole run on the way.
   if (opts.publish && (interest.publish.empty() || !cells_pub.empty())) {
     move_writer(cells_pub, 0);
-    if (!writer) writer = publisher->create_datawriter(topic, state_writer_qos, &writer_listener);
+    if (!writer) writer = publisher->create_datawriter(topic, shared_writer_qos, &writer_listener);
     if (!writer) throw std::runtime_error("dds: cannot create the state writer");
   }
   if (interest.subscribe.empty() || !cells_sub.empty()) {
     move_reader(cells_sub);
-    if (!reader) reader = state_reader(subscriber, topic, roster_topic);
+    // Its names have topics of their own: the place filter needs none of them.
+    if (!reader) {
+      place_params = place_filter(interest.near, {});
+      reader = state_reader(subscriber, topic, roster_topic, place_params);
+    } else {
+      set_place(interest, {});
+    }
   }
   // The agent names: new endpoints first, then the old ones go.
   const auto has = [](const std::vector<std::string>& v, const std::string& n) {
@@ -467,6 +491,18 @@ void DdsStateBus::Impl::set_named_interest(const Interest& interest) {
   for (const std::string& n : gone) drop_named(n, !has(agents_sub, n), !has(agents_pub, n));
 }
 
+void DdsStateBus::Impl::set_place(const Interest& interest, const std::vector<std::string>& names) {
+  if (!roster_topic) return;  // no filter to tell (no roster: a test's bus)
+  std::vector<AgentId> ids;
+  for (const std::string& n : names)
+    if (const auto id = agent_of_partition(n)) ids.push_back(*id);
+  std::vector<std::string> params = place_filter(interest.near, ids);
+  if (params == place_params) return;  // each change travels to every matched peer
+  if (roster_topic->set_expression_parameters(params) != ReturnCode_t::RETCODE_OK)
+    throw std::runtime_error("dds: cannot set the state reader's place filter");
+  place_params = std::move(params);
+}
+
 void DdsStateBus::set_interest(const Interest& interest) {
   Impl& d = *impl_;
   if (d.opts.recorder) return;  // the supervisor hears the record stream, everyone's
@@ -475,6 +511,8 @@ void DdsStateBus::set_interest(const Interest& interest) {
     return;
   }
   d.move_writer(interest.publish, d.opts.self);
+  // Names and cells are partitions of one topic: a sample heard by name passes whatever its place.
+  d.set_place(interest, interest.subscribe);
   d.move_reader(interest.subscribe);
 }
 
@@ -525,6 +563,10 @@ std::set<AgentId> DdsStateBus::strangers() const {
   const StrangerTally& t = impl_->roster_factory.tally;
   std::lock_guard<std::mutex> lock(t.mu);
   return t.ids;
+}
+
+std::uint64_t DdsStateBus::judged_on_arrival() const {
+  return impl_->roster_factory.judged_on_arrival.load(std::memory_order_relaxed);
 }
 
 std::map<AgentId, std::uint8_t> DdsStateBus::suspects() const {

@@ -48,6 +48,13 @@ struct StateBusOptions {
   // Discovery Server); the gate judges a sample's participant, not its writer, since an agent
   // speaks through two. Until set_interest the state stream has no endpoints.
   bool topic_per_name = false;
+  // The state writer evaluates its readers' place filters (Interest::near) and sends a sample only
+  // to the readers it passes (Fast DDS's writer-side content filtering, for up to max_agents + 16
+  // readers), so an agent is sent only what it hears. Each sample then carries 16 bytes per
+  // filtering reader its writer is matched with, and is judged once per reader: worth it where
+  // agents hear by place (a proximity or radio-range graph), not on a fixed graph. False: readers
+  // filter what they are sent.
+  bool filter_at_writer = false;
 };
 
 // The DDS partitions of a run: the agents' state stream, and the record stream to the supervisor.
@@ -71,6 +78,8 @@ class DdsStateBus final : public NeighborBus {
   void record(const StateMessage& msg) override;
   // Moves the state writer's and reader's partitions (DDS re-matches them with their peers); with
   // topic_per_name, creates and deletes the writers and readers of the names that come and go.
+  // Where it hears by place goes into its reader's filter (its peers' writers learn it through
+  // discovery).
   void set_interest(const Interest& interest) override;
   bool recorder_confirmed() const override;
   // Readers matched to our record writer (our side of discovery only: see recorder_confirmed).
@@ -89,6 +98,9 @@ class DdsStateBus final : public NeighborBus {
   // samples are counted in counters().dropped too).
   std::set<AgentId> strangers() const override;
   std::map<AgentId, std::uint8_t> suspects() const override;
+  // Samples its place filter judged on arrival (StateBusOptions::filter_at_writer: none, since
+  // each writer judges before it sends).
+  std::uint64_t judged_on_arrival() const;
 
   struct Impl;
 

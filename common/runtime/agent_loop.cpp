@@ -86,7 +86,9 @@ AgentLoop::AgentLoop(const RunConfig& rc, AgentId id, const AgentLoopOptions& op
 void AgentLoop::update_interest() {
   std::set<AgentId> linked;
   for (const auto& [peer, w] : runtime_.law().links()) linked.insert(peer);
-  Interest in = neighbourhood_.update(runtime_.position(), runtime_.consensus(), linked);
+  Neighbourhood::Settling settling;
+  for (const AgentId peer : runtime_.law().settling()) settling[peer] = runtime_.hears(peer);
+  Interest in = neighbourhood_.update(runtime_.position(), runtime_.consensus(), linked, settling);
   if (interest_told_ && in == interest_) return;
   interest_ = std::move(in);
   if (interest_told_) ++interest_changes_;

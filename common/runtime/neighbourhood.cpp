@@ -21,6 +21,14 @@ std::string cell_name(char tag, const Eigen::Vector3i& c) {
   return buf;
 }
 
+// A box's centre: where x is, kept within the same bounds as cells (a NaN goes to the origin:
+// such an agent's samples are refused anyway).
+Vec3 clamped(const Vec3& x) {
+  Vec3 out;
+  for (int k = 0; k < 3; ++k) out[k] = std::isfinite(x[k]) ? std::clamp(x[k], -1e9, 1e9) : 0.0;
+  return out;
+}
+
 // Whether x lies within `keep_m` of cell c (its box grown by keep_m on every side).
 bool near_cell(const Vec3& x, const Eigen::Vector3i& c, double cell_m, double keep_m) {
   for (int k = 0; k < 3; ++k) {
@@ -52,7 +60,8 @@ Neighbourhood::Neighbourhood(const RunConfig& rc, AgentId self) : self_(self) {
   by_name_ = t.policy == TopologyPolicy::kStickyProximity;
   const double reach = t.threshold_m + t.hysteresis_m;
   const auto space = [&](char tag, double r) {
-    spaces_.push_back({tag, r + 2.0 * margin_m(r), 0.5 * margin_m(r), std::nullopt});
+    spaces_.push_back({tag, r + 2.0 * margin_m(r), 0.5 * margin_m(r), r + margin_m(r), std::nullopt,
+                       std::nullopt});
   };
   if (t.policy == TopologyPolicy::kProximity || t.policy == TopologyPolicy::kStickyProximity)
     space('q', reach);
@@ -65,18 +74,36 @@ Neighbourhood::Neighbourhood(const RunConfig& rc, AgentId self) : self_(self) {
   if (physical > 0.0) space('p', physical);
 }
 
-Interest Neighbourhood::update(const Vec3& p_W, const Vec3& q, const std::set<AgentId>& linked) {
+Interest Neighbourhood::update(const Vec3& p_W, const Vec3& q, const std::set<AgentId>& linked,
+                               const Settling& settling) {
   Interest in;
   if (whole_run_) return in;
   in.publish.push_back(agent_partition(self_));
   for (Space& s : spaces_) {
     const Vec3& x = s.tag == 'q' ? q : p_W;
     if (!s.cell || !near_cell(x, *s.cell, s.cell_m, s.keep_m)) s.cell = cell_of(x, s.cell_m);
+    if (!s.anchor || !((x - *s.anchor).cwiseAbs().maxCoeff() <= s.keep_m)) s.anchor = clamped(x);
+    const Vec3 keep = Vec3::Constant(s.keep_m);
+    in.near.push_back({s.tag, *s.anchor - keep, *s.anchor + keep, s.radius_m});
     in.publish.push_back(cell_name(s.tag, *s.cell));
     for (int dx = -1; dx <= 1; ++dx)
       for (int dy = -1; dy <= 1; ++dy)
         for (int dz = -1; dz <= 1; ++dz)
           in.subscribe.push_back(cell_name(s.tag, *s.cell + Eigen::Vector3i(dx, dy, dz)));
+  }
+  if (!spaces_.empty()) {
+    in.subscribe.push_back(inbox_partition(self_));
+    std::map<AgentId, int> ticks;
+    std::set<AgentId> pushing;
+    for (const auto& [id, heard] : settling) {
+      if (id == self_) continue;
+      const auto it = settling_.find(id);
+      const int n = ticks[id] = it == settling_.end() ? 1 : it->second + 1;
+      if (!heard || n >= 3 || pushing_.count(id)) pushing.insert(id);
+    }
+    settling_ = std::move(ticks);
+    pushing_ = std::move(pushing);
+    for (const AgentId id : pushing_) in.publish.push_back(inbox_partition(id));
   }
   for (const AgentId id : listed_) in.subscribe.push_back(agent_partition(id));
   if (by_name_)
@@ -85,6 +112,12 @@ Interest Neighbourhood::update(const Vec3& p_W, const Vec3& q, const std::set<Ag
   sort_unique(in.publish);
   sort_unique(in.subscribe);
   return in;
+}
+
+bool Neighbourhood::by_place(const RunConfig& rc) {
+  if (rc.agents.empty()) return false;
+  const Neighbourhood n(rc, rc.agents.front().id);
+  return !n.whole_run_ && !n.spaces_.empty();
 }
 
 std::set<AgentId> Neighbourhood::heard_at_start(const RunConfig& rc, AgentId id) {
@@ -96,7 +129,8 @@ std::set<AgentId> Neighbourhood::heard_at_start(const RunConfig& rc, AgentId id)
   for (const AgentSpec& a : rc.agents) {
     if (a.id == id) continue;
     Neighbourhood theirs(rc, a.id);
-    if (Interest::meets(theirs.update(a.position_W, a.q0(), {}), in)) out.insert(a.id);
+    if (Interest::hears(in, theirs.update(a.position_W, a.q0(), {}), a.q0(), a.position_W))
+      out.insert(a.id);
   }
   return out;
 }

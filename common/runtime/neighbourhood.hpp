@@ -1,5 +1,6 @@
 #pragma once
 
+#include <map>
 #include <optional>
 #include <set>
 #include <string>
@@ -17,24 +18,41 @@ namespace qswarm {
 // Space is cut into cubic cells of the link reach (threshold + hysteresis) plus twice a margin; an
 // agent publishes into its cell and listens to that cell and the 26 around it. It keeps its cell
 // until it is half a margin outside it (moving cells makes DDS re-match its endpoints with every
-// peer: an agent resting on a cell's border must not flap), so any two agents within the reach
-// plus one margin hear each other: the margin is for links about to form and for motion while DDS
-// re-matches. The cells are in the space the topology measures: consensus states for
-// proximity, physical positions for radio range; and, with collision avoidance, physical cells of
-// the filter's reach too (a radio hears everyone near, whatever the graph). Every agent also
-// publishes into a partition of its own id, which others listen to when they must hear it by name:
-// listed edges (a FIXED graph hears only those), and, under sticky proximity, the links it holds
-// (kept however far). Under `transport { delivery: ALL }` everyone hears everyone (the empty
-// interest). Pure.
+// peer: an agent resting on a cell's border must not flap). Cells only bound who is matched with
+// whom: of the samples its cells bring, an agent takes only those of senders within the reach plus
+// a margin of a box about itself (Reach, which DDS evaluates on the writer's side, so nothing else
+// is sent), and it moves the box once half a margin outside it (a move travels to its peers
+// through discovery). So any two agents within the reach plus one margin hear each other, and an
+// agent hears a volume about twice its link sphere instead of 27 cells of at least 6.4 times it:
+// the margin is for links about to form and for motion while DDS re-matches. The cells are in the
+// space the topology measures: consensus states for proximity, physical positions for radio range;
+// and, with collision avoidance, physical cells of the filter's reach too (a radio hears everyone
+// near, whatever the graph). Every agent also publishes into a partition of its own id, which
+// others listen to when they must hear it by name: listed edges (a FIXED graph hears only those),
+// and, under sticky proximity, the links it holds (kept however far). Under `transport { delivery:
+// ALL }` everyone hears everyone (the empty interest). Pure.
 class Neighbourhood {
  public:
   Neighbourhood(const RunConfig& rc, AgentId self);
 
+  // The peers whose exchange with this agent is still settling (UpdateLaw::settling), and
+  // whether it hears them now.
+  using Settling = std::map<AgentId, bool>;
+
   // The interest of the agent at physical position p_W with consensus state q, holding links to
-  // `linked`; it moves to another cell only once half a margin outside its own.
-  Interest update(const Vec3& p_W, const Vec3& q, const std::set<AgentId>& linked);
+  // `linked`; it moves to another cell only once half a margin outside its own. It listens to its
+  // inbox, and pushes its samples into the inbox of a peer it still settles an exchange with once
+  // it no longer hears that peer, or the exchange is still open three ticks after the link ended,
+  // until it is settled: the two may no longer share a cell (particles can move metres in a tick),
+  // the peer may not even know of the exchange (the one sample that told it was lost), and an
+  // edge-flow exchange left unsettled would move the swarm's total.
+  Interest update(const Vec3& p_W, const Vec3& q, const std::set<AgentId>& linked,
+                  const Settling& settling = {});
   // Whether it hears the whole run (delivery ALL).
   bool whole_run() const { return whole_run_; }
+  // Whether the agents of `rc` hear each other by place (Interest::near): neighbourhood delivery
+  // on a graph whose links follow distance, or with collision avoidance.
+  static bool by_place(const RunConfig& rc);
 
   // The agents that agent `id` of `rc` hears at the start (at their start positions, before any
   // link): its start barrier waits for exactly these.
@@ -47,14 +65,18 @@ class Neighbourhood {
   struct Space {
     char tag;                             // 'q' consensus states, 'p' physical positions
     double cell_m;                        // edge of a cell
-    double keep_m;                        // how far outside its cell an agent keeps it
+    double keep_m;                        // how far outside its cell (or its box) an agent keeps it
+    double radius_m;                      // the link reach plus the margin: what it hears
     std::optional<Eigen::Vector3i> cell;  // the agent's cell, once placed
+    std::optional<Vec3> anchor;  // the centre of its box (keep_m on each side), once placed
   };
   AgentId self_;
   bool whole_run_ = false;
   std::vector<Space> spaces_;
   std::set<AgentId> listed_;
-  bool by_name_ = false;  // links are heard by name too
+  std::map<AgentId, int> settling_;  // updates each peer has been settling for
+  std::set<AgentId> pushing_;        // into whose inbox it publishes, until settled
+  bool by_name_ = false;             // links are heard by name too
 };
 
 // The one definition of the peers agent `id` waits for at the start (the barrier, and the law's

@@ -1,6 +1,7 @@
 #include "common/transport/in_memory_bus.hpp"
 
 #include <algorithm>
+#include <optional>
 
 namespace qswarm {
 
@@ -25,7 +26,12 @@ void InMemoryNetwork::deliver() {
     for (InMemoryBus* to : endpoints_) {
       if (to == p.from || to->role() != to_role) continue;
       // A record goes to every recorder; a sample to whoever listens where it was published.
-      if (!p.record && !Interest::meets(p.published, to->interest())) continue;
+      if (!p.record) {
+        const std::optional<AgentId> listener = to->interest().agent();
+        if (!Interest::hears(to->interest(), p.published, p.m.view.q, p.m.p_W,
+                             listener && mentions(p.m, *listener)))
+          continue;
+      }
       if (rewrite_ && p.from) {
         StateMessage m = p.m;
         rewrite_(*p.from, *to, m);

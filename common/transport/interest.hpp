@@ -5,19 +5,48 @@
 #include <vector>
 
 #include "common/core/agent.hpp"
+#include "common/core/math.hpp"
 
 namespace qswarm {
 
+// Where the agents an endpoint hears by place may be: within `radius_m` of the box [lo, hi] (the
+// box holds the listening agent while it keeps this reach; the radius is its link reach plus a
+// margin), in the space its topology measures: 'q' consensus states, 'p' physical positions.
+struct Reach {
+  char space = 'p';
+  Vec3 lo = Vec3::Zero();
+  Vec3 hi = Vec3::Zero();
+  double radius_m = 0.0;
+  bool operator==(const Reach&) const = default;
+  // Whether a point lies within radius_m of the box (never for a point that is not finite).
+  bool contains(const Vec3& x) const;
+};
+
 // Which parts of the run's state stream an endpoint publishes into and listens to: partitions,
-// named relative to the run (the transport adds the run's own prefix, so runs stay apart). An
-// endpoint hears a sample when the sample's publish set and its subscribe set share a name. The
-// empty interest is the whole run: one partition everybody shares.
+// named relative to the run (the transport adds the run's own prefix, so runs stay apart), and,
+// finer than partitions, where the senders it hears by place may be. The empty interest is the
+// whole run: one partition everybody shares.
 struct Interest {
   std::vector<std::string> publish;    // sorted, unique
   std::vector<std::string> subscribe;  // sorted, unique
+  // Of the samples that reach it through a cell (a partition that names no agent), the endpoint
+  // takes only those whose sender lies within one of these (none: all of them). Samples that
+  // reach it by an agent's name always pass. DDS applies it on the writer's side, so a sample that
+  // does not pass is never sent.
+  std::vector<Reach> near;
   bool operator==(const Interest&) const = default;
-  // Whether a sample published with `from` reaches an endpoint with `to`.
+  // Whether a sample published with `from` shares a partition with an endpoint's `to`.
   static bool meets(const Interest& from, const Interest& to);
+  // Whether an endpoint listening with `to` hears a sample published with `from` by an agent
+  // whose consensus state is q and physical position p_W, and which names the listener's agent
+  // among its links or its edges' entries (`bonded`): a shared agent name, or a shared cell and
+  // a place within `to.near` or a bond. A bond passes whatever the place: a link must not wait
+  // for discovery to carry a moved box, and an edge-flow exchange must be settled (the swarm's
+  // total depends on it) even when a particle moved metres in one tick.
+  static bool hears(const Interest& to, const Interest& from, const Vec3& q, const Vec3& p_W,
+                    bool bonded = false);
+  // The agent whose name it publishes into (its own), if any.
+  std::optional<AgentId> agent() const;
 };
 
 // The partition every agent publishes into, named for its id ("a3"): others listen to it to hear
@@ -27,5 +56,10 @@ struct Interest {
 std::string agent_partition(AgentId id);
 // The agent an agent partition names ("a3" -> 3); nothing for any other name ("a03", "a3x").
 std::optional<AgentId> agent_of_partition(const std::string& name);
+// An agent's inbox ("in3"): where agents that hear by place listen besides their cells, and where
+// a peer pushes its samples while an exchange with that agent is left to settle and the two may
+// no longer share a cell. What arrives there passes like what cells bring: by place or bond.
+std::string inbox_partition(AgentId id);
+std::optional<AgentId> inbox_of_partition(const std::string& name);
 
 }  // namespace qswarm

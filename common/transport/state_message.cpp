@@ -1,5 +1,6 @@
 #include "common/transport/state_message.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 namespace qswarm {
@@ -60,6 +61,17 @@ const char* suspect_text(SuspectKind k) {
       return "a participant whose certificate names another agent published as it (refused)";
   }
   return "unknown";
+}
+
+bool mentions(const StateMessage& m, AgentId id) {
+  const auto in = [id](const auto& entries) {
+    return std::any_of(entries.begin(), entries.end(),
+                       [id](const FlowEntry& e) { return e.peer == id; });
+  };
+  return std::any_of(m.links.begin(), m.links.end(),
+                     [id](const auto& l) { return l.first == id; }) ||
+         in(m.view.flows) || in(m.view.copies) ||
+         std::find(m.view.asking.begin(), m.view.asking.end(), id) != m.view.asking.end();
 }
 
 }  // namespace qswarm

@@ -89,6 +89,11 @@ struct StateMessage {
   std::vector<Suspect> suspects;
 };
 
+// Whether the sender of `m` is bonded with agent `id`: names it among its links, its edges'
+// entries (flows it owns, copies it holds: an exchange still to settle) or the peers it asks
+// after a restart. Such a sample must reach that agent wherever it is (Interest::hears).
+bool mentions(const StateMessage& m, AgentId id);
+
 // Empty if a received message is usable, else why not. Anything non-finite or absurd is refused.
 std::string check_message(const StateMessage& m);
 

@@ -40,10 +40,10 @@ struct Swarm {
       agents.push_back(std::make_unique<DdsBus>(o));
     }
     // Two pairs: 1 and 2 hear each other by name, 3 and 4 share a cell.
-    agent(1).set_interest({{"a1"}, {"a2"}});
-    agent(2).set_interest({{"a2"}, {"a1"}});
-    agent(3).set_interest({{"a3", "c.0.0.0"}, {"c.0.0.0"}});
-    agent(4).set_interest({{"a4", "c.0.0.0"}, {"c.0.0.0"}});
+    agent(1).set_interest({{"a1"}, {"a2"}, {}});
+    agent(2).set_interest({{"a2"}, {"a1"}, {}});
+    agent(3).set_interest({{"a3", "c.0.0.0"}, {"c.0.0.0"}, {}});
+    agent(4).set_interest({{"a4", "c.0.0.0"}, {"c.0.0.0"}, {}});
   }
   DdsBus& agent(AgentId a) { return *agents.at(a - 1); }
   int known(AgentId a) { return agent(a).participant().writers().participants_known(); }
@@ -78,7 +78,7 @@ TEST(NeighbourTopics, ThroughADiscoveryServerAnAgentDiscoversOnlyThoseItSharesAN
   EXPECT_EQ(s.agent(1).matched_readers(), 1);
 
   // Agent 3 starts listening to agent 1 by name: the server introduces them, samples flow.
-  s.agent(3).set_interest({{"a3", "c.0.0.0"}, {"a1", "c.0.0.0"}});
+  s.agent(3).set_interest({{"a3", "c.0.0.0"}, {"a1", "c.0.0.0"}, {}});
   ASSERT_TRUE(test::wait_for(
       [&] {
         s.publish();
@@ -91,7 +91,7 @@ TEST(NeighbourTopics, ThroughADiscoveryServerAnAgentDiscoversOnlyThoseItSharesAN
   EXPECT_EQ(s.known(4), 2);
 
   // And stops: its reader goes, agent 1 sends to one reader again.
-  s.agent(3).set_interest({{"a3", "c.0.0.0"}, {"c.0.0.0"}});
+  s.agent(3).set_interest({{"a3", "c.0.0.0"}, {"c.0.0.0"}, {}});
   ASSERT_TRUE(test::wait_for(
       [&] {
         s.publish();

@@ -122,6 +122,26 @@ TEST(RosterFilter, ReadsItsFieldsWhereTheSerializedSampleHasThem) {
   EXPECT_EQ(id, m.view.id);
 }
 
+// The place filter reads the consensus state and the physical position the same way.
+TEST(RosterFilter, ReadsThePlacesWhereTheSerializedSampleHasThem) {
+  StateMessage m;
+  m.view.id = 7;
+  m.view.q = Vec3(1.5, -2.25, 3.125);
+  m.p_W = Vec3(-7.5, 8.25, 9.0625);
+  m.links = {{2, 1.0}};
+  qswarm_msgs::AgentState s;
+  to_idl(m, s);
+  qswarm_msgs::AgentStatePubSubType type;
+  eprosima::fastrtps::rtps::SerializedPayload_t payload(type.m_typeSize);
+  ASSERT_TRUE(type.serialize(&s, &payload));
+  ASSERT_GE(payload.length, kPositionOffset + 24);
+  double q[3], p[3];
+  std::memcpy(q, payload.data + kConsensusOffset, sizeof q);
+  std::memcpy(p, payload.data + kPositionOffset, sizeof p);
+  EXPECT_EQ(Vec3(q[0], q[1], q[2]), m.view.q);
+  EXPECT_EQ(Vec3(p[0], p[1], p[2]), m.p_W);
+}
+
 TEST(RunIsolation, AStrangerFloodingKeysOnTheRunsPartitionCannotBlindAReader) {
   // 60 keys outside the run's roster (six participants of 10 keys each: a writer keeps 10
   // instances) would fill a reader sized for 16 agents + 16; with the roster filter they never

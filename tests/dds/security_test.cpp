@@ -181,7 +181,7 @@ TEST_F(Security, AWriterThatMovesIntoAnotherAgentsPartitionIsRefusedForGood) {
   DdsBus agent1(options("agent-1", ours(), "agent-1", false, 1));
   DdsBus agent2(options("agent-2", ours(), "agent-2", false, 2));
   // Agent 2 listens to agents 1, 3 and 5 by name, so that it still matches the moved writer.
-  agent2.set_interest(Interest{{}, {"a1", "a3", "a5"}});
+  agent2.set_interest(Interest{{}, {"a1", "a3", "a5"}, {}});
   std::uint64_t seq = 0;
   ASSERT_TRUE(test::wait_for(
       [&] {
@@ -192,7 +192,7 @@ TEST_F(Security, AWriterThatMovesIntoAnotherAgentsPartitionIsRefusedForGood) {
       },
       60.0));
   const std::uint64_t moved_at = seq;
-  intruder.set_interest(Interest{{"a5"}, {}});
+  intruder.set_interest(Interest{{"a5"}, {}, {}});
   const std::uint64_t received = agent2.counters().received;
   ASSERT_TRUE(test::wait_for(
       [&] {

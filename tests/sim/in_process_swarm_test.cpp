@@ -100,7 +100,7 @@ TEST(InProcessSwarm, AStrangerSendingNanAndImpersonationsIsDroppedAndChangesNoth
   InProcessSwarm swarm(six());
   InMemoryBus stranger(swarm.network());
   // It publishes where agent 2 does, so whoever hears agent 2 hears it.
-  stranger.set_interest({swarm.agent(2)->interest().publish, {}});
+  stranger.set_interest({swarm.agent(2)->interest().publish, {}, {}});
   std::uint64_t seq = 1u << 30;
   ASSERT_TRUE(swarm.run_until(
       [&] {

@@ -1,0 +1,249 @@
+// An agent that hears by place (Interest::near) is sent only the samples of agents within its
+// reach: the writers judge its filter before they send (Fast DDS's writer-side content filtering
+// with the project's filter class), learn where it moved through discovery, and still deliver
+// what it hears by name.
+#include <gtest/gtest.h>
+
+#include <memory>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "common/dds/dds_bus.hpp"
+#include "common/dds/idl_convert.hpp"
+#include "common/dds/roster_filter.hpp"
+#include "common/transport/interest.hpp"
+#include "tests/dds/test_bus.hpp"
+#include "tests/swarm/harness.hpp"
+
+#include "swarm_statePubSubTypes.h"
+
+namespace qswarm {
+namespace {
+
+constexpr std::uint64_t kRun = 0x90;
+
+// Agent 1 listens at the origin; agent 2 flies 100 m away, agent 3 1 m away. All share one cell
+// (as a dense swarm does), so only the place filter tells them apart.
+struct Three {
+  std::vector<std::unique_ptr<DdsBus>> agents;
+  std::vector<Vec3> at{Vec3(0, 0, 0), Vec3(100, 0, 0), Vec3(1, 0, 0)};
+  std::uint64_t seq = 0;
+
+  explicit Three(bool filter_at_writer) {
+    for (AgentId a = 1; a <= 3; ++a) {
+      DdsOptions o = test::dds_options(("agent-" + std::to_string(a)).c_str(), kRun);
+      o.state.self = a;
+      o.state.roster = {1, 2, 3};
+      o.state.filter_at_writer = filter_at_writer;
+      agents.push_back(std::make_unique<DdsBus>(o));
+    }
+    for (AgentId a = 1; a <= 3; ++a) listen_at(a, at[a - 1], {});
+  }
+  DdsBus& agent(AgentId a) { return *agents.at(a - 1); }
+  std::vector<std::vector<AgentId>> links{{}, {}, {}};  // what each agent's samples say it links
+  // Agent a hears the cell "c" within 5 m of a box of 1 m about `centre`, and these agents by
+  // name.
+  void listen_at(AgentId a, const Vec3& centre, std::vector<std::string> names) {
+    Interest in;
+    in.publish = {agent_partition(a), "c"};
+    names.emplace_back("c");
+    std::sort(names.begin(), names.end());
+    in.subscribe = names;
+    in.near = {Reach{'p', centre - Vec3::Constant(0.5), centre + Vec3::Constant(0.5), 5.0}};
+    agent(a).set_interest(in);
+  }
+  void publish() {
+    ++seq;
+    for (AgentId a = 1; a <= 3; ++a) {
+      StateMessage m = test::state_sample(a, kRun, seq);
+      m.p_W = at[a - 1];
+      m.view.q = at[a - 1];
+      for (const AgentId peer : links[a - 1]) m.links.emplace_back(peer, 1.0);
+      agent(a).publish(m);
+    }
+  }
+  std::uint64_t seq_heard(AgentId by, AgentId from) {
+    for (const StateMessage& m : agent(by).latest(by))
+      if (m.view.id == from) return m.seq;
+    return 0;
+  }
+  std::uint64_t judged(AgentId a) { return agent(a).state().judged_on_arrival(); }
+};
+
+TEST(PlaceFilter, AWriterSendsOnlyToTheReadersWhoseReachItIsIn) {
+  Three s(/*filter_at_writer=*/true);
+  ASSERT_TRUE(test::wait_for(
+      [&] {
+        s.publish();
+        return s.seq_heard(1, 3) > 10 && s.seq_heard(3, 1) > 10;
+      },
+      30.0));
+  // Agent 1's filter is never judged on arrival: every sample that reaches it was judged by its
+  // writer, and agent 2's were never sent.
+  const std::uint64_t judged = s.judged(1), from = s.seq;
+  ASSERT_TRUE(test::wait_for(
+      [&] {
+        s.publish();
+        return s.seq_heard(1, 3) >= from + 50;
+      },
+      30.0));
+  EXPECT_EQ(s.seq_heard(1, 2), 0u);
+  EXPECT_EQ(s.judged(1), judged);
+
+  // Agent 1 moves next to agent 2: its writers learn where through discovery, and it hears agent 2
+  // and no longer agent 3.
+  s.listen_at(1, Vec3(99, 0, 0), {});
+  ASSERT_TRUE(test::wait_for(
+      [&] {
+        s.publish();
+        return s.seq_heard(1, 2) > 0;
+      },
+      30.0));
+  const std::uint64_t moved = s.seq;
+  ASSERT_TRUE(test::wait_for(
+      [&] {
+        s.publish();
+        return s.seq_heard(1, 2) >= moved + 20;
+      },
+      30.0));
+  EXPECT_LT(s.seq_heard(1, 3), moved + 20);
+
+  // An agent heard by name is heard wherever it is.
+  s.listen_at(1, Vec3(0, 0, 0), {agent_partition(2)});
+  const std::uint64_t named = s.seq;
+  ASSERT_TRUE(test::wait_for(
+      [&] {
+        s.publish();
+        return s.seq_heard(1, 2) >= named + 20 && s.seq_heard(1, 3) >= named + 20;
+      },
+      30.0));
+
+  // A bond (a link, an exchange being settled) needs no discovery: once agent 3's samples name
+  // agent 2, 99 m away, as a link, they reach agent 2's reader, whatever its place. A bond is the
+  // sender's: agent 3 still does not hear agent 2, whose samples do not name it.
+  EXPECT_EQ(s.seq_heard(2, 3), 0u);
+  const std::uint64_t before = s.seq;
+  s.links[2] = {2};
+  ASSERT_TRUE(test::wait_for(
+      [&] {
+        s.publish();
+        return s.seq_heard(2, 3) >= before + 20;
+      },
+      30.0));
+  EXPECT_EQ(s.seq_heard(3, 2), 0u);
+}
+
+// The control: readers filter what they are sent, so agent 2's samples reach agent 1 and are
+// judged (and dropped) there.
+TEST(PlaceFilter, WithoutTheWritersHelpEverySampleIsSentAndJudgedOnArrival) {
+  Three s(/*filter_at_writer=*/false);
+  ASSERT_TRUE(test::wait_for(
+      [&] {
+        s.publish();
+        return s.seq_heard(1, 3) > 10;
+      },
+      30.0));
+  const std::uint64_t judged = s.judged(1), from = s.seq;
+  ASSERT_TRUE(test::wait_for(
+      [&] {
+        s.publish();
+        return s.seq_heard(1, 3) >= from + 50;
+      },
+      30.0));
+  EXPECT_EQ(s.seq_heard(1, 2), 0u);
+  EXPECT_GE(s.judged(1), judged + 50);
+}
+
+TEST(PlaceFilter, ParametersBothWaysAndWhatIsRefused) {
+  const Reach r{'q', Vec3(-1.5, 0.1, 1e-3), Vec3(2.25, 0.3, 7e5), 6.2500000001};
+  const std::vector<std::string> p = place_filter({r}, {1, 2, 3, 9});
+  ASSERT_EQ(p.size(), 2u);
+  EXPECT_EQ(p[1], "n 1-3,9");
+  const auto back = parse_place_filter(p);
+  ASSERT_TRUE(back.has_value());
+  EXPECT_EQ(back->near, std::vector<Reach>{r});  // exactly: the filter hears what the Reach says
+  EXPECT_EQ(back->names, (std::vector<std::pair<AgentId, AgentId>>{{1, 3}, {9, 9}}));
+  EXPECT_TRUE(place_filter({}, {1, 2}).empty());  // names without a place: no filter at all
+  EXPECT_EQ(parse_place_filter({}), PlaceFilter{});
+  // Many names are cut into parameters Fast DDS can carry (at most 255 characters each).
+  std::vector<AgentId> odd;
+  for (AgentId id = 1; id < 1024; id += 2) odd.push_back(id);
+  const std::vector<std::string> many = place_filter({r}, odd);
+  EXPECT_GT(many.size(), 5u);
+  for (const std::string& s : many) EXPECT_LE(s.size(), 255u);
+  ASSERT_TRUE(parse_place_filter(many).has_value());
+  EXPECT_EQ(parse_place_filter(many)->names.size(), odd.size());
+  // A peer's reader may send anything: what is not a place filter is refused (its writer then
+  // sends that reader everything its partitions match, and the reader judges).
+  for (const std::vector<std::string>& bad :
+       std::vector<std::vector<std::string>>{{"p 0 0 0 1 1 1"},
+                                             {"p 0 0 0 1 1 1 5 6"},
+                                             {"x 0 0 0 1 1 1 5"},
+                                             {"p 0 0 0 1 1 1 -5"},
+                                             {"p 1 0 0 0 1 1 5"},
+                                             {"p nan 0 0 1 1 1 5"},
+                                             {"p 0 0 0 inf 1 1 5"},
+                                             {"p 0 0 0 1 1 1 1e999"},
+                                             {"p0 0 0 1 1 1 5"},
+                                             {"n 1-3"},
+                                             {"p 0 0 0 1 1 1 5", "n 3-1"},
+                                             {"p 0 0 0 1 1 1 5", "n "},
+                                             {""},
+                                             {std::string(300, 'p')},
+                                             std::vector<std::string>(65, "p 0 0 0 1 1 1 5")})
+    EXPECT_FALSE(parse_place_filter(bad).has_value()) << (bad.empty() ? "" : bad[0]);
+}
+
+// The filter finds the agents a serialized sample names (its links, flows, copies, asking) where
+// the generated type puts them, whatever else the sample carries: the same answer as mentions()
+// on the decoded sample, for seeded random samples.
+TEST(PlaceFilter, ASerializedSampleNamesTheAgentsItsDecodedSampleNames) {
+  std::mt19937_64 rng(11);
+  std::uniform_int_distribution<int> count(0, 5), peer(1, 12), small(0, 16);
+  const auto entries = [&] {
+    std::vector<FlowEntry> v(static_cast<std::size_t>(count(rng)));
+    for (FlowEntry& e : v) e = {static_cast<AgentId>(peer(rng)), Vec3(1, 2, 3), 0.5, true};
+    return v;
+  };
+  int named = 0;
+  for (int k = 0; k < 500; ++k) {
+    StateMessage m;
+    m.view.id = 99;
+    for (int i = count(rng); i > 0; --i) m.links.emplace_back(peer(rng), 1.5);
+    for (int i = count(rng); i > 0; --i) m.initial_links.emplace_back(peer(rng), 1.5);
+    m.view.flows = entries();
+    m.view.copies = entries();
+    for (int i = count(rng); i > 0; --i) m.view.asking.push_back(static_cast<AgentId>(peer(rng)));
+    for (int i = small(rng); i > 0; --i) m.strangers.push_back(static_cast<AgentId>(1000 + i));
+    for (int i = small(rng); i > 0; --i) m.suspects.push_back({static_cast<AgentId>(i), 3});
+    qswarm_msgs::AgentState s;
+    to_idl(m, s);
+    qswarm_msgs::AgentStatePubSubType type;
+    eprosima::fastrtps::rtps::SerializedPayload_t payload(type.m_typeSize);
+    ASSERT_TRUE(type.serialize(&s, &payload));
+    for (AgentId id = 1; id <= 12; ++id) {
+      ASSERT_EQ(serialized_mentions(payload.data, payload.length, id), mentions(m, id))
+          << "sample " << k << ", agent " << id;
+      named += mentions(m, id);
+      // Cut short, it names nobody (and nothing beyond its end is read).
+      EXPECT_FALSE(serialized_mentions(payload.data, payload.length / 2, id));
+    }
+  }
+  EXPECT_GT(named, 1000);  // the property was tested, not skipped
+  EXPECT_FALSE(serialized_mentions(nullptr, 0, 1));
+}
+
+TEST(PlaceFilter, AReachHoldsPointsWithinItsRadiusOfTheBox) {
+  const Reach r{'p', Vec3(0, 0, 0), Vec3(1, 1, 1), 2.0};
+  EXPECT_TRUE(r.contains(Vec3(0.5, 0.5, 0.5)));
+  EXPECT_TRUE(r.contains(Vec3(3.0, 1.0, 1.0)));
+  EXPECT_FALSE(r.contains(Vec3(3.0 + 1e-9, 1.0, 1.0)));
+  EXPECT_TRUE(r.contains(Vec3(-1.4, -1.4, 0.5)));
+  EXPECT_FALSE(r.contains(Vec3(-1.5, -1.5, 0.5)));
+  EXPECT_FALSE(r.contains(Vec3(std::nan(""), 0, 0)));
+  EXPECT_FALSE(r.contains(Vec3(HUGE_VAL, 0, 0)));
+}
+
+}  // namespace
+}  // namespace qswarm
