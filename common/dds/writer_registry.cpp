@@ -8,7 +8,7 @@
 
 namespace qswarm {
 
-namespace rtps = eprosima::fastrtps::rtps;
+namespace frtps = eprosima::fastrtps::rtps;
 
 std::optional<AgentId> agent_named_by(const std::string& partition) {
   // "qswarm-run-" or "qswarm-record-", the run id's 16 hex digits, '/', an agent partition.
@@ -24,7 +24,7 @@ std::optional<AgentId> agent_named_by(const std::string& partition) {
   return agent_of_partition(partition.substr(at + 17));
 }
 
-WriterId WriterRegistry::id_of(const rtps::GUID_t& guid) {
+WriterId WriterRegistry::id_of(const frtps::GUID_t& guid) {
   WriterId w;
   std::memcpy(w.bytes.data(), guid.guidPrefix.value, 12);
   std::memcpy(w.bytes.data() + 12, guid.entityId.value, 4);
@@ -47,16 +47,16 @@ int WriterRegistry::participants_known() const {
 }
 
 void WriterRegistry::on_participant_discovery(eprosima::fastdds::dds::DomainParticipant*,
-                                              rtps::ParticipantDiscoveryInfo&& info) {
+                                              frtps::ParticipantDiscoveryInfo&& info) {
   std::array<std::uint8_t, 12> prefix;
   std::memcpy(prefix.data(), info.info.m_guid.guidPrefix.value, prefix.size());
   std::lock_guard<std::mutex> lock(mu_);
   switch (info.status) {
-    case rtps::ParticipantDiscoveryInfo::DISCOVERED_PARTICIPANT:
+    case frtps::ParticipantDiscoveryInfo::DISCOVERED_PARTICIPANT:
       participants_.insert(prefix);
       break;
-    case rtps::ParticipantDiscoveryInfo::REMOVED_PARTICIPANT:
-    case rtps::ParticipantDiscoveryInfo::DROPPED_PARTICIPANT:
+    case frtps::ParticipantDiscoveryInfo::REMOVED_PARTICIPANT:
+    case frtps::ParticipantDiscoveryInfo::DROPPED_PARTICIPANT:
       participants_.erase(prefix);
       break;
     default:
@@ -65,13 +65,13 @@ void WriterRegistry::on_participant_discovery(eprosima::fastdds::dds::DomainPart
 }
 
 void WriterRegistry::on_publisher_discovery(eprosima::fastdds::dds::DomainParticipant*,
-                                            rtps::WriterDiscoveryInfo&& info) {
+                                            frtps::WriterDiscoveryInfo&& info) {
   try {
     const std::string topic = info.info.topicName().to_string();
     if (topic != "qswarm/agent_state" && topic != "qswarm/record") return;
     const WriterId w = id_of(info.info.guid());
     std::lock_guard<std::mutex> lock(mu_);
-    if (info.status == rtps::WriterDiscoveryInfo::REMOVED_WRITER) {
+    if (info.status == frtps::WriterDiscoveryInfo::REMOVED_WRITER) {
       writers_.erase(w);
       return;
     }

@@ -12,12 +12,6 @@
 namespace qswarm {
 namespace {
 
-std::string num(double v) {
-  std::ostringstream s;
-  s << v;
-  return s.str();
-}
-
 double parse_number(const std::string& flag, const std::string& text) {
   try {
     size_t used = 0;
@@ -55,7 +49,7 @@ std::uint32_t parse_id(const std::string& flag, const std::string& text) {
 
 void add_loss_shortcut(scenario::Scenario& s, double p) {
   if (!std::isfinite(p) || p < 0.0 || p > 1.0) {
-    throw ScenarioError("--loss " + num(p) + ": expected a probability in [0, 1]");
+    throw ScenarioError("--loss " + quoted_number(p) + ": expected a probability in [0, 1]");
   }
   if (p > 0.0) s.mutable_faults()->add_loss()->set_probability(p);
 }

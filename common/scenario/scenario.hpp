@@ -38,5 +38,7 @@ std::string to_text(const scenario::Scenario& s);
 // against a range a run can honour, and a bad one throws ScenarioError naming it.
 RunConfig resolve_scenario(scenario::Scenario s, const ScenarioOverrides& o = {});
 RunConfig load_scenario(const std::string& path, const ScenarioOverrides& o = {});
+// A number as an error message quotes it (shortest form, as a person would type it).
+std::string quoted_number(double v);
 
 }  // namespace qswarm

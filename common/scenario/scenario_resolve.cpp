@@ -12,17 +12,18 @@
 #include "common/transport/port_plan.hpp"
 
 namespace qswarm {
+
+std::string quoted_number(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
+
 namespace {
 
 [[noreturn]] void fail(const std::string& field, const std::string& expected,
                        const std::string& got) {
   throw ScenarioError("scenario field '" + field + "': expected " + expected + ", got " + got);
-}
-
-std::string num(double v) {
-  std::ostringstream s;
-  s << v;
-  return s.str();
 }
 
 // One optional number of the scenario: where it is in the message (a dotted path), where it lands
@@ -84,9 +85,9 @@ void check_range(const NumberField& f, double v) {
   const bool below = f.lo_open ? v <= f.lo : v < f.lo;
   if (!std::isfinite(v) || below || v > f.hi) {
     fail(f.path,
-         std::string("a finite value in ") + (f.lo_open ? "(" : "[") + num(f.lo) + ", " +
-             num(f.hi) + "]",
-         num(v));
+         std::string("a finite value in ") + (f.lo_open ? "(" : "[") + quoted_number(f.lo) + ", " +
+             quoted_number(f.hi) + "]",
+         quoted_number(v));
   }
 }
 
@@ -154,15 +155,15 @@ void expand_random_agents(scenario::Scenario& s, std::uint64_t seed, double min_
     fail("random_agents.count", "1.." + std::to_string(kMaxSwarmAgents), std::to_string(n));
   const double box = s.random_agents().box_m() == 0.0 ? 30.0 : s.random_agents().box_m();
   if (!std::isfinite(box) || box <= 0.0 || box > 1e5)
-    fail("random_agents.box_m", "a finite value in (0, 100000]", num(box));
+    fail("random_agents.box_m", "a finite value in (0, 100000]", quoted_number(box));
   std::vector<AgentSpec> specs;
   try {
     specs = random_agent_specs(static_cast<int>(n), seed, box, min_separation_m);
   } catch (const std::runtime_error& e) {
     fail("random_agents.box_m",
          "a cube with room for " + std::to_string(n) + " agents avoidance.safe_distance_m (" +
-             num(min_separation_m) + " m) apart",
-         num(box) + " (" + e.what() + ")");
+             quoted_number(min_separation_m) + " m) apart",
+         quoted_number(box) + " (" + e.what() + ")");
   }
   for (const AgentSpec& a : specs) {
     scenario::Agent* pa = s.add_agents();
@@ -194,9 +195,10 @@ void resolve_agents(const scenario::Scenario& s, RunConfig& rc) {
     const Vec3 p = vec(a.position());
     if (!p.allFinite() || p.cwiseAbs().maxCoeff() > 1e5)
       fail(f + ".position", "finite coordinates within 100 km",
-           "(" + num(p.x()) + ", " + num(p.y()) + ", " + num(p.z()) + ")");
+           "(" + quoted_number(p.x()) + ", " + quoted_number(p.y()) + ", " + quoted_number(p.z()) +
+               ")");
     if (!std::isfinite(a.yaw_deg()) || std::abs(a.yaw_deg()) > 3600.0)
-      fail(f + ".yaw_deg", "a finite angle within +-3600 deg", num(a.yaw_deg()));
+      fail(f + ".yaw_deg", "a finite angle within +-3600 deg", quoted_number(a.yaw_deg()));
     rc.agents.push_back({a.id(), p, a.yaw_deg() * std::numbers::pi / 180.0});
   }
 }
@@ -218,9 +220,9 @@ void resolve_avoidance(const scenario::Scenario& s, RunConfig& rc) {
   const double span = 2.0 * rc.agent.airframe.arm_m;
   if (quad && rc.agent.avoidance.safe_distance_m < span)
     fail("avoidance.safe_distance_m",
-         "at least " + num(span) +
+         "at least " + quoted_number(span) +
              " m in QUADCOPTER mode (two airframes' arms: closer, their rotors overlap)",
-         num(rc.agent.avoidance.safe_distance_m));
+         quoted_number(rc.agent.avoidance.safe_distance_m));
 }
 
 // With avoidance on, listed starts must keep the safe distance: the run would begin in a violation.
@@ -231,9 +233,10 @@ void check_start_separation(const scenario::Scenario& s, const RunConfig& rc) {
       const double d = (rc.agents[i].position_W - rc.agents[j].position_W).norm();
       if (d < rc.agent.avoidance.safe_distance_m) {
         fail("agents[" + std::to_string(i) + "].position",
-             "at least avoidance.safe_distance_m (" + num(rc.agent.avoidance.safe_distance_m) +
+             "at least avoidance.safe_distance_m (" +
+                 quoted_number(rc.agent.avoidance.safe_distance_m) +
                  " m) from every other start, or avoidance { enabled: false }",
-             num(d) + " m from agent " + std::to_string(rc.agents[j].id) + " (of " +
+             quoted_number(d) + " m from agent " + std::to_string(rc.agents[j].id) + " (of " +
                  std::to_string(s.agents_size()) + ")");
       }
     }
@@ -246,7 +249,7 @@ void resolve_formation(scenario::Scenario& s, RunConfig& rc) {
   // Not part of RunConfig (it only places the slots), so its default is here.
   const double spacing = f.has_spacing_m() ? f.spacing_m() : 3.0;
   if (!std::isfinite(spacing) || spacing <= 0.0 || spacing > 1e4)
-    fail("formation.spacing_m", "a finite value in (0, 10000]", num(spacing));
+    fail("formation.spacing_m", "a finite value in (0, 10000]", quoted_number(spacing));
   std::vector<AgentId> ids;
   for (const AgentSpec& a : rc.agents) ids.push_back(a.id);
   std::sort(ids.begin(), ids.end());
@@ -263,7 +266,8 @@ void resolve_formation(scenario::Scenario& s, RunConfig& rc) {
     const Vec3 o = vec(s.agents(i).offset());
     if (!o.allFinite() || o.cwiseAbs().maxCoeff() > 1e4) {
       fail("agents[" + std::to_string(i) + "].offset", "finite coordinates within 10 km",
-           "(" + num(o.x()) + ", " + num(o.y()) + ", " + num(o.z()) + ")");
+           "(" + quoted_number(o.x()) + ", " + quoted_number(o.y()) + ", " + quoted_number(o.z()) +
+               ")");
     }
     a.offset_W = o;
     any = true;
@@ -352,15 +356,16 @@ void default_record_rate(const scenario::Scenario& s, RunConfig& rc) {
 void check_agent(RunConfig& rc) {
   AgentConfig& a = rc.agent;
   if (a.mode == AgentMode::kQuadcopter && a.physics_hz < 500.0)
-    fail("rates.physics_hz", ">= 500 in QUADCOPTER mode", num(a.physics_hz));
+    fail("rates.physics_hz", ">= 500 in QUADCOPTER mode", quoted_number(a.physics_hz));
   if (a.consensus_hz > a.physics_hz)
-    fail("rates.consensus_hz", "at most rates.physics_hz", num(a.consensus_hz));
+    fail("rates.consensus_hz", "at most rates.physics_hz", quoted_number(a.consensus_hz));
   // Each consensus tick runs a whole number of physics steps; a rate that does not divide the
   // physics rate would silently run at another rate than the record says.
   const double ratio = a.physics_hz / a.consensus_hz;
   if (std::abs(ratio - std::round(ratio)) > 1e-9 * ratio) {
-    fail("rates.consensus_hz", "a divisor of rates.physics_hz (" + num(a.physics_hz) + ")",
-         num(a.consensus_hz));
+    fail("rates.consensus_hz",
+         "a divisor of rates.physics_hz (" + quoted_number(a.physics_hz) + ")",
+         quoted_number(a.consensus_hz));
   }
   try {
     a.gains.validate();
@@ -378,8 +383,9 @@ void check_agent(RunConfig& rc) {
   // At least two consensus ticks: a shorter timeout makes every neighbour flap.
   if (a.neighbor_timeout_s < 2.0 / a.consensus_hz) {
     fail("transport.neighbor_timeout_s",
-         "a finite value in [" + num(2.0 / a.consensus_hz) + ", 3600] (two consensus ticks)",
-         num(a.neighbor_timeout_s));
+         "a finite value in [" + quoted_number(2.0 / a.consensus_hz) +
+             ", 3600] (two consensus ticks)",
+         quoted_number(a.neighbor_timeout_s));
   }
 }
 
@@ -444,16 +450,18 @@ class FaultFields {
   }
   void window(const std::string& field, double start, double end) const {
     if (!std::isfinite(start) || start < 0.0 || start > 1e7)
-      fail(field + ".start_s", "a time in [0, 1e7]", num(start));
+      fail(field + ".start_s", "a time in [0, 1e7]", quoted_number(start));
     if (!std::isfinite(end) || (end != 0.0 && (end <= start || end > 1e7))) {
-      fail(field + ".end_s", "0 (never) or a time after start_s", num(end));
+      fail(field + ".end_s", "0 (never) or a time after start_s", quoted_number(end));
     }
   }
   void probability(const std::string& field, double p) const {
-    if (!std::isfinite(p) || p < 0.0 || p > 1.0) fail(field, "a probability in [0, 1]", num(p));
+    if (!std::isfinite(p) || p < 0.0 || p > 1.0)
+      fail(field, "a probability in [0, 1]", quoted_number(p));
   }
   void time(const std::string& field, double t) const {
-    if (!std::isfinite(t) || t <= 0.0 || t > 1e7) fail(field, "a time in (0, 1e7]", num(t));
+    if (!std::isfinite(t) || t <= 0.0 || t > 1e7)
+      fail(field, "a time in (0, 1e7]", quoted_number(t));
   }
 
  private:
@@ -510,10 +518,10 @@ void resolve_link_faults(const scenario::Faults& f, const FaultFields& check, Fa
     const auto& d = f.delay(i);
     const std::string fld = at("delay", i);
     if (!std::isfinite(d.mean_s()) || d.mean_s() < 0.0 || d.mean_s() > 60.0) {
-      fail(fld + ".mean_s", "a delay in [0, 60] s", num(d.mean_s()));
+      fail(fld + ".mean_s", "a delay in [0, 60] s", quoted_number(d.mean_s()));
     }
     if (!std::isfinite(d.jitter_s()) || d.jitter_s() < 0.0 || d.jitter_s() > 60.0) {
-      fail(fld + ".jitter_s", "a jitter in [0, 60] s", num(d.jitter_s()));
+      fail(fld + ".jitter_s", "a jitter in [0, 60] s", quoted_number(d.jitter_s()));
     }
     check.agent(fld + ".from", d.from(), true);
     check.agent(fld + ".to", d.to(), true);
@@ -529,12 +537,13 @@ void resolve_process_faults(const scenario::Faults& f, const FaultFields& check,
     check.time(fld + ".at_s", k.at_s());
     if (!std::isfinite(k.restart_at_s()) ||
         (k.restart_at_s() != 0.0 && (k.restart_at_s() <= k.at_s() || k.restart_at_s() > 1e7))) {
-      fail(fld + ".restart_at_s", "0 (no restart) or a time after at_s", num(k.restart_at_s()));
+      fail(fld + ".restart_at_s", "0 (no restart) or a time after at_s",
+           quoted_number(k.restart_at_s()));
     }
     for (const auto& prev : plan.kill) {
       const double prev_end = prev.restarts() ? prev.restart_at_s : 1e300;
       if (prev.agent == k.agent() && k.at_s() < prev_end && k.at_s() + 1e-9 > prev.at_s) {
-        fail(fld + ".at_s", "a time after the agent's previous restart", num(k.at_s()));
+        fail(fld + ".at_s", "a time after the agent's previous restart", quoted_number(k.at_s()));
       }
     }
     plan.kill.push_back({k.agent(), k.at_s(), k.restart_at_s()});

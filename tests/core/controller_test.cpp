@@ -9,7 +9,7 @@
 namespace qswarm {
 namespace {
 
-const Airframe kPaper = Airframe::paper();
+const Airframe kPaperAirframe = Airframe::paper();
 
 TEST(TrackingController, FliesFromRestToAPointTenMetresAwayAndSettles) {
   // Given a quadcopter at rest at the origin and a reference 10 m away (6, 8, 0) with yaw 1 rad,
@@ -24,11 +24,11 @@ TEST(TrackingController, FliesFromRestToAPointTenMetresAwayAndSettles) {
   double max_along = 0.0, max_cross = 0.0, max_alt_err = 0.0;
   double settle_time = -1.0;
   for (int i = 0; i < 10000; ++i) {
-    const TrackingOutput out = track(kPaper, gains, s, ref);
+    const TrackingOutput out = track(kPaperAirframe, gains, s, ref);
     // rotor limits hold on every command
-    ASSERT_TRUE((out.allocation.omega_radps.array() >= kPaper.rotor_min_radps).all());
-    ASSERT_TRUE((out.allocation.omega_radps.array() <= kPaper.rotor_max_radps).all());
-    s = rk4_step(kPaper, s, out.allocation.omega_radps, dt);
+    ASSERT_TRUE((out.allocation.omega_radps.array() >= kPaperAirframe.rotor_min_radps).all());
+    ASSERT_TRUE((out.allocation.omega_radps.array() <= kPaperAirframe.rotor_max_radps).all());
+    s = rk4_step(kPaperAirframe, s, out.allocation.omega_radps, dt);
     ASSERT_TRUE(s.finite());
     max_along = std::max(max_along, s.p_W.dot(dir));
     max_cross = std::max(max_cross, (s.p_W - s.p_W.dot(dir) * dir).norm());
@@ -58,9 +58,9 @@ TEST(TrackingController, RecoversFromATumbleWithinRotorLimits) {
   TrackingReference ref;
   bool saturated_once = false;
   for (int i = 0; i < 5000; ++i) {
-    const TrackingOutput out = track(kPaper, TrackingGains{}, s, ref);
+    const TrackingOutput out = track(kPaperAirframe, TrackingGains{}, s, ref);
     saturated_once |= out.allocation.saturated;
-    s = rk4_step(kPaper, s, out.allocation.omega_radps, 0.002);
+    s = rk4_step(kPaperAirframe, s, out.allocation.omega_radps, 0.002);
   }
   EXPECT_TRUE(saturated_once);  // the limits were actually exercised
   EXPECT_LT(s.p_W.norm(), 0.05);
@@ -76,7 +76,8 @@ TEST(TrackingController, FollowsAMovingReference) {
     TrackingReference ref;
     ref.p_W = Vec3(t, 0.0, 0.0);
     ref.v_W = Vec3(1.0, 0.0, 0.0);
-    s = rk4_step(kPaper, s, track(kPaper, TrackingGains{}, s, ref).allocation.omega_radps, 0.002);
+    s = rk4_step(kPaperAirframe, s,
+                 track(kPaperAirframe, TrackingGains{}, s, ref).allocation.omega_radps, 0.002);
     if (t > 5.0) worst = std::max(worst, (s.p_W - ref.p_W).norm());
   }
   EXPECT_LT(worst, 0.05);
