@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Multi-process scaling benchmark: N agent processes and the supervisor over DDS on loopback, each
-# size and scenario one `swarm run`. Three scenarios:
+# size and scenario one `swarm run`. The scenarios:
 #   all    N seeded random point agents on one sticky-proximity graph that soon links everyone
 #          (bench/scale.txtpb, never converged, so it flies its whole duration): all-to-all;
 #   range  N point agents from a random cube into a lattice over 4.5 m radio links
@@ -8,6 +8,9 @@
 #          scenarios/formation_lattice64.txtpb): each agent has about a dozen neighbours, but the
 #          swarm is dense enough that every agent is within reach of the cells every other one
 #          listens to (docs/benchmarks.md);
+#   grid   N point agents scattered up to 0.5 m about their slots of a flat grid, 3 m apart,
+#          re-forming it over 3.5 m radio links (bench/formation_grid.txtpb): each links its four
+#          grid neighbours and hears about eight agents, whatever N;
 #   ring   N point agents on a fixed ring graph of degree 4 (bench/ring.txtpb): the traffic each
 #          agent handles follows its degree, not N;
 #   torus  the same agents on a fixed graph of degree 4 that mixes fast enough to agree: each
@@ -49,6 +52,13 @@ socket_drops() {
 }
 # The host's UDP receive-buffer errors so far (every socket, every process).
 rcvbuf_errors() { awk '$1 == "Udp:" && $2 ~ /^[0-9]/ { print $6 }' /proc/net/snmp; }
+# Agents 1..N about their slots of a GRID formation (ceil(sqrt(N)) columns, 3 m apart, by id),
+# each displaced up to 0.5 m in x and y, at 10 m (seeded).
+scattered_grid() {
+  awk -v n="$1" 'BEGIN { srand(3); cols = 1; while (cols * cols < n) cols++
+    for (i = 1; i <= n; i++) printf "agents { id: %d position { x: %.3f y: %.3f z: 10 } }\n", i,
+      ((i - 1) % cols) * 3 + rand() - 0.5, int((i - 1) / cols) * 3 + rand() - 0.5 }'
+}
 # A FIXED graph on agents 1..N: each linked to the next id and to the id OFFSET on.
 circulant() {
   awk -v n="$1" -v s="$2" 'BEGIN {
@@ -72,6 +82,13 @@ for kind in "${KINDS[@]}"; do
         sed -e "s/box_m: 10/box_m: $box/" -e "s/consensus_hz: 50/consensus_hz: $RATE_HZ/" \
           -e "s/physics_hz: 50/physics_hz: $RATE_HZ/" bench/formation_range.txtpb >"$scen"
         ;;
+      grid)
+        {
+          sed -e "s/consensus_hz: 50/consensus_hz: $RATE_HZ/" -e "s/physics_hz: 50/physics_hz: $RATE_HZ/" \
+            bench/formation_grid.txtpb
+          scattered_grid "$n"
+        } >"$scen"
+        ;;
       ring)
         {
           sed "s/consensus_hz: 50/consensus_hz: $RATE_HZ/" bench/ring.txtpb
@@ -85,7 +102,7 @@ for kind in "${KINDS[@]}"; do
           circulant "$n" "$(awk -v n="$n" 'BEGIN { s = int(sqrt(n) + 0.5); print (s < 2 ? 2 : s) }')"
         } >"$scen"
         ;;
-      *) echo "swarm_scale: unknown scenario $kind (all, range, ring, torus)" >&2; exit 2 ;;
+      *) echo "swarm_scale: unknown scenario $kind (all, range, grid, ring, torus)" >&2; exit 2 ;;
     esac
     if [[ -n ${DISCOVERY:-} ]]; then
       echo "transport { discovery: ${DISCOVERY^^} }" >>"$scen"
@@ -99,7 +116,9 @@ for kind in "${KINDS[@]}"; do
       fi
       secure=(--secure "$ks")
     fi
-    "$BUILD"/bin/swarm run "$scen" --agents "$n" --seed 3 --duration "$DURATION" \
+    agents=(--agents "$n")
+    [[ $kind == grid ]] && agents=()  # its agents are listed: --agents would draw others
+    "$BUILD"/bin/swarm run "$scen" "${agents[@]}" --seed 3 --duration "$DURATION" \
       --time-scale "$TIME_SCALE" --out "$dir" --domain "$domain" --quiet "${secure[@]}" \
       >"$dir.log" 2>&1 &
     launcher=$!
