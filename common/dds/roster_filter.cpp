@@ -194,6 +194,7 @@ class RosterFilter final : public dds::IContentFilter {
 
 std::vector<std::string> parameters(const dds::IContentFilterFactory::ParameterSeq& params) {
   std::vector<std::string> out;
+  out.reserve(params.length());
   for (dds::IContentFilterFactory::ParameterSeq::size_type i = 0; i < params.length(); ++i)
     out.emplace_back(params[i] ? params[i] : "");
   return out;
