@@ -1,7 +1,6 @@
 #include "common/app/process_setup.hpp"
 
 #include "common/app/cli_checks.hpp"
-#include "common/runtime/neighbourhood.hpp"
 #include "common/transport/port_plan.hpp"
 
 #include <openssl/pem.h>
@@ -205,7 +204,8 @@ DdsOptions dds_options(const RunConfig& rc, const std::string& participant_name,
   // A Discovery Server relays announcements by topic: with a topic per agent name, an agent that
   // hears its neighbours by name discovers only them (StateBusOptions::topic_per_name).
   s.topic_per_name = !p.discovery_server.empty();
-  s.filter_at_writer = Neighbourhood::by_place(rc);
+  // The place filter is judged on arrival, not by the writers (StateBusOptions::filter_at_writer
+  // says why).
   return d;
 }
 

@@ -54,6 +54,10 @@ struct StateBusOptions {
   // filtering reader its writer is matched with, and is judged once per reader: worth it where
   // agents hear by place (a proximity or radio-range graph), not on a fixed graph. False: readers
   // filter what they are sent.
+  // The product leaves it false: Fast DDS 2.9.1 adds and removes a writer's reader filters from
+  // its discovery thread without the writer's lock (the RTPS writer calls its listener unlocked)
+  // while write() walks the same map, so a reader matched or unmatched during a write (an agent
+  // changing cells, joining, leaving) can corrupt it. Fast DDS 3.0.0 locks there (#21188).
   bool filter_at_writer = false;
 };
 
