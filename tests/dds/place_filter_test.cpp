@@ -4,6 +4,7 @@
 // what it hears by name.
 #include <gtest/gtest.h>
 
+#include <functional>
 #include <memory>
 #include <random>
 #include <string>
@@ -69,55 +70,40 @@ struct Three {
     return 0;
   }
   std::uint64_t judged(AgentId a) { return agent(a).state().judged_on_arrival(); }
+  // Every agent publishes, round after round, until `heard` holds (at most 30 s).
+  bool publish_until(const std::function<bool()>& heard) {
+    return test::wait_for(
+        [&] {
+          publish();
+          return heard();
+        },
+        30.0);
+  }
 };
 
 TEST(PlaceFilter, AWriterSendsOnlyToTheReadersWhoseReachItIsIn) {
   Three s(/*filter_at_writer=*/true);
-  ASSERT_TRUE(test::wait_for(
-      [&] {
-        s.publish();
-        return s.seq_heard(1, 3) > 10 && s.seq_heard(3, 1) > 10;
-      },
-      30.0));
+  ASSERT_TRUE(s.publish_until([&] { return s.seq_heard(1, 3) > 10 && s.seq_heard(3, 1) > 10; }));
   // Agent 1's filter is never judged on arrival: every sample that reaches it was judged by its
   // writer, and agent 2's were never sent.
   const std::uint64_t judged = s.judged(1), from = s.seq;
-  ASSERT_TRUE(test::wait_for(
-      [&] {
-        s.publish();
-        return s.seq_heard(1, 3) >= from + 50;
-      },
-      30.0));
+  ASSERT_TRUE(s.publish_until([&] { return s.seq_heard(1, 3) >= from + 50; }));
   EXPECT_EQ(s.seq_heard(1, 2), 0u);
   EXPECT_EQ(s.judged(1), judged);
 
   // Agent 1 moves next to agent 2: its writers learn where through discovery, and it hears agent 2
   // and no longer agent 3.
   s.listen_at(1, Vec3(99, 0, 0), {});
-  ASSERT_TRUE(test::wait_for(
-      [&] {
-        s.publish();
-        return s.seq_heard(1, 2) > 0;
-      },
-      30.0));
+  ASSERT_TRUE(s.publish_until([&] { return s.seq_heard(1, 2) > 0; }));
   const std::uint64_t moved = s.seq;
-  ASSERT_TRUE(test::wait_for(
-      [&] {
-        s.publish();
-        return s.seq_heard(1, 2) >= moved + 20;
-      },
-      30.0));
+  ASSERT_TRUE(s.publish_until([&] { return s.seq_heard(1, 2) >= moved + 20; }));
   EXPECT_LT(s.seq_heard(1, 3), moved + 20);
 
   // An agent heard by name is heard wherever it is.
   s.listen_at(1, Vec3(0, 0, 0), {agent_partition(2)});
   const std::uint64_t named = s.seq;
-  ASSERT_TRUE(test::wait_for(
-      [&] {
-        s.publish();
-        return s.seq_heard(1, 2) >= named + 20 && s.seq_heard(1, 3) >= named + 20;
-      },
-      30.0));
+  ASSERT_TRUE(s.publish_until(
+      [&] { return s.seq_heard(1, 2) >= named + 20 && s.seq_heard(1, 3) >= named + 20; }));
 
   // A bond (a link, an exchange being settled) needs no discovery: once agent 3's samples name
   // agent 2, 99 m away, as a link, they reach agent 2's reader, whatever its place. A bond is the
@@ -125,12 +111,7 @@ TEST(PlaceFilter, AWriterSendsOnlyToTheReadersWhoseReachItIsIn) {
   EXPECT_EQ(s.seq_heard(2, 3), 0u);
   const std::uint64_t before = s.seq;
   s.links[2] = {2};
-  ASSERT_TRUE(test::wait_for(
-      [&] {
-        s.publish();
-        return s.seq_heard(2, 3) >= before + 20;
-      },
-      30.0));
+  ASSERT_TRUE(s.publish_until([&] { return s.seq_heard(2, 3) >= before + 20; }));
   EXPECT_EQ(s.seq_heard(3, 2), 0u);
 }
 
@@ -138,19 +119,9 @@ TEST(PlaceFilter, AWriterSendsOnlyToTheReadersWhoseReachItIsIn) {
 // judged (and dropped) there.
 TEST(PlaceFilter, WithoutTheWritersHelpEverySampleIsSentAndJudgedOnArrival) {
   Three s(/*filter_at_writer=*/false);
-  ASSERT_TRUE(test::wait_for(
-      [&] {
-        s.publish();
-        return s.seq_heard(1, 3) > 10;
-      },
-      30.0));
+  ASSERT_TRUE(s.publish_until([&] { return s.seq_heard(1, 3) > 10; }));
   const std::uint64_t judged = s.judged(1), from = s.seq;
-  ASSERT_TRUE(test::wait_for(
-      [&] {
-        s.publish();
-        return s.seq_heard(1, 3) >= from + 50;
-      },
-      30.0));
+  ASSERT_TRUE(s.publish_until([&] { return s.seq_heard(1, 3) >= from + 50; }));
   EXPECT_EQ(s.seq_heard(1, 2), 0u);
   EXPECT_GE(s.judged(1), judged + 50);
 }
