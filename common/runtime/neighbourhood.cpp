@@ -50,6 +50,7 @@ double Neighbourhood::margin_m(double reach_m) { return std::max(1.0, 0.25 * rea
 Neighbourhood::Neighbourhood(const RunConfig& rc, AgentId self) : self_(self) {
   const TopologyConfig& t = rc.agent.law.topology;
   whole_run_ = rc.transport.delivery == Delivery::kAll;
+  reach_ = rc.transport.delivery == Delivery::kReach;
   for (const auto& [a, b] : t.edges) {
     if (a == self) listed_.insert(b);
     if (b == self) listed_.insert(a);
@@ -82,16 +83,18 @@ Interest Neighbourhood::update(const Vec3& p_W, const Vec3& q, const std::set<Ag
   for (Space& s : spaces_) {
     const Vec3& x = s.tag == 'q' ? q : p_W;
     if (!s.cell || !near_cell(x, *s.cell, s.cell_m, s.keep_m)) s.cell = cell_of(x, s.cell_m);
-    if (!s.anchor || !((x - *s.anchor).cwiseAbs().maxCoeff() <= s.keep_m)) s.anchor = clamped(x);
-    const Vec3 keep = Vec3::Constant(s.keep_m);
-    in.near.push_back({s.tag, *s.anchor - keep, *s.anchor + keep, s.radius_m});
+    if (reach_) {
+      if (!s.anchor || !((x - *s.anchor).cwiseAbs().maxCoeff() <= s.keep_m)) s.anchor = clamped(x);
+      const Vec3 keep = Vec3::Constant(s.keep_m);
+      in.near.push_back({s.tag, *s.anchor - keep, *s.anchor + keep, s.radius_m});
+    }
     in.publish.push_back(cell_name(s.tag, *s.cell));
     for (int dx = -1; dx <= 1; ++dx)
       for (int dy = -1; dy <= 1; ++dy)
         for (int dz = -1; dz <= 1; ++dz)
           in.subscribe.push_back(cell_name(s.tag, *s.cell + Eigen::Vector3i(dx, dy, dz)));
   }
-  if (!spaces_.empty()) {
+  if (reach_ && !spaces_.empty()) {
     in.subscribe.push_back(inbox_partition(self_));
     std::map<AgentId, int> ticks;
     std::set<AgentId> pushing;
@@ -117,7 +120,7 @@ Interest Neighbourhood::update(const Vec3& p_W, const Vec3& q, const std::set<Ag
 bool Neighbourhood::by_place(const RunConfig& rc) {
   if (rc.agents.empty()) return false;
   const Neighbourhood n(rc, rc.agents.front().id);
-  return !n.whole_run_ && !n.spaces_.empty();
+  return n.reach_ && !n.spaces_.empty();
 }
 
 std::set<AgentId> Neighbourhood::heard_at_start(const RunConfig& rc, AgentId id) {

@@ -18,19 +18,20 @@ namespace qswarm {
 // Space is cut into cubic cells of the link reach (threshold + hysteresis) plus twice a margin; an
 // agent publishes into its cell and listens to that cell and the 26 around it. It keeps its cell
 // until it is half a margin outside it (moving cells makes DDS re-match its endpoints with every
-// peer: an agent resting on a cell's border must not flap). Cells only bound who is matched with
-// whom: of the samples its cells bring, an agent takes only those of senders within the reach plus
-// a margin of a box about itself (Reach, which DDS evaluates on the writer's side, so nothing else
-// is sent), and it moves the box once half a margin outside it (a move travels to its peers
-// through discovery). So any two agents within the reach plus one margin hear each other, and an
-// agent hears a volume about twice its link sphere instead of 27 cells of at least 6.4 times it:
-// the margin is for links about to form and for motion while DDS re-matches. The cells are in the
-// space the topology measures: consensus states for proximity, physical positions for radio range;
-// and, with collision avoidance, physical cells of the filter's reach too (a radio hears everyone
-// near, whatever the graph). Every agent also publishes into a partition of its own id, which
-// others listen to when they must hear it by name: listed edges (a FIXED graph hears only those),
-// and, under sticky proximity, the links it holds (kept however far). Under `transport { delivery:
-// ALL }` everyone hears everyone (the empty interest). Pure.
+// peer: an agent resting on a cell's border must not flap). The cells are in the space the topology
+// measures: consensus states for proximity, physical positions for radio range; and, with collision
+// avoidance, physical cells of the filter's reach too (a radio hears everyone near, whatever the
+// graph). Every agent also publishes into a partition of its own id, which others listen to when
+// they must hear it by name: listed edges (a FIXED graph hears only those), and, under sticky
+// proximity, the links it holds (kept however far). Under `transport { delivery: ALL }` everyone
+// hears everyone (the empty interest).
+//
+// Under `delivery: REACH` (experimental) the cells only bound who is matched with whom: of the
+// samples its cells bring, an agent takes only those of senders within the reach plus a margin of
+// a box about itself (Reach, judged on arrival), or that name it in a link or an exchange, and it
+// moves the box once half a margin outside it (a move travels to its peers through discovery). It
+// also listens to an inbox of its own, into which a peer that still settles an exchange with it
+// pushes its samples. Pure.
 class Neighbourhood {
  public:
   Neighbourhood(const RunConfig& rc, AgentId self);
@@ -40,18 +41,18 @@ class Neighbourhood {
   using Settling = std::map<AgentId, bool>;
 
   // The interest of the agent at physical position p_W with consensus state q, holding links to
-  // `linked`; it moves to another cell only once half a margin outside its own. It listens to its
-  // inbox, and pushes its samples into the inbox of a peer it still settles an exchange with once
-  // it no longer hears that peer, or the exchange is still open three ticks after the link ended,
-  // until it is settled: the two may no longer share a cell (particles can move metres in a tick),
-  // the peer may not even know of the exchange (the one sample that told it was lost), and an
-  // edge-flow exchange left unsettled would move the swarm's total.
+  // `linked`; it moves to another cell only once half a margin outside its own. Under REACH it
+  // listens to its inbox, and pushes its samples into the inbox of a peer it still settles an
+  // exchange with once it no longer hears that peer, or the exchange is still open three ticks
+  // after the link ended, until it is settled: the two may no longer share a cell (particles can
+  // move metres in a tick), the peer may not even know of the exchange (the one sample that told
+  // it was lost), and an edge-flow exchange left unsettled would move the swarm's total.
   Interest update(const Vec3& p_W, const Vec3& q, const std::set<AgentId>& linked,
                   const Settling& settling = {});
   // Whether it hears the whole run (delivery ALL).
   bool whole_run() const { return whole_run_; }
-  // Whether the agents of `rc` hear each other by place (Interest::near): neighbourhood delivery
-  // on a graph whose links follow distance, or with collision avoidance.
+  // Whether the agents of `rc` hear each other by place (Interest::near): delivery REACH on a graph
+  // whose links follow distance, or with collision avoidance.
   static bool by_place(const RunConfig& rc);
 
   // The agents that agent `id` of `rc` hears at the start (at their start positions, before any
@@ -72,6 +73,7 @@ class Neighbourhood {
   };
   AgentId self_;
   bool whole_run_ = false;
+  bool reach_ = false;  // delivery REACH: boxes about itself, and inboxes
   std::vector<Space> spaces_;
   std::set<AgentId> listed_;
   std::map<AgentId, int> settling_;  // updates each peer has been settling for

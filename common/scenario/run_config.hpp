@@ -56,7 +56,7 @@ struct JudgeConfig {
 
 // Which samples an agent is sent: those of the agents that can be its neighbours (the default), or
 // everyone's.
-enum class Delivery { kNeighbours, kAll };
+enum class Delivery { kNeighbours, kAll, kReach };
 // How a run's participants discover each other (scenario Transport.Discovery).
 enum class Discovery { kSimple, kServer };
 

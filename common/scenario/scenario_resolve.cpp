@@ -420,7 +420,9 @@ void resolve_transport(const scenario::Transport& t, RunConfig& rc) {
   if (t.delivery() == scenario::Transport::DELIVERY_UNSPECIFIED)
     tc.delivery = rc.agents.size() <= kAllToAllUpTo ? Delivery::kAll : Delivery::kNeighbours;
   else
-    tc.delivery = t.delivery() == scenario::Transport::ALL ? Delivery::kAll : Delivery::kNeighbours;
+    tc.delivery = t.delivery() == scenario::Transport::ALL     ? Delivery::kAll
+                  : t.delivery() == scenario::Transport::REACH ? Delivery::kReach
+                                                               : Delivery::kNeighbours;
   const bool secure = !tc.keystore.empty();
   switch (t.discovery()) {
     case scenario::Transport::SERVER:
@@ -585,9 +587,10 @@ void write_back_defaults(RunConfig& rc, scenario::Scenario& s) {
   s.mutable_transport()->set_shared_memory(rc.transport.shared_memory);
   if (!rc.transport.keystore.empty()) s.mutable_transport()->set_keystore(rc.transport.keystore);
   s.mutable_transport()->set_run_id(rc.transport.run_id);
-  s.mutable_transport()->set_delivery(rc.transport.delivery == Delivery::kAll
-                                          ? scenario::Transport::ALL
-                                          : scenario::Transport::NEIGHBOURS);
+  s.mutable_transport()->set_delivery(
+      rc.transport.delivery == Delivery::kAll     ? scenario::Transport::ALL
+      : rc.transport.delivery == Delivery::kReach ? scenario::Transport::REACH
+                                                  : scenario::Transport::NEIGHBOURS);
   s.mutable_transport()->set_discovery(rc.transport.discovery == Discovery::kServer
                                            ? scenario::Transport::SERVER
                                            : scenario::Transport::SIMPLE);

@@ -224,9 +224,9 @@ TEST(FormationSwarm, ALatticeOverRadioRangeKeepsASparseGraph) {
 }
 
 TEST(FormationSwarm, SixtyFourAgentsThatHearOnlyTheirReachKeepTheExactCentre) {
-  // scenarios/formation_lattice64.txtpb in lockstep: each agent hears only the agents within its
-  // link reach plus a margin (and those whose samples name it), while particles close metres in a
-  // tick. Two ways this lost edge-flow's exact centre, each now a rule:
+  // scenarios/formation_lattice64.txtpb in lockstep under delivery REACH: each agent hears only
+  // the agents within its link reach plus a margin (and those whose samples name it), while
+  // particles close metres in a tick. Two ways this lost edge-flow's exact centre, each now a rule:
   // - an agent moving toward where a neighbour that fell silent was last heard linked that ghost
   //   from its stale sample and integrated a flow the neighbour never heard (2.4 cm off): a link
   //   forms only on a current view;
@@ -246,6 +246,7 @@ TEST(FormationSwarm, SixtyFourAgentsThatHearOnlyTheirReachKeepTheExactCentre) {
         const std::string text((std::istreambuf_iterator<char>(in)), {});
         rc = resolve_scenario(parse_scenario_text(text + faults, "lattice64"), o);
       }
+      rc.transport.delivery = Delivery::kReach;
       InProcessSwarm swarm(rc);
       ASSERT_TRUE(swarm.run_until(
           [&] { return swarm.wall_s() > 1.0 && swarm.disagreement_running() < 1e-7; }, 90.0))

@@ -18,21 +18,34 @@
 namespace qswarm {
 namespace {
 
-// Neighbourhood delivery asked for: small swarms hear everyone by default.
+// Delivery REACH asked for (the place filter these tests are about; small swarms hear everyone
+// by default).
 RunConfig load(const std::string& text, const std::string& extra = "") {
   const bool own = extra.find("transport") != std::string::npos;
-  return resolve_scenario(parse_scenario_text(
-      text + extra + (own ? "" : "\ntransport { delivery: NEIGHBOURS }\n"), "s"));
+  return resolve_scenario(
+      parse_scenario_text(text + extra + (own ? "" : "\ntransport { delivery: REACH }\n"), "s"));
 }
 
 TEST(Neighbourhood, CellsCoverTheLinkReachAndIdsCoverTheGraph) {
   // Radio range 4.5 m (+ 0.5 hysteresis): cells of 5 + 1.25 m in physical space.
-  const RunConfig rc = load(
+  const std::string four =
       "agents { id: 1 position { x: 0 y: 0 z: 0 } }\n"
       "agents { id: 2 position { x: 6 y: 0 z: 0 } }\n"
       "agents { id: 3 position { x: 10 y: 0 z: 0 } }\n"
       "agents { id: 4 position { x: 40 y: 0 z: 0 } }\n"
-      "topology { policy: RANGE threshold_m: 4.5 hysteresis_m: 0.5 edges { a: 1 b: 4 } }\n");
+      "topology { policy: RANGE threshold_m: 4.5 hysteresis_m: 0.5 edges { a: 1 b: 4 } }\n";
+  // Delivery NEIGHBOURS: the cells and the names, and everything they bring (3, 10 m from 1, is
+  // in the cells around it).
+  const RunConfig cells = load(four, "transport { delivery: NEIGHBOURS }\n");
+  const Interest by_cell = Neighbourhood(cells, 1).update(Vec3(0, 0, 0), Vec3(0, 0, 0), {});
+  EXPECT_EQ(by_cell.publish, (std::vector<std::string>{"a1", "p0.0.0"}));
+  EXPECT_EQ(by_cell.subscribe.size(), 27u + 1u);  // 27 cells, the listed edge's agent
+  EXPECT_TRUE(by_cell.near.empty());
+  EXPECT_EQ(Neighbourhood::heard_at_start(cells, 1), (std::set<AgentId>{2, 3, 4}));
+  EXPECT_FALSE(Neighbourhood::by_place(cells));
+  // Delivery REACH: the same cells, an inbox, and a box about itself.
+  const RunConfig rc = load(four);
+  EXPECT_TRUE(Neighbourhood::by_place(rc));
   Neighbourhood n1(rc, 1);
   const Interest in = n1.update(Vec3(0, 0, 0), Vec3(0, 0, 0), {});
   EXPECT_EQ(in.publish, (std::vector<std::string>{"a1", "p0.0.0"}));
@@ -212,12 +225,12 @@ RunDir fresh(const std::string& name) {
   return RunDir::claim(dir.string(), name, "t");
 }
 
-// The same run twice, hearing everyone and hearing neighbours: the graph the recorder saw, row by
-// row, must be the same.
+// The same run three times, hearing everyone, neighbours by cell, and by reach: the graph the
+// recorder saw, row by row, must be the same.
 void same_graph_both_ways(const std::string& scenario, double wall_s) {
-  std::vector<std::string> graphs[2];
+  std::vector<std::string> graphs[3];
   int k = 0;
-  for (const char* delivery : {"ALL", "NEIGHBOURS"}) {
+  for (const char* delivery : {"ALL", "NEIGHBOURS", "REACH"}) {
     const RunConfig rc = load(scenario, std::string("transport { delivery: ") + delivery + " }\n");
     const RunDir dir = fresh(delivery);
     {
@@ -235,6 +248,7 @@ void same_graph_both_ways(const std::string& scenario, double wall_s) {
   for (auto& g : graphs) g.erase(std::unique(g.begin(), g.end()), g.end());
   EXPECT_GT(graphs[0].size(), 5u);
   EXPECT_EQ(graphs[0], graphs[1]);
+  EXPECT_EQ(graphs[0], graphs[2]);
 }
 
 TEST(NeighbourDelivery, ThePapersTimeVaryingGraphIsTheSameAsWhenEveryoneHearsEveryone) {
