@@ -4,8 +4,8 @@
 #      in build-release/; and a configure of the product alone (tests and benchmarks off);
 #   2. the core, runtime and view tests under AddressSanitizer + UndefinedBehaviorSanitizer (DDS
 #      off), and the runtime and view tests under ThreadSanitizer (DDS off);
-#   3. clang-format on every source, clang-tidy on the product's (tools/lint.sh; `--all` adds the
-#      tests' 27 files, about 4 more minutes: run it before a change to tests lands);
+#   3. clang-format on every source, clang-tidy on the product's sources as unity units
+#      (tools/lint.sh; `--all` adds the tests and benchmarks: run it before a change to them lands);
 #   4. every test but the `long` and `compose` labels, then the `compose` label alone.
 # With arguments, only step 1's build, then ctest with those arguments (e.g. tools/test.sh -L core).
 set -euo pipefail
