@@ -49,6 +49,14 @@ cmake --build build-asan --parallel "$(nproc)"
   -E "^(Avoidance(Flight|Swarm)|FormationSwarm\\.SixtyFour|Insider\\.EdgeFlowFollowsTheLiar|\
 NeighbourDelivery\\.AThirtyTwo|ClaimRunner\\.ThirtyTwo)")
 
+# The compose stage's image (a Debian base made with debootstrap, then docker/Dockerfile: mostly
+# downloads and package installs) is made in the background from here on, beside stages that do
+# not measure time, instead of in the compose stage; the tests stage starts only once it is done,
+# and the compose test then finds its layers cached (it makes them itself if this failed).
+setsid tests/compose/image.sh >"$BUILD/compose-image.log" 2>&1 &
+image_job=$!
+trap 'kill -- -"$image_job" 2>/dev/null || true' EXIT
+
 stage "in-process tests under ThreadSanitizer (DDS off)"
 # The code that runs beside a transport's threads without Fast DDS: the fault-injecting bus, the
 # agent loop, the supervisor's loop, the claim inbox (tests/runtime/concurrency_test.cpp puts real
@@ -65,6 +73,9 @@ stage "format and clang-tidy"
 tools/lint.sh "$BUILD"
 
 stage "tests"
+wait "$image_job" || echo "the compose image was not made early (the compose stage tries again):" \
+  "$(tail -3 "$BUILD/compose-image.log")"
+trap - EXIT
 cd "$BUILD"
 ctest "${ctest_args[@]}" -LE "long|compose"
 

@@ -28,18 +28,8 @@ RUNTIME=()
 if command -v runc >/dev/null; then RUNTIME=(--runtime runc); fi
 podman "${RUNTIME[@]}" info >/dev/null 2>&1 || skip "podman does not work here: $(podman info 2>&1 | tail -1)"
 
-# No image registry is reachable: make debian:bookworm-slim from Debian's packages once.
-if ! podman image exists docker.io/library/debian:bookworm-slim; then
-  [[ $(id -u) -eq 0 ]] || skip "no debian:bookworm-slim image, and making one needs root (debootstrap)"
-  command -v debootstrap >/dev/null || skip "no debian:bookworm-slim image and no debootstrap"
-  rootfs=$(mktemp -d /var/tmp/qswarm-rootfs.XXXXXX)
-  echo "compose test: making debian:bookworm-slim with debootstrap (about 2 minutes)"
-  debootstrap --variant=minbase bookworm "$rootfs" >/dev/null
-  tar -C "$rootfs" -c . | podman import - docker.io/library/debian:bookworm-slim >/dev/null
-  rm -rf "$rootfs"
-fi
-echo "compose test: building the image"
-podman "${RUNTIME[@]}" build --pull=never --layers -q -f "$SRC/docker/Dockerfile" -t localhost/qswarm:latest "$SRC" >/dev/null
+# The base image and the project's image (a layer-cache hit when tools/test.sh made it earlier).
+"$SRC/tests/compose/image.sh" || exit $?
 
 PROJECT="qswarm-test-$$"
 WORK=$(mktemp -d /tmp/qswarm-compose.XXXXXX)
