@@ -28,7 +28,7 @@ echo "lint: flake8 on ${#python[@]} files"
 flake8 "${python[@]}"
 # clang-tidy reads unity sources: each target's files joined into one unit, so that the Fast DDS,
 # Eigen and protobuf headers are parsed and matched once per target instead of once per file
-# (about a quarter of the time). The header filter below then covers the joined .cpp files
+# (about a third of the time). The header filter below then covers the joined .cpp files
 # too, and a finding names the file and line it is in. A missing include still fails: the
 # release build compiles file by file with -Werror.
 LINT_DIR="$BUILD_DIR-lint"

@@ -204,8 +204,7 @@ DdsOptions dds_options(const RunConfig& rc, const std::string& participant_name,
   // A Discovery Server relays announcements by topic: with a topic per agent name, an agent that
   // hears its neighbours by name discovers only them (StateBusOptions::topic_per_name).
   s.topic_per_name = !p.discovery_server.empty();
-  // The place filter is judged on arrival, not by the writers (StateBusOptions::filter_at_writer
-  // says why).
+  // Writers never filter for their readers (StateBusOptions::filter_at_writer says why).
   return d;
 }
 

@@ -117,12 +117,6 @@ Interest Neighbourhood::update(const Vec3& p_W, const Vec3& q, const std::set<Ag
   return in;
 }
 
-bool Neighbourhood::by_place(const RunConfig& rc) {
-  if (rc.agents.empty()) return false;
-  const Neighbourhood n(rc, rc.agents.front().id);
-  return n.reach_ && !n.spaces_.empty();
-}
-
 std::set<AgentId> Neighbourhood::heard_at_start(const RunConfig& rc, AgentId id) {
   std::set<AgentId> out;
   const AgentSpec* me = rc.spec(id);

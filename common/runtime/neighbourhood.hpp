@@ -51,9 +51,6 @@ class Neighbourhood {
                   const Settling& settling = {});
   // Whether it hears the whole run (delivery ALL).
   bool whole_run() const { return whole_run_; }
-  // Whether the agents of `rc` hear each other by place (Interest::near): delivery REACH on a graph
-  // whose links follow distance, or with collision avoidance.
-  static bool by_place(const RunConfig& rc);
 
   // The agents that agent `id` of `rc` hears at the start (at their start positions, before any
   // link): its start barrier waits for exactly these.

@@ -42,10 +42,8 @@ TEST(Neighbourhood, CellsCoverTheLinkReachAndIdsCoverTheGraph) {
   EXPECT_EQ(by_cell.subscribe.size(), 27u + 1u);  // 27 cells, the listed edge's agent
   EXPECT_TRUE(by_cell.near.empty());
   EXPECT_EQ(Neighbourhood::heard_at_start(cells, 1), (std::set<AgentId>{2, 3, 4}));
-  EXPECT_FALSE(Neighbourhood::by_place(cells));
   // Delivery REACH: the same cells, an inbox, and a box about itself.
   const RunConfig rc = load(four);
-  EXPECT_TRUE(Neighbourhood::by_place(rc));
   Neighbourhood n1(rc, 1);
   const Interest in = n1.update(Vec3(0, 0, 0), Vec3(0, 0, 0), {});
   EXPECT_EQ(in.publish, (std::vector<std::string>{"a1", "p0.0.0"}));
