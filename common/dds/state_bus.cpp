@@ -1,5 +1,6 @@
 #include "common/dds/state_bus.hpp"
 
+#include <fastrtps/utils/IPLocator.h>
 #include <spdlog/spdlog.h>
 #include <fastdds/dds/domain/DomainParticipant.hpp>
 #include <fastdds/dds/publisher/DataWriter.hpp>
@@ -24,6 +25,7 @@
 #include "common/dds/roster_filter.hpp"
 #include "common/dds/writer_registry.hpp"
 #include "common/transport/interest.hpp"
+#include "common/transport/port_plan.hpp"
 #include "common/transport/sample_gate.hpp"
 
 #include "swarm_statePubSubTypes.h"
@@ -317,6 +319,21 @@ DdsStateBus::DdsStateBus(DdsParticipant& participant, const StateBusOptions& opt
   if (!opts.roster.empty() || opts.filter_at_writer)
     d.participant->register_content_filter_factory(RosterFilterFactory::kRosterFilterClass,
                                                    &d.roster_factory);
+  if (!opts.recorder && !opts.multicast_group.empty()) {
+    const std::string& at = participant.options().interface;
+    namespace rtps = eprosima::fastrtps::rtps;
+    rtps::Locator_t group;
+    rtps::Locator_t own;
+    if (at.empty() || !rtps::IPLocator::setIPv4(own, at) ||
+        !rtps::IPLocator::setIPv4(group, opts.multicast_group) ||
+        !rtps::IPLocator::isMulticast(group))
+      throw std::invalid_argument("dds: a multicast state reader needs an IPv4 group (not \"" +
+                                  opts.multicast_group + "\") and one interface address");
+    // Port 0: the participant's own data port. Both lists given, Fast DDS adds no default one.
+    group.port = PortPlan::data_multicast_port(participant.options().domain_id);
+    rq.endpoint().unicast_locator_list.push_back(own);
+    rq.endpoint().multicast_locator_list.push_back(group);
+  }
   d.state_reader_qos = rq;
   if (opts.topic_per_name && !opts.recorder) {
     // The readers come with set_interest: the agent names' in this subscriber.

@@ -30,6 +30,14 @@ struct PortPlan {
   static constexpr std::uint32_t data_port(std::uint32_t domain, int id) {
     return discovery_port(domain, id) + 1;
   }
+  // The domain's multicast ports: discovery (Fast DDS's own), and the state readers' group
+  // (StateBusOptions::multicast_group), the port Fast DDS gives user data multicast.
+  static constexpr std::uint32_t discovery_multicast_port(std::uint32_t domain) {
+    return kBase + kDomainGain * domain;
+  }
+  static constexpr std::uint32_t data_multicast_port(std::uint32_t domain) {
+    return discovery_multicast_port(domain) + 1;
+  }
 };
 static_assert(PortPlan::data_port(PortPlan::kMaxDomain, PortPlan::kMaxParticipantId) < 32768,
               "the port plan must stay below Linux's ephemeral ports");

@@ -137,8 +137,7 @@ TEST_F(Security, MembersToldTheirBlockMeetByUnicastAlone) {
       },
       60.0));
   // No multicast discovery socket: the domain's multicast port is not bound by this process.
-  const std::uint32_t multicast =
-      PortPlan::kBase + PortPlan::kDomainGain * test::test_domain().domain();
+  const std::uint32_t multicast = PortPlan::discovery_multicast_port(test::test_domain().domain());
   EXPECT_FALSE(this_process_holds_udp_port(multicast));
   // (A participant left to Fast DDS's defaults listens there: the check can see it.)
   DdsBus plain(test::dds_options("plain", kRun));

@@ -1,0 +1,149 @@
+// Where everyone hears everyone, a state sample leaves its writer once, to the domain's multicast
+// group, instead of once per reader; and the runs that must not use the group do not.
+#include <arpa/inet.h>
+#include <gtest/gtest.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "common/app/process_setup.hpp"
+#include "common/dds/dds_bus.hpp"
+#include "common/scenario/scenario.hpp"
+#include "common/transport/port_plan.hpp"
+#include "tests/dds/test_bus.hpp"
+#include "tests/swarm/domain_lease.hpp"
+#include "tests/swarm/harness.hpp"
+
+namespace qswarm {
+namespace {
+
+constexpr std::uint64_t kRun = 0x3c;
+
+// A plain socket that listens at the group and port the state readers use, as one more member:
+// it counts the RTPS datagrams the writers send there (none unless they send to the group).
+class GroupListener {
+ public:
+  GroupListener(const char* group, std::uint32_t port) : fd_(::socket(AF_INET, SOCK_DGRAM, 0)) {
+    if (fd_ < 0) throw std::runtime_error(std::strerror(errno));
+    const int on = 1;
+    ::setsockopt(fd_, SOL_SOCKET, SO_REUSEADDR, &on, sizeof on);
+    timeval tv{0, 100000};
+    ::setsockopt(fd_, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
+    sockaddr_in at{};
+    at.sin_family = AF_INET;
+    at.sin_port = htons(static_cast<std::uint16_t>(port));
+    at.sin_addr.s_addr = htonl(INADDR_ANY);
+    if (::bind(fd_, reinterpret_cast<sockaddr*>(&at), sizeof at) != 0)
+      throw std::runtime_error(std::string("bind: ") + std::strerror(errno));
+    ip_mreq join{};
+    ::inet_pton(AF_INET, group, &join.imr_multiaddr);
+    ::inet_pton(AF_INET, "127.0.0.1", &join.imr_interface);
+    if (::setsockopt(fd_, IPPROTO_IP, IP_ADD_MEMBERSHIP, &join, sizeof join) != 0)
+      throw std::runtime_error(std::string("join: ") + std::strerror(errno));
+  }
+  ~GroupListener() { ::close(fd_); }
+  GroupListener(const GroupListener&) = delete;
+  GroupListener& operator=(const GroupListener&) = delete;
+
+  // RTPS datagrams received within about 0.1 s.
+  int drain() {
+    int n = 0;
+    char buf[65536];
+    for (;;) {
+      const ssize_t got = ::recv(fd_, buf, sizeof buf, 0);
+      if (got < 0) return n;
+      if (got >= 4 && std::memcmp(buf, "RTPS", 4) == 0) ++n;
+    }
+  }
+
+ private:
+  int fd_;
+};
+
+DdsOptions member(const char* name, bool multicast) {
+  DdsOptions o = test::dds_options(name, kRun);
+  if (multicast) o.state.multicast_group = "239.255.0.1";
+  return o;
+}
+
+// Publishes from `from` until both others have heard it, then counts what the group carried
+// while it sent 50 more samples.
+int datagrams_to_the_group(bool multicast) {
+  const auto domain = static_cast<std::uint32_t>(test::test_domain().domain());
+  GroupListener group("239.255.0.1", PortPlan::data_multicast_port(domain));
+  DdsBus from(member("from", multicast));
+  DdsBus a(member("a", multicast));
+  DdsBus b(member("b", multicast));
+  std::uint64_t seq = 0;
+  EXPECT_TRUE(test::wait_for(
+      [&] {
+        from.publish(test::state_sample(1, kRun, ++seq));
+        return a.latest(0).size() == 1 && b.latest(0).size() == 1;
+      },
+      30.0));
+  group.drain();
+  const std::uint64_t before = a.counters().received + b.counters().received;
+  for (int i = 0; i < 50; ++i) from.publish(test::state_sample(1, kRun, ++seq));
+  const int sent = group.drain();
+  // Every sample still reached both readers (loopback loses none of 100 here).
+  EXPECT_TRUE(test::wait_for(
+      [&] { return a.counters().received + b.counters().received >= before + 90; }, 10.0));
+  return sent;
+}
+
+TEST(StateMulticast, OneDatagramPerSampleReachesEveryReaderThroughTheGroup) {
+  const int sent = datagrams_to_the_group(true);
+  // One datagram per sample, not one per reader; a few more may carry discovery's heartbeats.
+  EXPECT_GE(sent, 45);
+  EXPECT_LE(sent, 60);
+}
+
+TEST(StateMulticast, WithoutTheGroupNothingIsSentThere) {
+  EXPECT_EQ(datagrams_to_the_group(false), 0);
+}
+
+TEST(StateMulticast, ABadGroupIsRefusedNamingIt) {
+  DdsOptions o = member("bad", true);
+  o.state.multicast_group = "10.0.0.1";
+  try {
+    DdsBus bus(o);
+    FAIL() << "a unicast address was taken as the group";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("10.0.0.1"), std::string::npos) << e.what();
+  }
+}
+
+// Which runs use the group: those where everyone hears everyone on loopback, and no others.
+TEST(StateMulticast, OnlyAllToAllRunsOnLoopbackWithoutTheTestTransportOrUnicastDiscoveryUseIt) {
+  RunConfig rc =
+      resolve_scenario(parse_scenario_text("random_agents { count: 4 box_m: 10 } seed: 1", "test"));
+  ASSERT_EQ(rc.transport.delivery, Delivery::kAll);
+  const auto group = [](const RunConfig& r, ProcessOptions po = {}) {
+    return dds_options(r, "agent", po).state.multicast_group;
+  };
+  EXPECT_EQ(group(rc), "239.255.0.1");
+  RunConfig neighbours = rc;
+  neighbours.transport.delivery = Delivery::kNeighbours;
+  EXPECT_EQ(group(neighbours), "");
+  RunConfig lossy = rc;
+  lossy.faults.transport_drop_percent = 20;
+  EXPECT_EQ(group(lossy), "");
+  ProcessOptions unicast;
+  unicast.unicast_peers = "0:5";
+  EXPECT_EQ(group(rc, unicast), "");
+  ProcessOptions container;
+  container.interface = "any";
+  EXPECT_EQ(group(rc, container), "");
+  ProcessOptions lan;
+  lan.interface = "10.1.2.3";
+  EXPECT_EQ(group(rc, lan), "");
+}
+
+}  // namespace
+}  // namespace qswarm
