@@ -320,18 +320,19 @@ DdsStateBus::DdsStateBus(DdsParticipant& participant, const StateBusOptions& opt
     d.participant->register_content_filter_factory(RosterFilterFactory::kRosterFilterClass,
                                                    &d.roster_factory);
   if (!opts.recorder && !opts.multicast_group.empty()) {
-    const std::string& at = participant.options().interface;
     namespace rtps = eprosima::fastrtps::rtps;
     rtps::Locator_t group;
-    rtps::Locator_t own;
-    if (at.empty() || !rtps::IPLocator::setIPv4(own, at) ||
+    if (participant.options().interface.empty() ||
         !rtps::IPLocator::setIPv4(group, opts.multicast_group) ||
         !rtps::IPLocator::isMulticast(group))
       throw std::invalid_argument("dds: a multicast state reader needs an IPv4 group (not \"" +
                                   opts.multicast_group + "\") and one interface address");
-    // Port 0: the participant's own data port. Both lists given, Fast DDS adds no default one.
     group.port = PortPlan::data_multicast_port(participant.options().domain_id);
-    rq.endpoint().unicast_locator_list.push_back(own);
+    // The group alone, no unicast locator: a writer then always sends this reader's samples to
+    // the group. With both, a writer sends to a reader's unicast locator once it is the last one
+    // left in the group, and Fast DDS 2.9.1 (Debian builds it with statistics and assertions)
+    // aborts on a destination it first saw as part of a group (its transport's statistics
+    // record a destination only when a match selects it): agents died so at teardown.
     rq.endpoint().multicast_locator_list.push_back(group);
   }
   d.state_reader_qos = rq;

@@ -59,12 +59,11 @@ struct StateBusOptions {
   // while write() walks the same map, so a reader matched or unmatched during a write (an agent
   // changing cells, joining, leaving) can corrupt it. Fast DDS 3.0.0 locks there (#21188).
   bool filter_at_writer = false;
-  // The state reader also listens on this IPv4 multicast group, at its domain's data multicast
-  // port (PortPlan::data_multicast_port), beside its unicast port. A writer matched with two or
-  // more such readers then sends each sample once, to the group, instead of once per reader: for
-  // a swarm where everyone hears everyone, the only one where that is a saving, since every
-  // reader on the domain receives every datagram sent to the group. Needs the participant's
-  // interface (one address). Empty: unicast only.
+  // The state reader listens on this IPv4 multicast group, at its domain's data multicast port
+  // (PortPlan::data_multicast_port), instead of its unicast port: a writer sends each sample
+  // once, to the group, instead of once per reader. For a swarm where everyone hears everyone,
+  // the only one where that is a saving, since every such reader on the domain receives every
+  // datagram sent to the group. Needs the participant's interface (one address). Empty: unicast.
   std::string multicast_group;
 };
 

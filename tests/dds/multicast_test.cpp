@@ -108,6 +108,36 @@ TEST(StateMulticast, WithoutTheGroupNothingIsSentThere) {
   EXPECT_EQ(datagrams_to_the_group(false), 0);
 }
 
+TEST(StateMulticast, TheLastReaderLeftStillHearsAndTheWriterLives) {
+  // Readers matched one after the other, then all but the last one gone: the writer keeps
+  // reaching it through the group (it has no unicast locator to fall back to).
+  DdsBus from(member("from", true));
+  std::vector<std::unique_ptr<DdsBus>> readers;
+  std::uint64_t seq = 0;
+  for (const char* name : {"first", "second", "last"}) {
+    readers.push_back(std::make_unique<DdsBus>(member(name, true)));
+    DdsBus& r = *readers.back();
+    ASSERT_TRUE(test::wait_for(
+        [&] {
+          from.publish(test::state_sample(1, kRun, ++seq));
+          return r.latest(0).size() == 1;
+        },
+        30.0))
+        << name;
+  }
+  const int matched = from.matched_readers();  // its own reader's too
+  readers.erase(readers.begin(), readers.begin() + 2);
+  ASSERT_TRUE(test::wait_for([&] { return from.matched_readers() == matched - 2; }, 30.0));
+  DdsBus& last = *readers.back();
+  const std::uint64_t before = last.counters().received;
+  EXPECT_TRUE(test::wait_for(
+      [&] {
+        from.publish(test::state_sample(1, kRun, ++seq));
+        return last.counters().received >= before + 20;
+      },
+      30.0));
+}
+
 TEST(StateMulticast, ABadGroupIsRefusedNamingIt) {
   DdsOptions o = member("bad", true);
   o.state.multicast_group = "10.0.0.1";
