@@ -176,11 +176,6 @@ void exit_cleanly_on_uncaught_exceptions(const char* prog) {
   std::set_terminate(on_terminate);
 }
 
-namespace {
-// The group Fast DDS's discovery uses too; the state readers listen at another port of it.
-constexpr const char* kStateMulticastGroup = "239.255.0.1";
-}  // namespace
-
 DdsOptions dds_options(const RunConfig& rc, const std::string& participant_name,
                        const ProcessOptions& o) {
   DdsOptions d;
@@ -210,14 +205,17 @@ DdsOptions dds_options(const RunConfig& rc, const std::string& participant_name,
   // hears its neighbours by name discovers only them (StateBusOptions::topic_per_name).
   s.topic_per_name = !p.discovery_server.empty();
   // Writers never filter for their readers (StateBusOptions::filter_at_writer says why).
-  // Where everyone hears everyone on loopback, a sample is one datagram to a multicast group
-  // rather than one per reader (docs/benchmarks.md, "One datagram per sample"). Not where the
-  // test transport drops (its losses would hit every reader of a sample at once, no longer each
-  // link on its own), nor where discovery is unicast alone (secure runs: no multicast is sent or
-  // heard there), nor in containers (multicast on their networks is unreliable).
+  // Where everyone hears everyone on loopback, a sample is one datagram to the run's multicast
+  // group rather than one per reader (docs/benchmarks.md, "One datagram per sample"). Discovery
+  // is another matter (simple or through a Discovery Server alike). Not where the test
+  // transport drops (its losses would hit every reader of a sample at once, no longer each link
+  // on its own), nor with discovery by unicast peers (secure runs: no multicast is sent or heard
+  // there), nor over shared memory (asked for by name), nor off loopback (containers, whose
+  // networks carry multicast unreliably, and the fault tests' namespaces).
   if (rc.transport.delivery == Delivery::kAll && p.interface.rfind("127.", 0) == 0 &&
-      p.test_drop_data_percent == 0 && p.unicast_peers_count == 0 && p.keystore.empty())
-    s.multicast_group = kStateMulticastGroup;
+      p.test_drop_data_percent == 0 && p.unicast_peers_count == 0 && p.keystore.empty() &&
+      !p.shared_memory)
+    s.multicast_group = state_multicast_group(rc.transport.run_id);
   return d;
 }
 

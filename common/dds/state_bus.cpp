@@ -59,6 +59,7 @@ std::string record_partition(std::uint64_t run_id) { return partition("record", 
 
 struct DdsStateBus::Impl : public dds::DataReaderListener {
   StateBusOptions opts;
+  std::string multicast_group;   // the group its readers listen on ("" : unicast)
   const Clock* clock = nullptr;  // the receiver's wall time, for the gate
   dds::DomainParticipant* participant = nullptr;
   dds::TypeSupport type{new qswarm_msgs::AgentStatePubSubType()};
@@ -328,12 +329,26 @@ DdsStateBus::DdsStateBus(DdsParticipant& participant, const StateBusOptions& opt
       throw std::invalid_argument("dds: a multicast state reader needs an IPv4 group (not \"" +
                                   opts.multicast_group + "\") and one interface address");
     group.port = PortPlan::data_multicast_port(participant.options().domain_id);
-    // The group alone, no unicast locator: a writer then always sends this reader's samples to
-    // the group. With both, a writer sends to a reader's unicast locator once it is the last one
-    // left in the group, and Fast DDS 2.9.1 (Debian builds it with statistics and assertions)
-    // aborts on a destination it first saw as part of a group (its transport's statistics
-    // record a destination only when a match selects it): agents died so at teardown.
-    rq.endpoint().multicast_locator_list.push_back(group);
+    // Fast DDS only logs a group socket it could not bind, and a reader listening on the group
+    // alone would then hear nothing: a program holding the port alone leaves this reader on
+    // unicast instead, and says so.
+    if (const std::string problem = multicast_port_problem(opts.multicast_group, group.port,
+                                                           participant.options().interface);
+        !problem.empty()) {
+      spdlog::warn("dds: state samples by unicast, not multicast group {}: {}",
+                   opts.multicast_group, problem);
+    } else {
+      // The group alone, no unicast locator: a writer then always sends this reader's samples
+      // to the group. With both, a writer sends to a reader's unicast locator once it is the
+      // last one left in the group, and Fast DDS 2.9.1 (Debian builds it with statistics and
+      // assertions) aborts on a destination it first saw as part of a group (its transport's
+      // statistics record a destination only when a match selects it): agents died so at
+      // teardown.
+      rq.endpoint().multicast_locator_list.push_back(group);
+      d.multicast_group = opts.multicast_group;
+      spdlog::info("dds: state samples by multicast group {} port {}", d.multicast_group,
+                   group.port);
+    }
   }
   d.state_reader_qos = rq;
   if (opts.topic_per_name && !opts.recorder) {
@@ -582,6 +597,8 @@ std::set<AgentId> DdsStateBus::strangers() const {
   std::lock_guard<std::mutex> lock(t.mu);
   return t.ids;
 }
+
+const std::string& DdsStateBus::multicast_group() const { return impl_->multicast_group; }
 
 std::uint64_t DdsStateBus::judged_on_arrival() const {
   return impl_->roster_factory.judged_on_arrival.load(std::memory_order_relaxed);

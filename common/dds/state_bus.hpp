@@ -62,8 +62,10 @@ struct StateBusOptions {
   // The state reader listens on this IPv4 multicast group, at its domain's data multicast port
   // (PortPlan::data_multicast_port), instead of its unicast port: a writer sends each sample
   // once, to the group, instead of once per reader. For a swarm where everyone hears everyone,
-  // the only one where that is a saving, since every such reader on the domain receives every
-  // datagram sent to the group. Needs the participant's interface (one address). Empty: unicast.
+  // the only one where that is a saving, since every reader in the group (a run's: see
+  // state_multicast_group) receives every datagram sent to it. Needs the participant's interface
+  // (one address). Empty: unicast; unicast too, with a warning, where another program holds the
+  // group's port alone.
   std::string multicast_group;
 };
 
@@ -111,6 +113,9 @@ class DdsStateBus final : public NeighborBus {
   // Samples its place filter judged on arrival (StateBusOptions::filter_at_writer: none, since
   // each writer judges before it sends).
   std::uint64_t judged_on_arrival() const;
+  // The multicast group its state readers listen on: StateBusOptions::multicast_group, or ""
+  // where it listens by unicast (none asked for, or the port was held by another program).
+  const std::string& multicast_group() const;
 
   struct Impl;
 

@@ -34,13 +34,17 @@ std::optional<std::pair<int, int>> parse_unicast_peers(const std::string& text, 
 
 namespace {
 
-// Whether a UDP port can be bound at `address` (any address when empty or "any").
-bool port_free(std::uint32_t port, const std::string& address, std::string* why) {
+// Whether a UDP port can be bound at `address` (any address when empty or "any"), alone or, with
+// `shared`, beside sockets that allow it (SO_REUSEADDR).
+bool port_free(std::uint32_t port, const std::string& address, std::string* why,
+               bool shared = false) {
   const int fd = ::socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC, 0);
   if (fd < 0) {
     if (why) *why = std::string("socket: ") + std::strerror(errno);
     return false;
   }
+  const int on = 1;
+  if (shared) (void)::setsockopt(fd, SOL_SOCKET, SO_REUSEADDR, &on, sizeof on);
   sockaddr_in a{};
   a.sin_family = AF_INET;
   a.sin_port = htons(static_cast<std::uint16_t>(port));
@@ -68,6 +72,26 @@ std::string participant_ports_problem(std::uint32_t domain, int id, const std::s
              " on domain " + std::to_string(domain) + " cannot be bound (" + why +
              "): another run on this domain, or another program, holds it";
     }
+  }
+  return "";
+}
+
+std::string state_multicast_group(std::uint64_t run_id) {
+  // splitmix64's finaliser: nearby run ids land on distant groups.
+  std::uint64_t h = run_id + 0x9e3779b97f4a7c15ULL;
+  h = (h ^ (h >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  h = (h ^ (h >> 27)) * 0x94d049bb133111ebULL;
+  h ^= h >> 31;
+  return "239.255." + std::to_string(1 + h % 254) + "." + std::to_string(1 + (h >> 8) % 254);
+}
+
+std::string multicast_port_problem(const std::string& group, std::uint32_t port,
+                                   const std::string& address) {
+  for (const std::string& at : {group, address}) {
+    std::string why;
+    if (!port_free(port, at, &why, /*shared=*/true))
+      return "UDP port " + std::to_string(port) + " at " + at + " cannot be shared (" + why +
+             "): another program holds it alone";
   }
   return "";
 }

@@ -42,6 +42,17 @@ struct PortPlan {
 static_assert(PortPlan::data_port(PortPlan::kMaxDomain, PortPlan::kMaxParticipantId) < 32768,
               "the port plan must stay below Linux's ephemeral ports");
 
+// The multicast group of a run's state readers where everyone hears everyone
+// (StateBusOptions::multicast_group): 239.255.A.B from the run id, never 239.255.0.x (Fast DDS's
+// discovery group). Fast DDS binds a group's socket to the group's address, so the kernel hands
+// a run's agents only their own run's datagrams, though runs share the domain's port.
+std::string state_multicast_group(std::uint64_t run_id);
+
+// Whether sockets may share `port` at the multicast `group` and at `address` (SO_REUSEADDR, as
+// Fast DDS binds multicast sockets): "" if so, else why not (a program holds the port alone).
+std::string multicast_port_problem(const std::string& group, std::uint32_t port,
+                                   const std::string& address);
+
 // Parses a block of participant ids "FIRST:COUNT" (all within 0..kMaxParticipantId): what
 // --unicast-peers takes. Nothing, with `why`, if it is not one.
 std::optional<std::pair<int, int>> parse_unicast_peers(const std::string& text, std::string& why);

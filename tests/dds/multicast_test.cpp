@@ -9,6 +9,7 @@
 #include <cerrno>
 #include <cstring>
 #include <memory>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -38,7 +39,7 @@ class GroupListener {
     sockaddr_in at{};
     at.sin_family = AF_INET;
     at.sin_port = htons(static_cast<std::uint16_t>(port));
-    at.sin_addr.s_addr = htonl(INADDR_ANY);
+    ::inet_pton(AF_INET, group, &at.sin_addr);  // as Fast DDS binds: the group's datagrams only
     if (::bind(fd_, reinterpret_cast<sockaddr*>(&at), sizeof at) != 0)
       throw std::runtime_error(std::string("bind: ") + std::strerror(errno));
     ip_mreq join{};
@@ -66,30 +67,34 @@ class GroupListener {
   int fd_;
 };
 
-DdsOptions member(const char* name, bool multicast) {
-  DdsOptions o = test::dds_options(name, kRun);
-  if (multicast) o.state.multicast_group = "239.255.0.1";
+std::uint32_t group_port() {
+  return PortPlan::data_multicast_port(static_cast<std::uint32_t>(test::test_domain().domain()));
+}
+
+DdsOptions member(const char* name, bool multicast, std::uint64_t run = kRun) {
+  DdsOptions o = test::dds_options(name, run);
+  if (multicast) o.state.multicast_group = state_multicast_group(run);
   return o;
 }
 
-// Publishes from `from` until both others have heard it, then counts what the group carried
-// while it sent 50 more samples.
-int datagrams_to_the_group(bool multicast) {
-  const auto domain = static_cast<std::uint32_t>(test::test_domain().domain());
-  GroupListener group("239.255.0.1", PortPlan::data_multicast_port(domain));
-  DdsBus from(member("from", multicast));
-  DdsBus a(member("a", multicast));
-  DdsBus b(member("b", multicast));
+// Publishes from `from` (of run `run`) until both others have heard it, then counts what
+// run kRun's group carried while it sent 50 more samples.
+int datagrams_to_the_group(bool multicast, std::uint64_t run = kRun) {
+  GroupListener group(state_multicast_group(kRun).c_str(), group_port());
+  DdsBus from(member("from", multicast, run));
+  DdsBus a(member("a", multicast, run));
+  DdsBus b(member("b", multicast, run));
+  EXPECT_EQ(a.state().multicast_group(), multicast ? state_multicast_group(run) : "");
   std::uint64_t seq = 0;
   EXPECT_TRUE(test::wait_for(
       [&] {
-        from.publish(test::state_sample(1, kRun, ++seq));
+        from.publish(test::state_sample(1, run, ++seq));
         return a.latest(0).size() == 1 && b.latest(0).size() == 1;
       },
       30.0));
   group.drain();
   const std::uint64_t before = a.counters().received + b.counters().received;
-  for (int i = 0; i < 50; ++i) from.publish(test::state_sample(1, kRun, ++seq));
+  for (int i = 0; i < 50; ++i) from.publish(test::state_sample(1, run, ++seq));
   const int sent = group.drain();
   // Every sample still reached both readers (loopback loses none of 100 here).
   EXPECT_TRUE(test::wait_for(
@@ -108,10 +113,56 @@ TEST(StateMulticast, WithoutTheGroupNothingIsSentThere) {
   EXPECT_EQ(datagrams_to_the_group(false), 0);
 }
 
+TEST(StateMulticast, AnotherRunOnTheDomainSendsToItsOwnGroupWhichThisRunsSocketsNeverSee) {
+  ASSERT_NE(state_multicast_group(kRun + 1), state_multicast_group(kRun));
+  EXPECT_EQ(datagrams_to_the_group(true, kRun + 1), 0);
+}
+
+TEST(StateMulticast, APortHeldAloneByAnotherProgramLeavesTheReadersOnUnicastStillHearing) {
+  // A socket bound to the port without sharing it: Fast DDS could not bind the group's socket.
+  const int blocker = ::socket(AF_INET, SOCK_DGRAM, 0);
+  ASSERT_GE(blocker, 0);
+  sockaddr_in at{};
+  at.sin_family = AF_INET;
+  at.sin_port = htons(static_cast<std::uint16_t>(group_port()));
+  at.sin_addr.s_addr = htonl(INADDR_ANY);
+  ASSERT_EQ(::bind(blocker, reinterpret_cast<sockaddr*>(&at), sizeof at), 0)
+      << std::strerror(errno);
+  EXPECT_NE(multicast_port_problem(state_multicast_group(kRun), group_port(), "127.0.0.1"), "");
+  {
+    DdsBus from(member("from", true));
+    DdsBus a(member("a", true));
+    EXPECT_EQ(a.state().multicast_group(), "");
+    std::uint64_t seq = 0;
+    EXPECT_TRUE(test::wait_for(
+        [&] {
+          from.publish(test::state_sample(1, kRun, ++seq));
+          return a.latest(0).size() == 1;
+        },
+        30.0));
+  }
+  ::close(blocker);
+  EXPECT_EQ(multicast_port_problem(state_multicast_group(kRun), group_port(), "127.0.0.1"), "");
+}
+
+TEST(StateMulticast, EachRunHasItsOwnGroupOutsideDiscoverysOwn) {
+  std::set<std::string> groups;
+  for (std::uint64_t run = 0; run < 1000; ++run) {
+    const std::string g = state_multicast_group(run);
+    EXPECT_EQ(g, state_multicast_group(run));
+    EXPECT_EQ(g.rfind("239.255.", 0), 0u) << g;
+    EXPECT_NE(g.rfind("239.255.0.", 0), 0u) << g;
+    EXPECT_NE(g.substr(g.size() - 2), ".0") << g;
+    EXPECT_NE(g.substr(g.size() - 4), ".255") << g;
+    groups.insert(g);
+  }
+  EXPECT_GT(groups.size(), 950u);  // 64 516 groups: few of 1000 runs share one
+}
+
 TEST(StateMulticast, TheLastReaderLeftStillHearsAndTheWriterLives) {
   // Readers matched one after the other, then all but the last one gone: the writer keeps
   // reaching it through the group (it has no unicast locator to fall back to).
-  DdsBus from(member("from", true));
+  DdsBus from(member("from", false));  // so that the last reader is alone in the group
   std::vector<std::unique_ptr<DdsBus>> readers;
   std::uint64_t seq = 0;
   for (const char* name : {"first", "second", "last"}) {
@@ -125,7 +176,7 @@ TEST(StateMulticast, TheLastReaderLeftStillHearsAndTheWriterLives) {
         30.0))
         << name;
   }
-  const int matched = from.matched_readers();  // its own reader's too
+  const int matched = from.matched_readers();
   readers.erase(readers.begin(), readers.begin() + 2);
   ASSERT_TRUE(test::wait_for([&] { return from.matched_readers() == matched - 2; }, 30.0));
   DdsBus& last = *readers.back();
@@ -157,7 +208,10 @@ TEST(StateMulticast, OnlyAllToAllRunsOnLoopbackWithoutTheTestTransportOrUnicastD
   const auto group = [](const RunConfig& r, ProcessOptions po = {}) {
     return dds_options(r, "agent", po).state.multicast_group;
   };
-  EXPECT_EQ(group(rc), "239.255.0.1");
+  EXPECT_EQ(group(rc), state_multicast_group(rc.transport.run_id));
+  ProcessOptions server;  // discovery is not data: through a Discovery Server too
+  server.discovery_server = "127.0.0.1:11811";
+  EXPECT_EQ(group(rc, server), state_multicast_group(rc.transport.run_id));
   RunConfig neighbours = rc;
   neighbours.transport.delivery = Delivery::kNeighbours;
   EXPECT_EQ(group(neighbours), "");
@@ -167,6 +221,12 @@ TEST(StateMulticast, OnlyAllToAllRunsOnLoopbackWithoutTheTestTransportOrUnicastD
   ProcessOptions unicast;
   unicast.unicast_peers = "0:5";
   EXPECT_EQ(group(rc, unicast), "");
+  RunConfig secure = rc;
+  secure.transport.keystore = "/nonexistent/keystore";
+  EXPECT_EQ(group(secure), "");
+  RunConfig shm = rc;
+  shm.transport.shared_memory = true;
+  EXPECT_EQ(group(shm), "");
   ProcessOptions container;
   container.interface = "any";
   EXPECT_EQ(group(rc, container), "");
