@@ -89,9 +89,12 @@ std::string multicast_port_problem(const std::string& group, std::uint32_t port,
                                    const std::string& address) {
   for (const std::string& at : {group, address}) {
     std::string why;
-    if (!port_free(port, at, &why, /*shared=*/true))
-      return "UDP port " + std::to_string(port) + " at " + at + " cannot be shared (" + why +
-             "): another program holds it alone";
+    if (port_free(port, at, &why, /*shared=*/true)) continue;
+    std::string problem = "UDP port " + std::to_string(port);
+    problem += " at " + at;
+    problem += " cannot be shared (" + why;
+    problem += "): another program holds it alone";
+    return problem;
   }
   return "";
 }
