@@ -162,6 +162,14 @@ podman stop -t 5 "$SECURE-stranger" >/dev/null 2>&1 || true
 podman logs "$SECURE-stranger" >"$WORK/stranger.log" 2>&1 || true
 echo "compose test: secure supervisor exited $scode"
 sed -n '/==/,$p' "$WORK/supervisor-secure.out"
+if [[ $scode -ne 0 ]]; then
+  # What each replica said: the one place that tells a handshake that never finished from a
+  # replica that never claimed its id.
+  tail -15 "$WORK/supervisor-secure.out" | sed 's/^/  supervisor: /'
+  for c in $(podman ps -a --format '{{.Names}}' | grep "^${SECURE}_agent_" || true); do
+    podman logs "$c" 2>&1 | tail -12 | sed "s/^/  $c: /"
+  done
+fi
 srun=$(find "$WORK/runs-secure" -mindepth 1 -maxdepth 1 -type d | head -1)
 check "secure: the supervisor exits 0 (converged, complete record)" '[[ $scode -eq 0 ]]'
 check "secure: the stranger heard none of the replicas" \
