@@ -71,6 +71,10 @@ int main(int argc, char** argv) {
     SteadyClock clock;
     DdsOptions dopt = dds_options(*rc, "swarm-agent", f.process);
     dopt.participant.identity = identity;
+    if (!f.process.peer_hosts.empty())
+      dopt.participant.unicast_peer_hosts =
+          find_peer_hosts(f.process.peer_hosts, rc->agents.size() + 1, kPeerHostsWaitS,
+                          [&](const std::string& line) { log->info("{}", line); });
     // The tick is this process's deadline; hearing neighbours may wait (docs/benchmarks.md). Not
     // under DDS-Security: Fast DDS 2.9.1's handshakes race between its receive threads (see
     // ParticipantOptions::unicast_peers_first), and with them slowed a secure compose swarm

@@ -95,6 +95,10 @@ int main(int argc, char** argv) {
     SteadyClock clock;
     DdsOptions dopt = dds_options(rc, "swarm-supervisor", opts);
     dopt.participant.identity = "supervisor";
+    if (!opts.peer_hosts.empty())
+      dopt.participant.unicast_peer_hosts =
+          find_peer_hosts(opts.peer_hosts, rc.agents.size() + 1, kPeerHostsWaitS,
+                          [&](const std::string& line) { logger->info("{}", line); });
     dopt.state.publish = false;  // a read-only participant: it publishes nothing an agent acts on
     dopt.state.recorder = true;  // it reads what agents send it, not their state stream
     dopt.participant.test_drop_data_percent = 0;

@@ -12,6 +12,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -19,9 +20,27 @@
 #include <filesystem>
 #include <new>
 #include <system_error>
+#include <thread>
 #include <utility>
 
 namespace qswarm {
+
+namespace {
+
+// "a,b,,c" -> {"a", "b", "", "c"}; "" -> {}.
+std::vector<std::string> split_names(const std::string& text) {
+  std::vector<std::string> out;
+  if (text.empty()) return out;
+  std::size_t from = 0;
+  for (;;) {
+    const std::size_t comma = text.find(',', from);
+    out.push_back(text.substr(from, comma == std::string::npos ? std::string::npos : comma - from));
+    if (comma == std::string::npos) return out;
+    from = comma + 1;
+  }
+}
+
+}  // namespace
 
 void add_process_options(CLI::App& app, ProcessOptions& o) {
   app.add_option("--scenario", o.scenario, "scenario file (Protobuf text format)")->required();
@@ -51,6 +70,15 @@ void add_process_options(CLI::App& app, ProcessOptions& o) {
       ->check([](const std::string& v) {
         std::string why;
         return parse_unicast_peers(v, why) ? std::string() : why;
+      });
+  app.add_option("--peer-hosts", o.peer_hosts,
+                 "NAME,...: discover by unicast the one participant at each address of these "
+                 "names (secure compose: agent,supervisor)")
+      ->envname("QSWARM_PEER_HOSTS")
+      ->check([](const std::string& v) {
+        for (const std::string& name : split_names(v))
+          if (name.empty()) return std::string("an empty name in \"") + v + "\"";
+        return std::string();
       });
   app.add_option("--seed", o.seed, "run seed (overrides the scenario)")
       ->check(CLI::Range(std::int64_t{0}, std::int64_t{4294967295}));
@@ -193,6 +221,14 @@ DdsOptions dds_options(const RunConfig& rc, const std::string& participant_name,
     p.unicast_peers_first = peers->first;
     p.unicast_peers_count = peers->second;
   }
+  if (!o.peer_hosts.empty()) {
+    // One participant per host (a container): id 0 of the port plan, everywhere.
+    if (p.participant_id < 0) p.participant_id = 0;
+    if (o.unicast_peers.empty()) {
+      p.unicast_peers_first = 0;
+      p.unicast_peers_count = 1;
+    }
+  }
   p.keystore = rc.transport.keystore;  // the caller names the identity
   // Everyone hears every announcement: N^2 per period. Every second up to 25 processes, then
   // slower with the swarm (10 s at 256); lost first announcements are repeated by the quick ones.
@@ -234,6 +270,48 @@ std::shared_ptr<spdlog::logger> make_process_logger(const std::string& name,
   logger->flush_on(spdlog::level::info);
   spdlog::set_default_logger(logger);
   return logger;
+}
+
+std::vector<std::string> find_peer_hosts(const std::string& names, std::size_t want,
+                                         double timeout_s,
+                                         const std::function<void(const std::string&)>& say) {
+  const auto start = std::chrono::steady_clock::now();
+  const auto waited = [&] {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  };
+  double next_say_s = 10.0;
+  std::vector<std::string> found;
+  for (;;) {
+    found.clear();
+    std::string missing;
+    for (const std::string& name : split_names(names)) {
+      int error = 0;
+      const std::vector<std::string> at = ipv4_addresses(name, error);
+      if (at.empty()) missing += (missing.empty() ? "" : ", ") + name;
+      for (const std::string& a : at)
+        if (std::find(found.begin(), found.end(), a) == found.end()) found.push_back(a);
+    }
+    const double t = waited();
+    if (found.size() >= want) {
+      if (say)
+        say("peer hosts " + names + ": " + std::to_string(found.size()) + " addresses after " +
+            std::to_string(static_cast<int>(t)) + " s: discovery by unicast there");
+      return found;
+    }
+    const std::string line = "peer hosts " + names + ": " + std::to_string(found.size()) + " of " +
+                             std::to_string(want) + " addresses after " +
+                             std::to_string(static_cast<int>(t)) + " s" +
+                             (missing.empty() ? "" : " (not resolved yet: " + missing + ")");
+    if (t >= timeout_s) {
+      if (say) say(line + "; going on with these: the others find this one");
+      return found;
+    }
+    if (say && t >= next_say_s) {
+      say(line);
+      next_say_s += 10.0;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  }
 }
 
 }  // namespace qswarm

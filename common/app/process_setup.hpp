@@ -2,10 +2,13 @@
 
 #include <spdlog/logger.h>
 
+#include <cstddef>
 #include <exception>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "common/dds/dds_bus.hpp"
 #include "common/scenario/scenario.hpp"
@@ -32,8 +35,24 @@ struct ProcessOptions {
   // --unicast-peers FIRST:COUNT: discover only the participant ids FIRST.. of the port plan, by
   // unicast (ParticipantOptions::unicast_peers_*); swarm run passes its block to a secure run.
   std::string unicast_peers;
+  // --peer-hosts / QSWARM_PEER_HOSTS NAME,...: the unicast peers are at every address of these
+  // names (compose services: each replica of one), one participant per host, so that port plan id
+  // 0 and peers 0:1 go with it unless given. find_peer_hosts resolves them.
+  std::string peer_hosts;
 };
 void add_process_options(CLI::App& app, ProcessOptions& o);
+
+// The addresses of --peer-hosts (comma-separated names or IPv4 addresses), asked again every half
+// second until they are `want` (the run's processes: every agent replica and the supervisor, this
+// one included) or `timeout_s` has passed: a process started early waits for the others' names.
+// `say` hears progress every 10 s, and what it found once at the end. Discovery is symmetric: a
+// peer that comes up later finds this one in its own list.
+// How long a process waits for its peer hosts' names: a compose swarm of a few dozen replicas
+// starting on two cores.
+inline constexpr double kPeerHostsWaitS = 120.0;
+std::vector<std::string> find_peer_hosts(const std::string& names, std::size_t want,
+                                         double timeout_s,
+                                         const std::function<void(const std::string&)>& say);
 
 // An exception that escapes a thread (one of Fast DDS's too: std::system_error when threads or
 // memory run out) ends the process with exit code 1 and one line on stderr that names it, instead

@@ -24,6 +24,7 @@
 #include <mutex>
 #include <stdexcept>
 #include <thread>
+#include <vector>
 
 namespace qswarm {
 
@@ -112,22 +113,34 @@ DdsParticipant::DdsParticipant(const ParticipantOptions& opts) : opts_(opts) {
     set("dds.sec.crypto.plugin", "builtin.AES-GCM-GMAC");
   }
   if (opts.unicast_peers_count > 0) {
-    if (opts.interface.empty() || !opts.discovery_server.empty())
+    if ((opts.interface.empty() && opts.unicast_peer_hosts.empty()) ||
+        !opts.discovery_server.empty())
       throw std::invalid_argument(
-          "dds: unicast discovery needs one interface address and no Discovery Server");
+          "dds: unicast discovery needs one interface address or peer hosts, and no Discovery "
+          "Server");
     if (opts.unicast_peers_first < 0 ||
         opts.unicast_peers_first + opts.unicast_peers_count > PortPlan::kMaxParticipantId + 1)
       throw std::invalid_argument("dds: unicast peers beyond the port plan's ids 0..544");
     // Explicit unicast locators (port 0: the participant id's own ports) leave Fast DDS no
-    // default multicast one; the initial peers replace the multicast announcements.
+    // default multicast one; the initial peers replace the multicast announcements. Every
+    // interface (0.0.0.0) where none is named: Fast DDS lists each of them in its announcements.
     eprosima::fastrtps::rtps::Locator_t own;
-    eprosima::fastrtps::rtps::IPLocator::setIPv4(own, opts.interface);
+    eprosima::fastrtps::rtps::IPLocator::setIPv4(
+        own, opts.interface.empty() ? std::string("0.0.0.0") : opts.interface);
     pqos.wire_protocol().builtin.metatrafficUnicastLocatorList.push_back(own);
     pqos.wire_protocol().default_unicast_locator_list.push_back(own);
-    for (int i = 0; i < opts.unicast_peers_count; ++i) {
-      eprosima::fastrtps::rtps::Locator_t peer = own;
-      peer.port = PortPlan::discovery_port(opts.domain_id, opts.unicast_peers_first + i);
-      pqos.wire_protocol().builtin.initialPeersList.push_back(peer);
+    const std::vector<std::string> hosts = opts.unicast_peer_hosts.empty()
+                                               ? std::vector<std::string>{opts.interface}
+                                               : opts.unicast_peer_hosts;
+    for (const std::string& host : hosts) {
+      eprosima::fastrtps::rtps::Locator_t peer;
+      if (!eprosima::fastrtps::rtps::IPLocator::setIPv4(peer, host))
+        throw std::invalid_argument("dds: unicast peer host \"" + host +
+                                    "\" is not an IPv4 address");
+      for (int i = 0; i < opts.unicast_peers_count; ++i) {
+        peer.port = PortPlan::discovery_port(opts.domain_id, opts.unicast_peers_first + i);
+        pqos.wire_protocol().builtin.initialPeersList.push_back(peer);
+      }
     }
   }
   if (!opts.discovery_server.empty()) {
@@ -223,6 +236,25 @@ DdsParticipant::~DdsParticipant() {
   dds::DomainParticipantFactory::get_instance()->delete_participant(participant_);
 }
 
+std::vector<std::string> ipv4_addresses(const std::string& host, int& error) {
+  addrinfo hints{};
+  hints.ai_family = AF_INET;
+  hints.ai_socktype = SOCK_DGRAM;
+  addrinfo* res = nullptr;
+  error = getaddrinfo(host.c_str(), nullptr, &hints, &res);
+  std::vector<std::string> out;
+  if (error != 0) return out;
+  for (const addrinfo* a = res; a != nullptr; a = a->ai_next) {
+    char buf[INET_ADDRSTRLEN] = {};
+    inet_ntop(AF_INET, &reinterpret_cast<const sockaddr_in*>(a->ai_addr)->sin_addr, buf,
+              sizeof buf);
+    if (std::find(out.begin(), out.end(), buf) == out.end()) out.emplace_back(buf);
+  }
+  freeaddrinfo(res);
+  if (out.empty()) error = EAI_NODATA;
+  return out;
+}
+
 std::pair<std::string, std::uint16_t> resolve_discovery_server(const std::string& host_port) {
   const auto colon = host_port.rfind(':');
   if (colon == std::string::npos || colon == 0 || colon + 1 == host_port.size())
@@ -233,24 +265,19 @@ std::pair<std::string, std::uint16_t> resolve_discovery_server(const std::string
   const long port = std::strtol(port_text.c_str(), &end, 10);
   if (*end != '\0' || port < 1 || port > 65535)
     throw std::invalid_argument("discovery server \"" + host_port + "\": port must be 1..65535");
-  addrinfo hints{};
-  hints.ai_family = AF_INET;
-  hints.ai_socktype = SOCK_DGRAM;
-  addrinfo* res = nullptr;
   // A container's name may take a moment to appear in the network's DNS (unknown name, no data,
   // a server failure): retry for ~15 s. A numeric address resolves at once.
   int rc = 0;
+  std::vector<std::string> found;
   for (int attempt = 0; attempt < 30; ++attempt) {
-    rc = getaddrinfo(host.c_str(), nullptr, &hints, &res);
+    found = ipv4_addresses(host, rc);
     if (rc != EAI_AGAIN && rc != EAI_NONAME && rc != EAI_FAIL && rc != EAI_NODATA) break;
     std::this_thread::sleep_for(std::chrono::milliseconds(500));
   }
-  if (rc != 0 || !res)
+  if (found.empty())
     throw std::invalid_argument("discovery server \"" + host_port + "\": cannot resolve " + host +
                                 " (" + gai_strerror(rc) + ")");
-  char buf[INET_ADDRSTRLEN] = {};
-  inet_ntop(AF_INET, &reinterpret_cast<sockaddr_in*>(res->ai_addr)->sin_addr, buf, sizeof buf);
-  freeaddrinfo(res);
+  const std::string buf = found.front();
   return {buf, static_cast<std::uint16_t>(port)};
 }
 

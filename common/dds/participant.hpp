@@ -4,6 +4,7 @@
 #include <memory>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include "common/dds/writer_registry.hpp"
 
@@ -45,6 +46,10 @@ struct ParticipantOptions {
   // count 0: multicast discovery (simple), as Fast DDS does by default.
   int unicast_peers_first = 0;
   int unicast_peers_count = 0;
+  // Where those ids are: these IPv4 addresses, each with the ids' ports (compose replicas, one
+  // participant per container, found by name: find_peer_hosts). Empty: `interface`, which may
+  // then be empty (every interface) here.
+  std::vector<std::string> unicast_peer_hosts;
   // How often it announces itself after its first quick announcements (seconds): everyone hears
   // every announcement, so a large swarm announces less often.
   double announce_period_s = 1.0;
@@ -92,6 +97,10 @@ void disable_writer_liveliness(eprosima::fastdds::dds::DomainParticipantQos& qos
 // (with retries for ~15 s while a container network's DNS catches up). Throws
 // std::invalid_argument naming what is wrong.
 std::pair<std::string, std::uint16_t> resolve_discovery_server(const std::string& host_port);
+
+// Every IPv4 address `host` resolves to now (a numeric address: itself), in the resolver's order
+// without repeats; empty, with `error` set to getaddrinfo's code, when it does not resolve.
+std::vector<std::string> ipv4_addresses(const std::string& host, int& error);
 
 // Whether a thread of this process is inside Fast DDS's participant creation. When a thread of
 // the participant cannot start (a task limit), Fast DDS 2.9 throws, and a destructor on the way

@@ -174,6 +174,16 @@ srun=$(find "$WORK/runs-secure" -mindepth 1 -maxdepth 1 -type d | head -1)
 check "secure: the supervisor exits 0 (converged, complete record)" '[[ $scode -eq 0 ]]'
 check "secure: the stranger heard none of the replicas" \
   'grep -q "start timeout: 0 of" "$WORK/stranger.log"'
+# Discovery by unicast to every replica and the supervisor, not by multicast (docs/security.md,
+# "A secure pair that never hears each other"): each replica's log says where it found them.
+# (grep reads the whole log: with -q it would stop early, and pipefail would see podman's SIGPIPE.)
+unicast=0
+for c in $(podman ps -a --format '{{.Names}}' | grep "^${SECURE}_agent_" || true); do
+  podman logs "$c" 2>&1 | grep "peer hosts agent,supervisor: $((N + 1)) addresses" >/dev/null &&
+    unicast=$((unicast + 1))
+done
+check "secure: every replica discovered by unicast at the $((N + 1)) peer hosts ($unicast of $N)" \
+  '[[ $unicast -eq $N ]]'
 PYTHONPATH="$SRC/python" /usr/bin/python3 - "$srun" "$N" <<'PY' || fail=1
 import csv, json, os, sys
 from qswarm import run_dir as names

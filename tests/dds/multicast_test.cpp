@@ -237,5 +237,43 @@ TEST(StateMulticast, OnlyAllToAllRunsOnLoopbackWithoutTheTestTransportOrUnicastD
   EXPECT_EQ(group(rc, lan), "");
 }
 
+// --peer-hosts: one participant per host (a container), so id 0 of the port plan and the peers
+// 0:1 at each host, unless told otherwise; never the multicast group.
+TEST(PeerHosts, MeanOneParticipantPerHostUnlessTold) {
+  RunConfig rc =
+      resolve_scenario(parse_scenario_text("random_agents { count: 4 box_m: 10 } seed: 1", "test"));
+  ProcessOptions po;
+  po.interface = "any";
+  po.peer_hosts = "agent,supervisor";
+  DdsOptions d = dds_options(rc, "agent", po);
+  EXPECT_EQ(d.participant.participant_id, 0);
+  EXPECT_EQ(d.participant.unicast_peers_first, 0);
+  EXPECT_EQ(d.participant.unicast_peers_count, 1);
+  EXPECT_EQ(d.state.multicast_group, "");
+  po.participant_id = 7;
+  po.unicast_peers = "5:3";
+  d = dds_options(rc, "agent", po);
+  EXPECT_EQ(d.participant.participant_id, 7);
+  EXPECT_EQ(d.participant.unicast_peers_first, 5);
+  EXPECT_EQ(d.participant.unicast_peers_count, 3);
+}
+
+// The names' addresses, each once; fewer than wanted after the wait: what was found, said once.
+TEST(PeerHosts, AreEveryAddressOfTheNamesEachOnceAndTooFewAreSaid) {
+  std::vector<std::string> said;
+  const auto say = [&](const std::string& line) { said.push_back(line); };
+  EXPECT_EQ(find_peer_hosts("127.0.0.1,localhost,127.0.0.1", 1, 0.0, say),
+            std::vector<std::string>{"127.0.0.1"});
+  ASSERT_EQ(said.size(), 1u);
+  EXPECT_NE(said[0].find("1 addresses after 0 s: discovery by unicast"), std::string::npos)
+      << said[0];
+  said.clear();
+  EXPECT_EQ(find_peer_hosts("127.0.0.1,127.0.0.2", 3, 0.0, say),
+            (std::vector<std::string>{"127.0.0.1", "127.0.0.2"}));
+  ASSERT_EQ(said.size(), 1u);
+  EXPECT_NE(said[0].find("2 of 3 addresses"), std::string::npos) << said[0];
+  EXPECT_NE(said[0].find("going on"), std::string::npos) << said[0];
+}
+
 }  // namespace
 }  // namespace qswarm

@@ -144,6 +144,39 @@ TEST_F(Security, MembersToldTheirBlockMeetByUnicastAlone) {
   EXPECT_TRUE(this_process_holds_udp_port(multicast));
 }
 
+// Compose replicas have no interface address of their own to announce to: they are told their
+// peers' host addresses (find_peer_hosts, from the services' names) and discover by unicast there,
+// at the ids' ports of each host, with no multicast.
+TEST_F(Security, MembersToldTheirPeersHostsMeetByUnicastAlone) {
+  const auto at_hosts = [](const char* name, int id, AgentId self) {
+    DdsOptions o = options(name, ours(), name, id, false, self);
+    o.participant.unicast_peer_hosts = {"127.0.0.1"};
+    return o;
+  };
+  DdsBus agent1(at_hosts("agent-1", 0, 1));
+  DdsBus agent2(at_hosts("agent-2", 1, 2));
+  std::uint64_t seq = 0;
+  EXPECT_TRUE(test::wait_for(
+      [&] {
+        ++seq;
+        agent1.publish(sample(1, seq));
+        agent2.publish(sample(2, seq));
+        return heard(agent1).count(2) == 1 && heard(agent2).count(1) == 1;
+      },
+      60.0));
+  EXPECT_FALSE(this_process_holds_udp_port(
+      PortPlan::discovery_multicast_port(test::test_domain().domain())));
+  // A peer host that is not an address (a name left unresolved) is refused, named.
+  DdsOptions bad = at_hosts("agent-3", 2, 3);
+  bad.participant.unicast_peer_hosts = {"agent"};
+  try {
+    DdsBus bus(bad);
+    FAIL() << "a name was taken as a peer host's address";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("\"agent\""), std::string::npos) << e.what();
+  }
+}
+
 TEST_F(Security, ACertificateFromAnotherAuthorityIsRefused) {
   // A well-formed identity, permissions and governance for agent 3, all signed by another CA.
   DdsOptions o = options("foreign-agent-3", foreign(), "agent-3", kIntruder);
