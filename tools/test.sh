@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Sets everything up (apt + build) and runs what CI runs (.ci/run calls this):
 #   1. a Release build (what users build) of everything, tests included, with warnings as errors,
-#      in build-release/; and a configure of the product alone (tests and benchmarks off);
+#      in build-release/; and a configure of the product alone (tests and benchmarks off), from
+#      the sources docker/Dockerfile's build stage copies;
 #   2. the core, runtime and view tests under AddressSanitizer + UndefinedBehaviorSanitizer (DDS
 #      off), and the runtime and view tests under ThreadSanitizer (DDS off);
 #   3. clang-format on every source, clang-tidy on the product's sources as unity units
@@ -24,11 +25,17 @@ if (($#)); then
 fi
 stage() { printf '\n== %s (%s) ==\n' "$*" "$(date +%T)"; }
 
-stage "the product configured alone (tests and benchmarks off)"
+stage "the product configured alone (tests and benchmarks off), from the image's sources"
 # Catches a product target that only resolves because the test targets exist; what it compiles
-# was compiled with -Werror in step 1.
-cmake -S . -B build-product -G Ninja -DCMAKE_BUILD_TYPE=Release -DQSWARM_WERROR=ON \
-  -DQSWARM_BUILD_TESTS=OFF -DQSWARM_BUILD_BENCH=OFF >/dev/null
+# was compiled with -Werror in step 1. Configured from the paths docker/Dockerfile's build stage
+# copies, and only those: the compose test flies the release build's programs on the image's
+# runtime stage (tests/compose/image.sh), so this is where a source directory the Dockerfile
+# forgot shows (the programs' unity compile is what lint's clang-tidy parses).
+rm -rf build-product && mkdir -p build-product/src
+sed -n '/^FROM .* AS build$/,/^FROM /s/^COPY \([^ ]*\) .*/\1/p' docker/Dockerfile |
+  while read -r path; do cp -r --parents "$path" build-product/src/; done
+cmake -S build-product/src -B build-product/build -G Ninja -DCMAKE_BUILD_TYPE=Release \
+  -DQSWARM_WERROR=ON -DQSWARM_BUILD_TESTS=OFF -DQSWARM_BUILD_BENCH=OFF >/dev/null
 
 # The sanitizer builds compile unity sources (16 files to a unit): about half the time of a build
 # file by file. They are not linted and users never build them; the release build above stays
@@ -65,7 +72,7 @@ thirty_two="Insider\\.EdgeFlowFollowsTheLiar|NeighbourDelivery\\.AThirtyTwo|Clai
 # downloads and package installs) is made in the background from here on, beside stages that do
 # not measure time, instead of in the compose stage; the tests stage starts only once it is done,
 # and the compose test then finds its layers cached (it makes them itself if this failed).
-setsid tests/compose/image.sh >"$BUILD/compose-image.log" 2>&1 &
+setsid tests/compose/image.sh "$BUILD/bin" >"$BUILD/compose-image.log" 2>&1 &
 image_job=$!
 trap 'kill -- -"$image_job" 2>/dev/null || true' EXIT
 

@@ -23,8 +23,12 @@ skip() { echo "SKIPPED: $*"; exit 77; }
 
 command -v podman-compose >/dev/null || skip "no podman-compose"
 # Podman works here (else 77), and the base image and the project's image are made (a layer-cache
-# hit when tools/test.sh made them earlier).
-"$SRC/tests/compose/image.sh" || exit $?
+# hit when tools/test.sh made them earlier), with this build's programs when it has them.
+programs=""
+if [[ -x $BIN/swarm-agent && -x $BIN/swarm-supervisor && -x $BIN/swarm-discovery ]]; then
+  programs="$BIN"
+fi
+"$SRC/tests/compose/image.sh" $programs || exit $?
 export CONTAINERS_CONF="$SRC/tests/compose/containers.conf"
 RUNTIME=()
 if command -v runc >/dev/null; then RUNTIME=(--runtime runc); fi

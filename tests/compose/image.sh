@@ -4,6 +4,12 @@
 # (localhost/qswarm:latest, with podman's layer cache). compose_test.sh calls it; tools/test.sh also
 # starts it early, beside stages that do not measure time, so that the compose stage finds it made.
 # Exit 77 with the reason when it cannot be made here (no podman, no root for debootstrap).
+#
+# Usage: image.sh [PROGRAMS_DIR]. Given a directory holding swarm-agent, swarm-supervisor and
+# swarm-discovery (a release build's bin/), the image is the Dockerfile's runtime-base stage with
+# those programs (stripped copies) instead of the ones its build stage would compile: the test
+# then flies the build it tests, and CI does not compile them a second time. Without it, the
+# whole Dockerfile, as users build it.
 set -euo pipefail
 SRC="$(cd "$(dirname "$0")/../.." && pwd)"
 skip() { echo "SKIPPED: $*"; exit 77; }
@@ -23,6 +29,23 @@ if ! podman image exists docker.io/library/debian:bookworm-slim; then
   tar -C "$rootfs" -c . | podman import - docker.io/library/debian:bookworm-slim >/dev/null
   rm -rf "$rootfs"
 fi
-echo "compose image: building localhost/qswarm:latest"
+PROGRAMS="${1:-}"
+if [[ -z $PROGRAMS ]]; then
+  echo "compose image: building localhost/qswarm:latest"
+  podman "${RUNTIME[@]}" build --pull=never --layers -q -f "$SRC/docker/Dockerfile" \
+    -t localhost/qswarm:latest "$SRC" >/dev/null
+  exit 0
+fi
+echo "compose image: building localhost/qswarm:latest with the programs of $PROGRAMS"
+# The stages the target does not use (the build stage) are skipped (podman's default).
 podman "${RUNTIME[@]}" build --pull=never --layers -q -f "$SRC/docker/Dockerfile" \
-  -t localhost/qswarm:latest "$SRC" >/dev/null
+  --target runtime-base -t localhost/qswarm-base:latest "$SRC" >/dev/null
+stage=$(mktemp -d)
+trap 'rm -rf "$stage"' EXIT
+for p in swarm-agent swarm-supervisor swarm-discovery; do
+  strip -o "$stage/$p" "$PROGRAMS/$p"
+done
+printf 'FROM localhost/qswarm-base:latest\nCOPY %s /usr/local/bin/\n' \
+  "swarm-agent swarm-supervisor swarm-discovery" >"$stage/Containerfile"
+podman "${RUNTIME[@]}" build --pull=never --layers -q -f "$stage/Containerfile" \
+  -t localhost/qswarm:latest "$stage" >/dev/null
