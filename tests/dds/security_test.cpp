@@ -72,6 +72,19 @@ class Security : public ::testing::Test {
     return ids;
   }
 
+  // Agents 1 and 2 publish until each has heard the other; whether that happened within a minute.
+  static bool meet(DdsBus& agent1, DdsBus& agent2) {
+    std::uint64_t seq = 0;
+    return test::wait_for(
+        [&] {
+          ++seq;
+          agent1.publish(sample(1, seq));
+          agent2.publish(sample(2, seq));
+          return heard(agent1).count(2) == 1 && heard(agent2).count(1) == 1;
+        },
+        60.0);
+  }
+
   // Agents 1 and 2 and the supervisor of the run, every one with its own certificate.
   struct Members {
     DdsBus agent1{options("agent-1", ours(), "agent-1", 0, false, 1)};
@@ -127,15 +140,7 @@ TEST_F(Security, AStrangerWithoutCredentialsReachesNoOneAndHearsNothing) {
 TEST_F(Security, MembersToldTheirBlockMeetByUnicastAlone) {
   DdsBus agent1(options("agent-1", ours(), "agent-1", 0, false, 1));
   DdsBus agent2(options("agent-2", ours(), "agent-2", 1, false, 2));
-  std::uint64_t seq = 0;
-  EXPECT_TRUE(test::wait_for(
-      [&] {
-        ++seq;
-        agent1.publish(sample(1, seq));
-        agent2.publish(sample(2, seq));
-        return heard(agent1).count(2) == 1 && heard(agent2).count(1) == 1;
-      },
-      60.0));
+  EXPECT_TRUE(meet(agent1, agent2));
   // No multicast discovery socket: the domain's multicast port is not bound by this process.
   const std::uint32_t multicast = PortPlan::discovery_multicast_port(test::test_domain().domain());
   EXPECT_FALSE(this_process_holds_udp_port(multicast));
@@ -155,15 +160,7 @@ TEST_F(Security, MembersToldTheirPeersHostsMeetByUnicastAlone) {
   };
   DdsBus agent1(at_hosts("agent-1", 0, 1));
   DdsBus agent2(at_hosts("agent-2", 1, 2));
-  std::uint64_t seq = 0;
-  EXPECT_TRUE(test::wait_for(
-      [&] {
-        ++seq;
-        agent1.publish(sample(1, seq));
-        agent2.publish(sample(2, seq));
-        return heard(agent1).count(2) == 1 && heard(agent2).count(1) == 1;
-      },
-      60.0));
+  EXPECT_TRUE(meet(agent1, agent2));
   EXPECT_FALSE(this_process_holds_udp_port(
       PortPlan::discovery_multicast_port(test::test_domain().domain())));
   // A peer host that is not an address (a name left unresolved) is refused, named.
