@@ -71,10 +71,19 @@ int main(int argc, char** argv) {
     SteadyClock clock;
     DdsOptions dopt = dds_options(*rc, "swarm-agent", f.process);
     dopt.participant.identity = identity;
-    if (!f.process.peer_hosts.empty())
+    if (!f.process.peer_hosts.empty()) {
       dopt.participant.unicast_peer_hosts =
-          find_peer_hosts(f.process.peer_hosts, rc->agents.size() + 1, kPeerHostsWaitS,
+          find_peer_hosts(f.process.peer_hosts, rc->agents.size() + 1, kPeerHostsWaitS, g_stop,
                           [&](const std::string& line) { log->info("{}", line); });
+      if (g_stop) return 0;  // stopped while waiting for its peers: a stop, not a failure
+      if (dopt.participant.unicast_peer_hosts.empty()) {
+        std::fprintf(stderr,
+                     "swarm-agent: --peer-hosts (QSWARM_PEER_HOSTS): none of %s resolves "
+                     "after %.0f s\n",
+                     f.process.peer_hosts.c_str(), kPeerHostsWaitS);
+        return 2;
+      }
+    }
     // The tick is this process's deadline; hearing neighbours may wait (docs/benchmarks.md). Not
     // under DDS-Security: Fast DDS 2.9.1's handshakes race between its receive threads (see
     // ParticipantOptions::unicast_peers_first), and with them slowed a secure compose swarm

@@ -440,8 +440,8 @@ int main(int argc, char** argv) {
   // The compose swarm's variables are read by swarm-agent and swarm-supervisor as flag defaults;
   // `swarm run` passes everything its children need, so a shell that exported them for compose
   // must not change a local run.
-  for (const char* v :
-       {"QSWARM_AGENTS", "QSWARM_DISCOVERY_SERVER", "QSWARM_AGENT_ID", "QSWARM_KEYSTORE"})
+  for (const char* v : {"QSWARM_AGENTS", "QSWARM_DISCOVERY_SERVER", "QSWARM_AGENT_ID",
+                        "QSWARM_KEYSTORE", "QSWARM_PEER_HOSTS"})
     unsetenv(v);
   CLI::App app{"swarm: a quadcopter swarm that agrees over DDS"};
   app.require_subcommand(1);

@@ -95,10 +95,23 @@ int main(int argc, char** argv) {
     SteadyClock clock;
     DdsOptions dopt = dds_options(rc, "swarm-supervisor", opts);
     dopt.participant.identity = "supervisor";
-    if (!opts.peer_hosts.empty())
+    if (!opts.peer_hosts.empty()) {
       dopt.participant.unicast_peer_hosts =
-          find_peer_hosts(opts.peer_hosts, rc.agents.size() + 1, kPeerHostsWaitS,
+          find_peer_hosts(opts.peer_hosts, rc.agents.size() + 1, kPeerHostsWaitS, g_stop,
                           [&](const std::string& line) { logger->info("{}", line); });
+      if (dopt.participant.unicast_peer_hosts.empty()) {
+        if (!g_stop) {
+          std::fprintf(stderr,
+                       "swarm-supervisor: --peer-hosts (QSWARM_PEER_HOSTS): none of %s "
+                       "resolves after %.0f s\n",
+                       opts.peer_hosts.c_str(), kPeerHostsWaitS);
+          return 2;
+        }
+        // Stopped before any peer's name resolved: a participant that reaches no one, so that
+        // the run still ends with its record ("interrupted").
+        dopt.participant.unicast_peer_hosts = {"127.0.0.1"};
+      }
+    }
     dopt.state.publish = false;  // a read-only participant: it publishes nothing an agent acts on
     dopt.state.recorder = true;  // it reads what agents send it, not their state stream
     dopt.participant.test_drop_data_percent = 0;

@@ -11,6 +11,8 @@
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
+#include <atomic>
+#include <cctype>
 #include <cerrno>
 #include <chrono>
 #include <cstdio>
@@ -76,8 +78,17 @@ void add_process_options(CLI::App& app, ProcessOptions& o) {
                  "names (secure compose: agent,supervisor)")
       ->envname("QSWARM_PEER_HOSTS")
       ->check([](const std::string& v) {
-        for (const std::string& name : split_names(v))
-          if (name.empty()) return std::string("an empty name in \"") + v + "\"";
+        for (const std::string& name : split_names(v)) {
+          // A host name or a dotted IPv4 address: letters, digits, '-' and '.', no port.
+          const bool host =
+              !name.empty() && name.front() != '-' && name.front() != '.' &&
+              std::all_of(name.begin(), name.end(), [](char c) {
+                return std::isalnum(static_cast<unsigned char>(c)) != 0 || c == '-' || c == '.';
+              });
+          if (!host)
+            return "\"" + name + "\" in \"" + v +
+                   "\" is not a host name or an IPv4 address (NAME,NAME,... with no port)";
+        }
         return std::string();
       });
   app.add_option("--seed", o.seed, "run seed (overrides the scenario)")
@@ -144,6 +155,14 @@ std::optional<RunConfig> load_for_process(const char* prog, const ProcessOptions
     // Checked (and resolved, with retries while a container network's DNS catches up) before
     // anything is created, so that a bad address is bad input: exit 2.
     if (!opts.discovery_server.empty()) resolve_discovery_server(opts.discovery_server);
+    if (!opts.peer_hosts.empty() && !opts.discovery_server.empty()) {
+      std::fprintf(stderr,
+                   "%s: --peer-hosts (QSWARM_PEER_HOSTS) and --discovery-server "
+                   "(QSWARM_DISCOVERY_SERVER): discovery by unicast to the peers, or through the "
+                   "server, not both\n",
+                   prog);
+      return std::nullopt;
+    }
     const std::string problem =
         interface_problem(opts.interface.empty() ? rc.transport.interface : opts.interface);
     if (!problem.empty()) {
@@ -273,7 +292,7 @@ std::shared_ptr<spdlog::logger> make_process_logger(const std::string& name,
 }
 
 std::vector<std::string> find_peer_hosts(const std::string& names, std::size_t want,
-                                         double timeout_s,
+                                         double timeout_s, const std::atomic<bool>& stop,
                                          const std::function<void(const std::string&)>& say) {
   const auto start = std::chrono::steady_clock::now();
   const auto waited = [&] {
@@ -302,8 +321,9 @@ std::vector<std::string> find_peer_hosts(const std::string& names, std::size_t w
                              std::to_string(want) + " addresses after " +
                              std::to_string(static_cast<int>(t)) + " s" +
                              (missing.empty() ? "" : " (not resolved yet: " + missing + ")");
+    if (stop) return found;
     if (t >= timeout_s) {
-      if (say) say(line + "; going on with these: the others find this one");
+      if (say && !found.empty()) say(line + "; going on with these: the others find this one");
       return found;
     }
     if (say && t >= next_say_s) {

@@ -6,6 +6,7 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <cerrno>
 #include <cstring>
 #include <memory>
@@ -262,17 +263,22 @@ TEST(PeerHosts, MeanOneParticipantPerHostUnlessTold) {
 TEST(PeerHosts, AreEveryAddressOfTheNamesEachOnceAndTooFewAreSaid) {
   std::vector<std::string> said;
   const auto say = [&](const std::string& line) { said.push_back(line); };
-  EXPECT_EQ(find_peer_hosts("127.0.0.1,localhost,127.0.0.1", 1, 0.0, say),
+  const std::atomic<bool> go{false};
+  EXPECT_EQ(find_peer_hosts("127.0.0.1,localhost,127.0.0.1", 1, 0.0, go, say),
             std::vector<std::string>{"127.0.0.1"});
   ASSERT_EQ(said.size(), 1u);
   EXPECT_NE(said[0].find("1 addresses after 0 s: discovery by unicast"), std::string::npos)
       << said[0];
   said.clear();
-  EXPECT_EQ(find_peer_hosts("127.0.0.1,127.0.0.2", 3, 0.0, say),
+  EXPECT_EQ(find_peer_hosts("127.0.0.1,127.0.0.2", 3, 0.0, go, say),
             (std::vector<std::string>{"127.0.0.1", "127.0.0.2"}));
   ASSERT_EQ(said.size(), 1u);
   EXPECT_NE(said[0].find("2 of 3 addresses"), std::string::npos) << said[0];
   EXPECT_NE(said[0].find("going on"), std::string::npos) << said[0];
+  // A signal while it waits: at once, with what it has (a minute's wait asked for).
+  const std::atomic<bool> stopped{true};
+  EXPECT_EQ(find_peer_hosts("127.0.0.1", 3, 60.0, stopped, say),
+            std::vector<std::string>{"127.0.0.1"});
 }
 
 }  // namespace

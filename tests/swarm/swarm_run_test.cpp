@@ -482,6 +482,20 @@ TEST(SwarmRun, MalformedScenariosExit2NamingTheProblem) {
   const Result wrong_id = run({bin("swarm-agent"), "--scenario", scenario("demo"), "--id", "77"});
   EXPECT_EQ(wrong_id.code, 2);
   EXPECT_NE(wrong_id.output.find("--id"), std::string::npos) << wrong_id.output;
+  // --peer-hosts: names or addresses, no port, and not beside a Discovery Server.
+  for (const std::string hosts : {"agent supervisor", "10.0.0.1:7410", "agent,,supervisor", "-x"}) {
+    const Result bad = run(
+        {bin("swarm-agent"), "--scenario", scenario("demo"), "--id", "1", "--peer-hosts", hosts});
+    EXPECT_EQ(bad.code, 2) << hosts << ": " << bad.output;
+    EXPECT_NE(bad.output.find("--peer-hosts"), std::string::npos) << bad.output;
+  }
+  const Result both =
+      run({bin("swarm-supervisor"), "--scenario", scenario("demo"), "--run-dir", dir.string(),
+           "--peer-hosts", "agent", "--discovery-server", "127.0.0.1:11811"});
+  EXPECT_EQ(both.code, 2) << both.output;
+  EXPECT_NE(both.output.find("--peer-hosts (QSWARM_PEER_HOSTS) and --discovery-server"),
+            std::string::npos)
+      << both.output;
 }
 
 TEST(SwarmRun, BadSamplesFromATestParticipantAreDroppedByEveryAgentAndChangeNothing) {
