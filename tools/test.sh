@@ -29,8 +29,9 @@ stage "the product configured alone (tests and benchmarks off), from the image's
 # Catches a product target that only resolves because the test targets exist; what it compiles
 # was compiled with -Werror in step 1. Configured from the paths docker/Dockerfile's build stage
 # copies, and only those: the compose test flies the release build's programs on the image's
-# runtime stage (tests/compose/image.sh), so this is where a source directory the Dockerfile
-# forgot shows (the programs' unity compile is what lint's clang-tidy parses).
+# runtime stage (tests/compose/image.sh), so this is where a source directory CMake names and the
+# Dockerfile forgot shows (the programs' unity compile is what lint's clang-tidy parses; the build
+# stage's packages are not checked here).
 rm -rf build-product && mkdir -p build-product/src
 sed -n '/^FROM .* AS build$/,/^FROM /s/^COPY \([^ ]*\) .*/\1/p' docker/Dockerfile |
   while read -r path; do cp -r --parents "$path" build-product/src/; done
