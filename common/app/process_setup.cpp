@@ -85,9 +85,14 @@ void add_process_options(CLI::App& app, ProcessOptions& o) {
               std::all_of(name.begin(), name.end(), [](char c) {
                 return std::isalnum(static_cast<unsigned char>(c)) != 0 || c == '-' || c == '.';
               });
-          if (!host)
-            return "\"" + name + "\" in \"" + v +
-                   "\" is not a host name or an IPv4 address (NAME,NAME,... with no port)";
+          if (!host) {
+            std::string why = "\"";
+            why += name;
+            why += "\" in \"";
+            why += v;
+            why += "\" is not a host name or an IPv4 address (NAME,NAME,... with no port)";
+            return why;
+          }
         }
         return std::string();
       });
