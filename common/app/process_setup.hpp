@@ -43,16 +43,17 @@ struct ProcessOptions {
 };
 void add_process_options(CLI::App& app, ProcessOptions& o);
 
+// How long a process waits for its peer hosts' names: a compose swarm of a few dozen replicas
+// starting on two cores.
+inline constexpr double kPeerHostsWaitS = 120.0;
+
 // The addresses of --peer-hosts (comma-separated names or IPv4 addresses), asked again every half
 // second until they are `want` (the run's processes: every agent replica and the supervisor, this
 // one included) or `timeout_s` has passed: a process started early waits for the others' names.
 // `say` hears progress every 10 s, and what it found once at the end. It returns at once, with
 // what it has, when `stop` is set (a signal). Empty: none of the names resolved (the caller says
-// so, naming the flag, and exits 2). Discovery is symmetric: a
-// peer that comes up later finds this one in its own list.
-// How long a process waits for its peer hosts' names: a compose swarm of a few dozen replicas
-// starting on two cores.
-inline constexpr double kPeerHostsWaitS = 120.0;
+// so, naming the flag, and exits 2). Discovery is symmetric: a peer that comes up later finds
+// this one in its own list.
 std::vector<std::string> find_peer_hosts(const std::string& names, std::size_t want,
                                          double timeout_s, const std::atomic<bool>& stop,
                                          const std::function<void(const std::string&)>& say);
