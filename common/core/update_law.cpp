@@ -107,6 +107,7 @@ void UpdateLaw::observe(const std::vector<NeighborView>& neighbors) {
   published_total_weight_ = 0.0;
   for (const auto& [peer, w] : links_) published_total_weight_ += w;
   observed_ = true;
+  links_observed();
 }
 
 void UpdateLaw::step(double dt, const std::vector<NeighborView>& neighbors) {
@@ -207,18 +208,28 @@ std::vector<FlowEntry> EdgeFlowLaw::owned_flows() const {
   return out;
 }
 
+bool EdgeFlowLaw::shows(AgentId owner, const Copy& c) const {
+  return c.linked || (c.seen && (c.announced || askers_.count(owner)));
+}
+
 std::vector<FlowEntry> EdgeFlowLaw::held_copies() const {
   std::vector<FlowEntry> out;
-  for (const auto& [owner, c] : copies_) {
-    if (c.seen && (c.linked || c.announced || askers_.count(owner)))
-      out.push_back({owner, c.flow, 0.0, false});
-  }
+  for (const auto& [owner, c] : copies_)
+    if (shows(owner, c)) out.push_back({owner, c.flow, 0.0, c.linked});
   for (const AgentId owner : askers_) {
     if (owns(owner)) continue;
     const auto it = copies_.find(owner);
-    if (it == copies_.end() || !it->second.seen) out.push_back({owner, Vec3::Zero(), 0.0, false});
+    if (it == copies_.end() || !shows(owner, it->second))
+      out.push_back({owner, Vec3::Zero(), 0.0, false});
   }
   return out;
+}
+
+void EdgeFlowLaw::links_observed() {
+  // The first message already says which owners this agent hears, so that a fixed graph moves
+  // from the first tick on, as the Laplacian law does.
+  for (const auto& [peer, w] : links_)
+    if (!owns(peer) && w > 0.0) copies_[peer].linked = true;
 }
 
 std::set<AgentId> EdgeFlowLaw::settling() const {
@@ -272,7 +283,10 @@ void EdgeFlowLaw::integrate(const Tick& t) {
   const std::vector<double>& coef = t.coef;
   const Vec3 q = state();  // every edge moves from the same snapshot of q_i (Jacobi)
   for (auto& [peer, o] : owned_) o.entry.active = false;
-  for (auto& [peer, c] : copies_) c.linked = false;
+  for (auto& [peer, c] : copies_) {
+    c.was_linked = c.linked;
+    c.linked = false;
+  }
   askers_.clear();
   unanswered_.clear();
   std::set<AgentId> heard;
@@ -285,7 +299,10 @@ void EdgeFlowLaw::integrate(const Tick& t) {
     if (owns(n.id)) {
       if (!answered) continue;  // nothing moves on this edge before its flow is known
       auto it = owned_.find(n.id);
-      if (coef[k] > 0.0) {
+      // The other end's copy says whether it links this agent: without that, what moves here
+      // might never be taken in there.
+      const FlowEntry* copy = entry_for(n.copies, self_);
+      if (coef[k] > 0.0 && copy && copy->active) {
         Owned& o = it != owned_.end() ? it->second : owned_[n.id];
         o.entry.peer = n.id;
         o.entry.flow += coef[k] * (q - n.q);
@@ -294,8 +311,7 @@ void EdgeFlowLaw::integrate(const Tick& t) {
         o.settled = false;
       } else if (it != owned_.end() && !askers_.count(n.id)) {
         // Settled once the other end shows the flow as it stands.
-        const FlowEntry* c = entry_for(n.copies, self_);
-        if (c && c->flow == it->second.entry.flow) it->second.settled = true;
+        if (copy && copy->flow == it->second.entry.flow) it->second.settled = true;
       } else if (it != owned_.end()) {
         it->second.settled = false;  // it restarted and asks: announce until it shows the copy
       }
@@ -321,7 +337,8 @@ void EdgeFlowLaw::integrate(const Tick& t) {
       } else if (fresh) {
         c.quiet = true;
       }
-      if (c.linked) c.predicted += coef[k] * (n.q - q);
+      // The owner moves only on what this agent's last message showed (the copy's active).
+      if (c.linked && c.was_linked) c.predicted += coef[k] * (n.q - q);
     }
   }
   // A silent owner's increments can no longer be confirmed: keep only its last copy.

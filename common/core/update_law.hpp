@@ -123,6 +123,8 @@ class UpdateLaw {
     double dt_s;
   };
   virtual void integrate(const Tick& t) = 0;
+  // After observe() has set the first links, before the first message goes out.
+  virtual void links_observed() {}
   // What the agent asks its peers (NeighborView::asking).
   virtual std::vector<AgentId> asking() const { return {}; }
   std::vector<double> update_links(const std::vector<NeighborView>& neighbors);
@@ -190,7 +192,12 @@ class WmsrLaw final : public UpdateLaw {
 // not its history: the owner announces a flow while the edge is linked, until the other end has
 // shown a copy equal to it (settled), and whenever the other end asks for it; the other end shows
 // its copy while the edge is linked, while the owner still announces the flow, and when the owner
-// asks. Settled entries stay in both agents' states. A restarted agent has lost its half of every
+// asks. A copy says whether its holder links the owner now (FlowEntry::active), and an owner moves
+// on an edge only while the other end's newest message says so: where only one end hears the
+// other (a one-sided DDS match, a cut in one direction), nothing moves that the other end could
+// never take in. The other end predicts only what its last message allowed, so in lockstep the
+// two laws still coincide on a fixed graph; a link that forms mid-run moves one tick later than
+// the Laplacian law's. Settled entries stay in both agents' states. A restarted agent has lost its half of every
 // edge it had: it asks each peer it hears until that peer has answered (an owner adopts the copy
 // before it moves on the edge again; a non-owner takes the owner's flow as a copy), so a restart
 // never moves the total.
@@ -212,6 +219,7 @@ class EdgeFlowLaw final : public UpdateLaw {
 
  private:
   void integrate(const Tick& t) override;
+  void links_observed() override;
   struct Owned {
     FlowEntry entry;
     bool settled = false;  // the other end showed a copy equal to it since it last changed
@@ -222,13 +230,16 @@ class EdgeFlowLaw final : public UpdateLaw {
     std::uint64_t seq = 0;          // message it came in
     bool seen = false;
     bool announced = false;  // the owner's newest message carried this edge's flow
-    bool linked = false;     // linked on the last tick
+    bool linked = false;     // linked on the last tick (shown to the owner as the copy's active)
+    bool was_linked = false;  // linked on the tick before: what the owner last heard (integrate)
     // Since the link last ended, a message of the owner's carried no flow for this edge: the owner
     // has settled it (or never moved on it), nothing is left to hear.
     bool quiet = false;
   };
   std::map<AgentId, Owned> owned_;  // edges this agent owns (peer id > self)
   std::map<AgentId, Copy> copies_;  // flows neighbours own toward us
+  // Whether the newest message shows this copy (held_copies()).
+  bool shows(AgentId owner, const Copy& c) const;
   std::set<AgentId> askers_;        // peers whose newest message asks this agent
   bool recovering_ = false;         // restarted: ask each peer heard until it answered
   std::set<AgentId> answered_;

@@ -87,6 +87,7 @@ void to_idl(const StateMessage& m, qswarm_msgs::AgentState& s) {
     qswarm_msgs::FlowEntry e;
     e.peer(f.peer);
     e.flow(arr(f.flow));
+    e.active(f.active);  // the holder links the owner now: the owner may move on the edge
     s.copies().push_back(e);
   }
   s.asking(m.view.asking);
@@ -121,7 +122,7 @@ StateMessage from_idl(const qswarm_msgs::AgentState& s) {
   for (const auto& e : s.suspects()) m.suspects.push_back({e.id(), e.kinds()});
   for (const auto& e : s.links()) m.links.emplace_back(e.peer(), e.weight());
   for (const auto& e : s.initial_links()) m.initial_links.emplace_back(e.peer(), e.weight());
-  for (const auto& e : s.copies()) m.view.copies.push_back({e.peer(), vec(e.flow()), 0.0, false});
+  for (const auto& e : s.copies()) m.view.copies.push_back({e.peer(), vec(e.flow()), 0.0, e.active()});
   for (const auto& e : s.flows())
     m.view.flows.push_back({e.peer(), vec(e.flow()), e.weight(), e.active()});
   m.view.asking.assign(s.asking().begin(), s.asking().end());

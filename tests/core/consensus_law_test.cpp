@@ -241,6 +241,53 @@ TEST(EdgeFlowLaw, BothEndsKnowAnExchangeIsOpenUntilItIsSettled) {
   EXPECT_NEAR(a.state().x() + b.state().x(), 1.0, 1e-12);
 }
 
+// A one-sided link: DDS matched agent 1's reader to agent 2's writer but never 2's reader to 1's
+// writer (or a cut drops one direction only), so 1 hears 2 in range and 2 never hears 1. Agent 1
+// owns the edge; whatever it moved there, 2 could never take in, and the total would move by it.
+// The owner moves only while the other end's copy says it links the owner.
+TEST(EdgeFlowLaw, AnOwnerHeardByNoOneMovesNothingUntilTheOtherEndHearsIt) {
+  LawConfig cfg;
+  cfg.weight.policy = WeightPolicy::kUnweighted;
+  cfg.topology.policy = TopologyPolicy::kRange;
+  cfg.topology.threshold_m = 4.5;
+  EdgeFlowLaw a(1, Vec3(0, 0, 0), cfg), b(2, Vec3(2, 0, 0), cfg);
+  const auto at = [](NeighborView v) {
+    v.link_distance_m = 1.0;
+    return v;
+  };
+  a.observe({at(b.message())});
+  b.observe({});
+  for (int tick = 0; tick < 500; ++tick) {
+    const NeighborView mb = b.message();
+    a.step(0.02, {at(mb)});
+    b.step(0.02, {});  // never hears a
+    ASSERT_EQ(a.links().size(), 1u);  // a links b all along...
+    ASSERT_EQ(a.state(), Vec3(0, 0, 0)) << "tick " << tick;  // ...and moves nothing
+    ASSERT_EQ(b.state(), Vec3(2, 0, 0));
+  }
+  // The other direction heals: b hears a, links it and says so; a moves from then on.
+  for (int tick = 0; tick < 1500; ++tick) {
+    const NeighborView ma = a.message(), mb = b.message();
+    a.step(0.02, {at(mb)});
+    b.step(0.02, {at(ma)});
+  }
+  EXPECT_NEAR(a.state().x(), 1.0, 1e-9);
+  EXPECT_NEAR(b.state().x(), 1.0, 1e-9);
+  EXPECT_NEAR(a.state().x() + b.state().x(), 2.0, 1e-12);
+  // And the other way round (2 hears 1, 1 never hears 2): 2's view of the edge follows 1's
+  // messages, which carry no flow, so nothing accumulates anywhere.
+  EdgeFlowLaw c(1, Vec3(0, 0, 0), cfg), d(2, Vec3(2, 0, 0), cfg);
+  c.observe({});
+  d.observe({at(c.message())});
+  for (int tick = 0; tick < 500; ++tick) {
+    const NeighborView mc = c.message();
+    c.step(0.02, {});
+    d.step(0.02, {at(mc)});
+  }
+  EXPECT_EQ(c.state(), Vec3(0, 0, 0));
+  EXPECT_LT((d.state() - Vec3(2, 0, 0)).norm(), 0.02 * 2.0);  // at most one tick's prediction
+}
+
 // Six edge-flow agents whose links come and go by radio range (each pair's "physical" distance
 // switches between in and out of range on a seeded schedule) while 30 % of messages are lost and
 // one agent restarts from scratch. Settled edges stop riding on the messages (their size follows

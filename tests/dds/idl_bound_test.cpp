@@ -15,7 +15,7 @@ StateMessage with_entries(std::size_t n) {
     m.links.emplace_back(peer, 1.0);
     m.initial_links.emplace_back(peer, 1.0);
     m.view.flows.push_back({peer, Vec3(1, 2, 3) * static_cast<double>(k), 1.0, true});
-    m.view.copies.push_back({peer, Vec3(3, 2, 1), 0.0, false});
+    m.view.copies.push_back({peer, Vec3(3, 2, 1), 0.0, k % 2 == 0});
   }
   return m;
 }
@@ -31,6 +31,8 @@ TEST(WireBound, TheLargestSwarmsFlowsAllSurviveTheRoundTrip) {
   ASSERT_EQ(back.initial_links.size(), kMaxSwarmAgents - 1);
   EXPECT_EQ(back.view.flows.back().flow, m.view.flows.back().flow);
   EXPECT_EQ(back.view.flows.back().peer, m.view.flows.back().peer);
+  // A copy's active (its holder links the owner) is what lets the owner move on the edge.
+  for (std::size_t k = 0; k < 2; ++k) EXPECT_EQ(back.view.copies[k].active, k % 2 == 0);
 }
 
 TEST(WireBound, OneMoreThanTheWireCarriesIsRefusedNotCut) {
