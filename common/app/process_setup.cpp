@@ -271,8 +271,10 @@ DdsOptions dds_options(const RunConfig& rc, const std::string& participant_name,
   // transport drops (its losses would hit every reader of a sample at once, no longer each link
   // on its own), nor with discovery by unicast peers (secure runs: no multicast is sent or heard
   // there), nor over shared memory (asked for by name), nor off loopback (containers, whose
-  // networks carry multicast unreliably, and the fault tests' namespaces).
-  if (rc.transport.delivery == Delivery::kAll && p.interface.rfind("127.", 0) == 0 &&
+  // networks carry multicast unreliably, and the fault tests' namespaces), nor where the scenario
+  // turns it off (transport.multicast).
+  if (rc.transport.multicast && rc.transport.delivery == Delivery::kAll &&
+      p.interface.rfind("127.", 0) == 0 &&
       p.test_drop_data_percent == 0 && p.unicast_peers_count == 0 && p.keystore.empty() &&
       !p.shared_memory)
     s.multicast_group = state_multicast_group(rc.transport.run_id);

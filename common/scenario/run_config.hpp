@@ -69,6 +69,9 @@ struct TransportConfig {
   Delivery delivery = Delivery::kNeighbours;
   std::string keystore;  // DDS-Security keystore (an absolute path); empty: plain DDS
   Discovery discovery = Discovery::kSimple;
+  // Under Delivery::kAll on loopback a sample is one datagram to the run's multicast group;
+  // false: one per reader (a host whose loopback carries no multicast).
+  bool multicast = true;
 };
 
 // A scenario with every default filled in and random agents resolved: what a run actually uses.

@@ -407,6 +407,7 @@ void resolve_transport(const scenario::Transport& t, RunConfig& rc) {
   if (tc.interface.empty())
     fail("transport.interface", "an IPv4 address such as 127.0.0.1", "\"\"");
   if (t.has_shared_memory()) tc.shared_memory = t.shared_memory();
+  if (t.has_multicast()) tc.multicast = t.multicast();
   tc.run_id = t.run_id();
   if (!t.keystore().empty()) {
     std::error_code ec;
@@ -585,6 +586,7 @@ void write_back_defaults(RunConfig& rc, scenario::Scenario& s) {
   s.mutable_transport()->set_domain_id(rc.transport.domain_id);
   s.mutable_transport()->set_interface(rc.transport.interface);
   s.mutable_transport()->set_shared_memory(rc.transport.shared_memory);
+  s.mutable_transport()->set_multicast(rc.transport.multicast);
   if (!rc.transport.keystore.empty()) s.mutable_transport()->set_keystore(rc.transport.keystore);
   s.mutable_transport()->set_run_id(rc.transport.run_id);
   s.mutable_transport()->set_delivery(

@@ -236,6 +236,12 @@ TEST(StateMulticast, OnlyAllToAllRunsOnLoopbackWithoutTheTestTransportOrUnicastD
   ProcessOptions lan;
   lan.interface = "10.1.2.3";
   EXPECT_EQ(group(rc, lan), "");
+  // A scenario can turn it off (a loopback without multicast), and the run's scenario.txtpb says so.
+  const RunConfig off = resolve_scenario(parse_scenario_text(
+      "random_agents { count: 4 box_m: 10 } seed: 1 transport { multicast: false }", "test"));
+  EXPECT_EQ(group(off), "");
+  EXPECT_NE(to_text(off.resolved).find("multicast: false"), std::string::npos);
+  EXPECT_NE(to_text(rc.resolved).find("multicast: true"), std::string::npos);
 }
 
 // --peer-hosts: one participant per host (a container), so id 0 of the port plan and the peers
