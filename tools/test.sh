@@ -77,21 +77,21 @@ setsid tests/compose/image.sh "$BUILD/bin" >"$BUILD/compose-image.log" 2>&1 &
 image_job=$!
 trap 'kill -- -"$image_job" 2>/dev/null || true' EXIT
 
-stage "in-process tests under ThreadSanitizer (DDS off)"
-# The code that runs beside a transport's threads without Fast DDS: the fault-injecting bus, the
-# agent loop, the supervisor's loop, the claim inbox (tests/runtime/concurrency_test.cpp puts real
-# threads on each), every other in-process test, and the live view's server (its asio threads
-# against hostile clients, tests/view/view_test.cpp). Any report fails the stage (halt_on_error).
+stage "threaded in-process tests under ThreadSanitizer (DDS off)"
+# The code that runs beside other threads without Fast DDS: the fault-injecting bus, the agent
+# loop, the supervisor's loop, the claim inbox (tests/runtime/concurrency_test.cpp puts real
+# threads on each), the port plan's reservations made at once (runtime_tests), the launcher's
+# signal handling, and the live view's server (its asio threads against hostile clients,
+# tests/view/view_test.cpp). The other in-process executables (scenario, claim, record, mcap,
+# sim) run one thread, where ThreadSanitizer has nothing to find: ASan runs them. Any report
+# fails the stage (halt_on_error).
 cmake -S . -B build-tsan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DQSWARM_WITH_DDS=OFF \
   -DQSWARM_TSAN=ON -DQSWARM_WERROR=ON -DQSWARM_BUILD_BENCH=OFF "${unity[@]}" >/dev/null
-cmake --build build-tsan --parallel "$(nproc)" --target tests-runtime tests-view
-built_all_but build-tsan "core_tests "
-# The 64-agent lattices (one thread, minutes under TSan) run in the release suite, and so do the
-# 32-agent runs left out of the ASan stage; the place filter's geometric walks (Neighbourhood.*:
-# one thread, half a minute each here) run under ASan.
+cmake --build build-tsan --parallel "$(nproc)" \
+  --target concurrency_tests runtime_tests launcher_tests view_tests
+built_all_but build-tsan "claim_tests core_tests mcap_tests record_tests scenario_tests sim_tests "
 (cd build-tsan && TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1" \
-  ctest "${ctest_args[@]}" -L "runtime|view" \
-  -E "^(FormationSwarm\\.SixtyFour|$thirty_two|Neighbourhood\\.(EveryPair|TheWorstCase))")
+  ctest "${ctest_args[@]}" -L "runtime|view")
 
 stage "format and clang-tidy"
 tools/lint.sh "$BUILD"
