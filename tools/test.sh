@@ -38,13 +38,23 @@ sed -n '/^FROM .* AS build$/,/^FROM /s/^COPY \([^ ]*\) .*/\1/p' docker/Dockerfil
 cmake -S build-product/src -B build-product/build -G Ninja -DCMAKE_BUILD_TYPE=Release \
   -DQSWARM_WERROR=ON -DQSWARM_BUILD_TESTS=OFF -DQSWARM_BUILD_BENCH=OFF >/dev/null
 
+# The compose stage's image (a Debian base made with debootstrap, then docker/Dockerfile: mostly
+# downloads and package installs, then the release build's programs) is made in the background
+# from here on, beside the sanitizer and lint stages, which do not measure time, instead of in the
+# compose stage: its downloads wait on the network while the compilers use the cores. The tests
+# stage starts only once it is done, and the compose test then finds its layers cached (it makes
+# them itself if this failed).
+setsid tests/compose/image.sh "$BUILD/bin" >"$BUILD/compose-image.log" 2>&1 &
+image_job=$!
+trap 'kill -- -"$image_job" 2>/dev/null || true' EXIT
+
 # The sanitizer builds compile unity sources (16 files to a unit): about half the time of a build
 # file by file. They are not linted and users never build them; the release build above stays
 # file by file, so that a missing include still fails it and clang-tidy sees every file.
 unity=(-DCMAKE_UNITY_BUILD=ON -DCMAKE_UNITY_BUILD_BATCH_SIZE=16)
 
-# The sanitizer stages build only the test executables of the labels they run (tests-core,
-# tests-runtime, tests-view). One left out of those targets would only leave a placeholder test
+# The sanitizer stages build only the test executables they run (ASan: tests-core,
+# tests-runtime, tests-view; TSan: the threaded ones). One left out would only leave a placeholder test
 # without labels, which `ctest -L` skips without a word: fail instead, naming it.
 built_all_but() {
   local unbuilt
@@ -68,14 +78,6 @@ built_all_but build-asan
 thirty_two="Insider\\.EdgeFlowFollowsTheLiar|NeighbourDelivery\\.AThirtyTwo|ClaimRunner\\.ThirtyTwo"
 (cd build-asan && ctest "${ctest_args[@]}" -L "core|runtime|view" \
   -E "^(Avoidance(Flight|Swarm)|FormationSwarm\\.SixtyFour|$thirty_two)")
-
-# The compose stage's image (a Debian base made with debootstrap, then docker/Dockerfile: mostly
-# downloads and package installs) is made in the background from here on, beside stages that do
-# not measure time, instead of in the compose stage; the tests stage starts only once it is done,
-# and the compose test then finds its layers cached (it makes them itself if this failed).
-setsid tests/compose/image.sh "$BUILD/bin" >"$BUILD/compose-image.log" 2>&1 &
-image_job=$!
-trap 'kill -- -"$image_job" 2>/dev/null || true' EXIT
 
 stage "threaded in-process tests under ThreadSanitizer (DDS off)"
 # The code that runs beside other threads without Fast DDS: the fault-injecting bus, the agent
