@@ -215,7 +215,7 @@ bool EdgeFlowLaw::shows(AgentId owner, const Copy& c) const {
 std::vector<FlowEntry> EdgeFlowLaw::held_copies() const {
   std::vector<FlowEntry> out;
   for (const auto& [owner, c] : copies_)
-    if (shows(owner, c)) out.push_back({owner, c.flow, 0.0, c.linked});
+    if (shows(owner, c)) out.push_back({owner, c.flow, 0.0, c.hearing});
   for (const AgentId owner : askers_) {
     if (owns(owner)) continue;
     const auto it = copies_.find(owner);
@@ -226,10 +226,21 @@ std::vector<FlowEntry> EdgeFlowLaw::held_copies() const {
 }
 
 void EdgeFlowLaw::links_observed() {
-  // The first message already says which owners this agent hears, so that a fixed graph moves
-  // from the first tick on, as the Laplacian law does.
-  for (const auto& [peer, w] : links_)
-    if (!owns(peer) && w > 0.0) copies_[peer].linked = true;
+  // The first message already says whom this agent links and hears (a new link forms only on a
+  // current view), so that a fixed graph moves from the first tick on, as the Laplacian law does.
+  for (const auto& [peer, w] : links_) {
+    if (w <= 0.0) continue;
+    if (!owns(peer)) {
+      Copy& c = copies_[peer];
+      c.linked = c.hearing = true;
+    } else if (!owned_.count(peer) && (!recovering_ || answered_.count(peer))) {
+      // A zero flow, settled: what the other end holds already. Not before a restarted agent
+      // knows its flow on the edge: a zero announced then would overwrite the other end's copy.
+      Owned& o = owned_[peer];
+      o.entry = {peer, Vec3::Zero(), w, true};
+      o.settled = true;
+    }
+  }
 }
 
 std::set<AgentId> EdgeFlowLaw::settling() const {
@@ -284,8 +295,8 @@ void EdgeFlowLaw::integrate(const Tick& t) {
   const Vec3 q = state();  // every edge moves from the same snapshot of q_i (Jacobi)
   for (auto& [peer, o] : owned_) o.entry.active = false;
   for (auto& [peer, c] : copies_) {
-    c.was_linked = c.linked;
-    c.linked = false;
+    c.was_hearing = c.hearing;
+    c.linked = c.hearing = false;
   }
   askers_.clear();
   unanswered_.clear();
@@ -299,16 +310,20 @@ void EdgeFlowLaw::integrate(const Tick& t) {
     if (owns(n.id)) {
       if (!answered) continue;  // nothing moves on this edge before its flow is known
       auto it = owned_.find(n.id);
-      // The other end's copy says whether it links this agent: without that, what moves here
-      // might never be taken in there.
+      // The other end's copy says whether it hears this agent lately: without that, what moves
+      // here might never be taken in there.
       const FlowEntry* copy = entry_for(n.copies, self_);
-      if (coef[k] > 0.0 && copy && copy->active) {
-        Owned& o = it != owned_.end() ? it->second : owned_[n.id];
+      if (coef[k] > 0.0) {
+        const bool first = it == owned_.end();
+        Owned& o = first ? owned_[n.id] : it->second;
+        if (first) o.settled = true;  // a zero flow: what the other end holds already
         o.entry.peer = n.id;
-        o.entry.flow += coef[k] * (q - n.q);
         o.entry.weight = links_.count(n.id) ? links_.at(n.id) : 0.0;
-        o.entry.active = true;
-        o.settled = false;
+        o.entry.active = true;  // announced while linked, moved on or not (the other end asks)
+        if (copy && copy->active) {
+          o.entry.flow += coef[k] * (q - n.q);
+          o.settled = false;
+        }
       } else if (it != owned_.end() && !askers_.count(n.id)) {
         // Settled once the other end shows the flow as it stands.
         if (copy && copy->flow == it->second.entry.flow) it->second.settled = true;
@@ -320,8 +335,9 @@ void EdgeFlowLaw::integrate(const Tick& t) {
       // The neighbour owns the edge: a newer message replaces copy and prediction.
       const FlowEntry* e = entry_for(n.flows, self_);
       auto it = copies_.find(n.id);
-      // An edge never linked and never announced costs no entry.
-      if (it == copies_.end() && coef[k] <= 0.0 && (!e || e->flow.isZero())) continue;
+      // An edge never linked, never moved on and not linked by its owner costs no entry.
+      if (it == copies_.end() && coef[k] <= 0.0 && (!e || (e->flow.isZero() && !e->active)))
+        continue;
       Copy& c = it != copies_.end() ? it->second : copies_[n.id];
       const bool fresh = !c.seen || n.seq != c.seq;  // a new message (or a restarted owner)
       if (fresh) {
@@ -332,13 +348,15 @@ void EdgeFlowLaw::integrate(const Tick& t) {
         c.seen = true;
       }
       c.linked = coef[k] > 0.0;
+      c.hearing = n.current;
       if (c.linked || (fresh && e)) {
         c.quiet = false;
       } else if (fresh) {
         c.quiet = true;
       }
-      // The owner moves only on what this agent's last message showed (the copy's active).
-      if (c.linked && c.was_linked) c.predicted += coef[k] * (n.q - q);
+      // The owner moves while it links this agent (its flow's active) and this agent's last
+      // message said it heard the owner (the copy's active): predict on the same terms.
+      if (c.linked && c.was_hearing && e && e->active) c.predicted += coef[k] * (n.q - q);
     }
   }
   // A silent owner's increments can no longer be confirmed: keep only its last copy.

@@ -17,7 +17,9 @@ struct FlowEntry {
   AgentId peer = 0;
   Vec3 flow = Vec3::Zero();  // f_{sender,peer}: taken from the sender, given to the peer [m]
   double weight = 0.0;       // the edge's weight as the owner last computed it
-  bool active = false;       // the owner currently holds this edge (flows persist after it drops)
+  // A flow: the owner links the edge now (flows persist after it drops). A copy: its holder
+  // heard the owner lately (NeighborView::current); the owner moves only while it says so.
+  bool active = false;
 };
 
 // What an agent publishes and what its neighbours' laws read. Transport-independent.
@@ -192,15 +194,18 @@ class WmsrLaw final : public UpdateLaw {
 // not its history: the owner announces a flow while the edge is linked, until the other end has
 // shown a copy equal to it (settled), and whenever the other end asks for it; the other end shows
 // its copy while the edge is linked, while the owner still announces the flow, and when the owner
-// asks. A copy says whether its holder links the owner now (FlowEntry::active), and an owner moves
-// on an edge only while the other end's newest message says so: where only one end hears the
-// other (a one-sided DDS match, a cut in one direction), nothing moves that the other end could
-// never take in. The other end predicts only what its last message allowed, so in lockstep the
-// two laws still coincide on a fixed graph; a link that forms mid-run moves one tick later than
-// the Laplacian law's. Settled entries stay in both agents' states. A restarted agent has lost its half of every
-// edge it had: it asks each peer it hears until that peer has answered (an owner adopts the copy
-// before it moves on the edge again; a non-owner takes the owner's flow as a copy), so a restart
-// never moves the total.
+// asks. A copy says whether its holder heard the owner lately (FlowEntry::active), and an owner
+// moves on an edge only while the other end's newest message says so: where only one end hears
+// the other (a one-sided DDS match), nothing moves that the other end could never take in. A cut
+// in one direction mid-run still lets the owner move until the other end's view of it goes stale
+// (two ticks, or a quarter of the neighbour timeout if longer): taken in if the cut heals, lost if
+// it never does. An owner announces a linked edge, moved on or not, and the other end predicts
+// only while the owner links it and its own last message said it heard the owner, so in lockstep
+// the two laws still coincide on a fixed graph; a link that forms mid-run moves one tick later
+// than the Laplacian law's. Settled entries stay in both agents' states. A restarted agent has lost
+// its half of every edge it had: it asks each peer it hears until that peer has answered (an owner
+// adopts the copy before it moves on the edge again; a non-owner takes the owner's flow as a copy),
+// so a restart never moves the total.
 class EdgeFlowLaw final : public UpdateLaw {
  public:
   EdgeFlowLaw(AgentId self, const Vec3& q0, LawConfig cfg) : UpdateLaw(self, q0, std::move(cfg)) {}
@@ -229,9 +234,10 @@ class EdgeFlowLaw final : public UpdateLaw {
     Vec3 predicted = Vec3::Zero();  // our estimate of the owner's increments since that copy
     std::uint64_t seq = 0;          // message it came in
     bool seen = false;
-    bool announced = false;  // the owner's newest message carried this edge's flow
-    bool linked = false;     // linked on the last tick (shown to the owner as the copy's active)
-    bool was_linked = false;  // linked on the tick before: what the owner last heard (integrate)
+    bool announced = false;    // the owner's newest message carried this edge's flow
+    bool linked = false;       // linked on the last tick
+    bool hearing = false;      // heard the owner lately on the last tick: the copy's active
+    bool was_hearing = false;  // the same a tick before: what the owner last read (integrate)
     // Since the link last ended, a message of the owner's carried no flow for this edge: the owner
     // has settled it (or never moved on it), nothing is left to hear.
     bool quiet = false;
@@ -240,8 +246,8 @@ class EdgeFlowLaw final : public UpdateLaw {
   std::map<AgentId, Copy> copies_;  // flows neighbours own toward us
   // Whether the newest message shows this copy (held_copies()).
   bool shows(AgentId owner, const Copy& c) const;
-  std::set<AgentId> askers_;        // peers whose newest message asks this agent
-  bool recovering_ = false;         // restarted: ask each peer heard until it answered
+  std::set<AgentId> askers_;  // peers whose newest message asks this agent
+  bool recovering_ = false;   // restarted: ask each peer heard until it answered
   std::set<AgentId> answered_;
   std::set<AgentId> unanswered_;  // heard on the last tick, not answered yet
   int recovered_ = 0;
