@@ -50,8 +50,10 @@ void AgentRuntime::publish(Phase phase) {
   m.v_W = p_.config.mode == AgentMode::kQuadcopter ? quad_.velocity_W() : Vec3::Zero();
   m.q_WB = Eigen::Quaterniond(quad_.R_WB);
   m.rotors_radps = rotors_;
-  for (const auto& [peer, w] : law_->links()) m.links.emplace_back(peer, w);
-  m.initial_links = initial_links_;
+  const auto add_links = [&] {
+    for (const auto& [peer, w] : law_->links()) m.links.emplace_back(peer, w);
+  };
+  if (p_.start.links_to_neighbours) add_links();
   m.wall_ns = wall_ns_;
   m.incarnation = p_.start.incarnation;
   m.run_id = p_.start.run_id;
@@ -63,8 +65,13 @@ void AgentRuntime::publish(Phase phase) {
   m.strangers = strangers_;
   m.suspects = suspects_;
   bus_.publish(m);
-  // The recorder gets every k-th sample, and the goodbye (a departure it sees at once).
-  if (m.seq % p_.start.record_every == 0 || phase == Phase::kStopping) bus_.record(m);
+  // The recorder gets every k-th sample, and the goodbye (a departure it sees at once), with the
+  // links and the initial links.
+  if (m.seq % p_.start.record_every == 0 || phase == Phase::kStopping) {
+    if (!p_.start.links_to_neighbours) add_links();
+    m.initial_links = initial_links_;
+    bus_.record(m);
+  }
 }
 
 void AgentRuntime::set_strangers(const std::set<AgentId>& ids) {

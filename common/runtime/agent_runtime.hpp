@@ -33,6 +33,11 @@ struct AgentStart {
   bool recover_flows = false;
   // Every how many samples one also goes to the recorder (RunConfig::record_every).
   std::uint32_t record_every = 1;
+  // Whether the samples its neighbours hear carry its links. Only a place filter reads them
+  // (delivery REACH: a bond lets a sample through); the recorder's samples always carry its
+  // links and initial links (graph.csv), and no neighbour reads the initial ones. Without them a
+  // sample's size follows the edges still settling, not twice the degree more.
+  bool links_to_neighbours = true;
 };
 
 // One agent: who it is and where it starts (its spec), what every agent of the run flies with (the

@@ -181,6 +181,39 @@ TEST(RecordedRun, TheSupervisorsOwnRecorderJudgesAnInProcessRunConverged) {
   EXPECT_EQ(s.messages().seq_gaps(), 0u);
 }
 
+// A neighbour's sample carries no links unless a place filter reads them (REACH); the recorder's
+// carry the links and the initial graph, so graph.csv is whole either way.
+TEST(RecordedRun, LinksRideToTheRecorderAndToNeighboursOnlyWhereAFilterReadsThem) {
+  for (const char* delivery : {"ALL", "NEIGHBOURS", "REACH"}) {
+    SCOPED_TRACE(delivery);
+    const RunDir dir = fresh_run_dir(delivery);
+    InProcessSwarm swarm(six(std::string("transport { delivery: ") + delivery + " }"), 1.0, dir);
+    std::size_t samples = 0, samples_with_links = 0, samples_with_initial = 0;
+    std::size_t records = 0, records_with_links = 0, records_with_initial = 0;
+    swarm.network().set_rewrite([&](const InMemoryBus&, const InMemoryBus& to, StateMessage& m) {
+      if (m.phase != Phase::kRunning) return;
+      const bool recorder = to.role() == InMemoryBus::Role::kRecorder;
+      ++(recorder ? records : samples);
+      if (!m.links.empty()) ++(recorder ? records_with_links : samples_with_links);
+      if (!m.initial_links.empty()) ++(recorder ? records_with_initial : samples_with_initial);
+    });
+    EXPECT_EQ(swarm.run_recorded(60.0), "converged");
+    ASSERT_GT(samples, 1000u);
+    ASSERT_GT(records, 100u);
+    EXPECT_EQ(records_with_links, records);
+    EXPECT_EQ(records_with_initial, records);
+    EXPECT_EQ(samples_with_initial, 0u);
+    if (std::string(delivery) == "REACH") {
+      // All but the first running samples, sent before the law's first tick linked anyone.
+      EXPECT_GT(samples_with_links, samples * 99 / 100);
+    } else {
+      EXPECT_EQ(samples_with_links, 0u);
+    }
+    // The record's initial graph (from the initial links) is the complete one.
+    EXPECT_EQ(summary_of(dir).edges_initial_size(), 15);
+  }
+}
+
 TEST(RecordedRun, AnAgentThatCrashedIsMissingSoTheRunDoesNotConverge) {
   // Given six agents, one of which crashes once everyone runs (no plan expects it gone)
   const RunDir dir = fresh_run_dir();
