@@ -77,10 +77,7 @@ int main(int argc, char** argv) {
                           [&](const std::string& line) { log->info("{}", line); });
       if (g_stop) return 0;  // stopped while waiting for its peers: a stop, not a failure
       if (dopt.participant.unicast_peer_hosts.empty()) {
-        std::fprintf(stderr,
-                     "swarm-agent: --peer-hosts (QSWARM_PEER_HOSTS): none of %s resolves "
-                     "after %.0f s\n",
-                     f.process.peer_hosts.c_str(), kPeerHostsWaitS);
+        say_peer_hosts_unresolved("swarm-agent", f.process.peer_hosts);
         return 2;
       }
     }

@@ -101,10 +101,7 @@ int main(int argc, char** argv) {
                           [&](const std::string& line) { logger->info("{}", line); });
       if (dopt.participant.unicast_peer_hosts.empty()) {
         if (!g_stop) {
-          std::fprintf(stderr,
-                       "swarm-supervisor: --peer-hosts (QSWARM_PEER_HOSTS): none of %s "
-                       "resolves after %.0f s\n",
-                       opts.peer_hosts.c_str(), kPeerHostsWaitS);
+          say_peer_hosts_unresolved("swarm-supervisor", opts.peer_hosts);
           return 2;
         }
         // Stopped before any peer's name resolved: a participant that reaches no one, so that

@@ -4,7 +4,7 @@
 #      in build-release/; and a configure of the product alone (tests and benchmarks off), from
 #      the sources docker/Dockerfile's build stage copies;
 #   2. the core, runtime and view tests under AddressSanitizer + UndefinedBehaviorSanitizer (DDS
-#      off), and the runtime and view tests under ThreadSanitizer (DDS off);
+#      off), and those of them that run threads under ThreadSanitizer (DDS off);
 #   3. clang-format on every source, clang-tidy on the product's sources as unity units
 #      (tools/lint.sh; `--all` adds the tests and benchmarks: run it before a change to them lands);
 #   4. every test but the `long` and `compose` labels, then the `compose` label alone.

@@ -274,9 +274,8 @@ DdsOptions dds_options(const RunConfig& rc, const std::string& participant_name,
   // networks carry multicast unreliably, and the fault tests' namespaces), nor where the scenario
   // turns it off (transport.multicast).
   if (rc.transport.multicast && rc.transport.delivery == Delivery::kAll &&
-      p.interface.rfind("127.", 0) == 0 &&
-      p.test_drop_data_percent == 0 && p.unicast_peers_count == 0 && p.keystore.empty() &&
-      !p.shared_memory)
+      p.interface.rfind("127.", 0) == 0 && p.test_drop_data_percent == 0 &&
+      p.unicast_peers_count == 0 && p.keystore.empty() && !p.shared_memory)
     s.multicast_group = state_multicast_group(rc.transport.run_id);
   return d;
 }
@@ -296,6 +295,11 @@ std::shared_ptr<spdlog::logger> make_process_logger(const std::string& name,
   logger->flush_on(spdlog::level::info);
   spdlog::set_default_logger(logger);
   return logger;
+}
+
+void say_peer_hosts_unresolved(const char* prog, const std::string& names) {
+  std::fprintf(stderr, "%s: --peer-hosts (QSWARM_PEER_HOSTS): none of %s resolves after %.0f s\n",
+               prog, names.c_str(), kPeerHostsWaitS);
 }
 
 std::vector<std::string> find_peer_hosts(const std::string& names, std::size_t want,

@@ -57,6 +57,8 @@ inline constexpr double kPeerHostsWaitS = 120.0;
 std::vector<std::string> find_peer_hosts(const std::string& names, std::size_t want,
                                          double timeout_s, const std::atomic<bool>& stop,
                                          const std::function<void(const std::string&)>& say);
+// What `prog` says on stderr when none of its --peer-hosts resolved (it then exits 2).
+void say_peer_hosts_unresolved(const char* prog, const std::string& names);
 
 // An exception that escapes a thread (one of Fast DDS's too: std::system_error when threads or
 // memory run out) ends the process with exit code 1 and one line on stderr that names it, instead

@@ -122,7 +122,8 @@ StateMessage from_idl(const qswarm_msgs::AgentState& s) {
   for (const auto& e : s.suspects()) m.suspects.push_back({e.id(), e.kinds()});
   for (const auto& e : s.links()) m.links.emplace_back(e.peer(), e.weight());
   for (const auto& e : s.initial_links()) m.initial_links.emplace_back(e.peer(), e.weight());
-  for (const auto& e : s.copies()) m.view.copies.push_back({e.peer(), vec(e.flow()), 0.0, e.active()});
+  for (const auto& e : s.copies())
+    m.view.copies.push_back({e.peer(), vec(e.flow()), 0.0, e.active()});
   for (const auto& e : s.flows())
     m.view.flows.push_back({e.peer(), vec(e.flow()), e.weight(), e.active()});
   m.view.asking.assign(s.asking().begin(), s.asking().end());

@@ -277,8 +277,7 @@ std::pair<std::string, std::uint16_t> resolve_discovery_server(const std::string
   if (found.empty())
     throw std::invalid_argument("discovery server \"" + host_port + "\": cannot resolve " + host +
                                 " (" + gai_strerror(rc) + ")");
-  const std::string buf = found.front();
-  return {buf, static_cast<std::uint16_t>(port)};
+  return {found.front(), static_cast<std::uint16_t>(port)};
 }
 
 }  // namespace qswarm

@@ -236,7 +236,8 @@ TEST(StateMulticast, OnlyAllToAllRunsOnLoopbackWithoutTheTestTransportOrUnicastD
   ProcessOptions lan;
   lan.interface = "10.1.2.3";
   EXPECT_EQ(group(rc, lan), "");
-  // A scenario can turn it off (a loopback without multicast), and the run's scenario.txtpb says so.
+  // A scenario can turn it off (a loopback without multicast), and the run's scenario.txtpb says
+  // so.
   const RunConfig off = resolve_scenario(parse_scenario_text(
       "random_agents { count: 4 box_m: 10 } seed: 1 transport { multicast: false }", "test"));
   EXPECT_EQ(group(off), "");
