@@ -174,13 +174,29 @@ TEST_P(BothLaws, StableForLargeWeightsAtLowRates) {
 INSTANTIATE_TEST_SUITE_P(Laws, BothLaws, ::testing::Values(LawKind::kLaplacian, LawKind::kEdgeFlow),
                          law_name);
 
+// Two agents 1 and 2 under unweighted links: on the fixed edge 1-2, or by a 4.5 m radio range.
+LawConfig pair_config(TopologyPolicy policy) {
+  LawConfig cfg;
+  cfg.weight.policy = WeightPolicy::kUnweighted;
+  cfg.topology.policy = policy;
+  if (policy == TopologyPolicy::kFixed) {
+    cfg.topology.edges = {{1, 2}};
+  } else {
+    cfg.topology.threshold_m = 4.5;
+  }
+  return cfg;
+}
+
+// A view as a receiver's runtime hands it on under kRange: with the physical distance set.
+NeighborView at(NeighborView v, double distance_m) {
+  v.link_distance_m = distance_m;
+  return v;
+}
+
 TEST(EdgeFlowLaw, LostMessagesDelayButNeverShiftTheTotal) {
   // Hand-driven two-agent exchange with a lost message: the non-owner misses the owner's update for
   // a few ticks (its prediction stands in), then a copy arrives and the total is exact again.
-  LawConfig cfg;
-  cfg.weight.policy = WeightPolicy::kUnweighted;
-  cfg.topology.policy = TopologyPolicy::kFixed;
-  cfg.topology.edges = {{1, 2}};
+  const LawConfig cfg = pair_config(TopologyPolicy::kFixed);
   EdgeFlowLaw a(1, Vec3(0, 0, 0), cfg), b(2, Vec3(10, 0, 0), cfg);
   a.observe({b.message()});
   b.observe({a.message()});
@@ -209,15 +225,8 @@ TEST(EdgeFlowLaw, LostMessagesDelayButNeverShiftTheTotal) {
 // no flow for the edge, even when the one message that carried it was lost. The runtime keeps
 // the two in touch for that long (Neighbourhood's inbox pushes).
 TEST(EdgeFlowLaw, BothEndsKnowAnExchangeIsOpenUntilItIsSettled) {
-  LawConfig cfg;
-  cfg.weight.policy = WeightPolicy::kUnweighted;
-  cfg.topology.policy = TopologyPolicy::kRange;
-  cfg.topology.threshold_m = 4.5;
+  const LawConfig cfg = pair_config(TopologyPolicy::kRange);
   EdgeFlowLaw a(1, Vec3(0, 0, 0), cfg), b(2, Vec3(1, 0, 0), cfg);  // a owns the edge
-  const auto at = [](NeighborView v, double d) {
-    v.link_distance_m = d;
-    return v;
-  };
   a.observe({at(b.message(), 1.0)});
   b.observe({at(a.message(), 1.0)});
   // One linked tick each: a moves the flow; a's message carrying it is lost.
@@ -246,20 +255,14 @@ TEST(EdgeFlowLaw, BothEndsKnowAnExchangeIsOpenUntilItIsSettled) {
 // owns the edge; whatever it moved there, 2 could never take in, and the total would move by it.
 // The owner moves only while the other end's copy says it links the owner.
 TEST(EdgeFlowLaw, AnOwnerHeardByNoOneMovesNothingUntilTheOtherEndHearsIt) {
-  LawConfig cfg;
-  cfg.weight.policy = WeightPolicy::kUnweighted;
-  cfg.topology.policy = TopologyPolicy::kRange;
-  cfg.topology.threshold_m = 4.5;
+  const LawConfig cfg = pair_config(TopologyPolicy::kRange);
   EdgeFlowLaw a(1, Vec3(0, 0, 0), cfg), b(2, Vec3(2, 0, 0), cfg);
-  const auto at = [](NeighborView v) {
-    v.link_distance_m = 1.0;
-    return v;
-  };
-  a.observe({at(b.message())});
+  const auto near = [](const NeighborView& v) { return at(v, 1.0); };
+  a.observe({near(b.message())});
   b.observe({});
   for (int tick = 0; tick < 500; ++tick) {
     const NeighborView mb = b.message();
-    a.step(0.02, {at(mb)});
+    a.step(0.02, {near(mb)});
     b.step(0.02, {});                                        // never hears a
     ASSERT_EQ(a.links().size(), 1u);                         // a links b all along...
     ASSERT_EQ(a.state(), Vec3(0, 0, 0)) << "tick " << tick;  // ...and moves nothing
@@ -268,8 +271,8 @@ TEST(EdgeFlowLaw, AnOwnerHeardByNoOneMovesNothingUntilTheOtherEndHearsIt) {
   // The other direction heals: b hears a, links it and says so; a moves from then on.
   for (int tick = 0; tick < 1500; ++tick) {
     const NeighborView ma = a.message(), mb = b.message();
-    a.step(0.02, {at(mb)});
-    b.step(0.02, {at(ma)});
+    a.step(0.02, {near(mb)});
+    b.step(0.02, {near(ma)});
   }
   EXPECT_NEAR(a.state().x(), 1.0, 1e-9);
   EXPECT_NEAR(b.state().x(), 1.0, 1e-9);
@@ -278,11 +281,11 @@ TEST(EdgeFlowLaw, AnOwnerHeardByNoOneMovesNothingUntilTheOtherEndHearsIt) {
   // of 1's and neither state changes.
   EdgeFlowLaw c(1, Vec3(0, 0, 0), cfg), d(2, Vec3(2, 0, 0), cfg);
   c.observe({});
-  d.observe({at(c.message())});
+  d.observe({near(c.message())});
   for (int tick = 0; tick < 500; ++tick) {
     const NeighborView mc = c.message();
     c.step(0.02, {});
-    d.step(0.02, {at(mc)});
+    d.step(0.02, {near(mc)});
     ASSERT_EQ(c.state(), Vec3(0, 0, 0)) << "tick " << tick;
     ASSERT_EQ(d.state(), Vec3(2, 0, 0)) << "tick " << tick;
   }
@@ -292,15 +295,8 @@ TEST(EdgeFlowLaw, AnOwnerHeardByNoOneMovesNothingUntilTheOtherEndHearsIt) {
 // link's hysteresis band one end may hold the link while the other (which lost it, or restarted)
 // may not form it again. The owner moves, the other end takes the flow in, and the two meet.
 TEST(EdgeFlowLaw, AnOwnerWhoseLinkTheOtherEndDoesNotHoldStillMovesWhileItIsHeard) {
-  LawConfig cfg;
-  cfg.weight.policy = WeightPolicy::kUnweighted;
-  cfg.topology.policy = TopologyPolicy::kRange;
-  cfg.topology.threshold_m = 4.5;
+  const LawConfig cfg = pair_config(TopologyPolicy::kRange);
   EdgeFlowLaw a(1, Vec3(0, 0, 0), cfg), b(2, Vec3(2, 0, 0), cfg);
-  const auto at = [](NeighborView v, double d) {
-    v.link_distance_m = d;
-    return v;
-  };
   a.observe({at(b.message(), 1.0)});
   b.observe({at(a.message(), 100.0)});
   for (int tick = 0; tick < 1500; ++tick) {
@@ -319,10 +315,7 @@ TEST(EdgeFlowLaw, AnOwnerWhoseLinkTheOtherEndDoesNotHoldStillMovesWhileItIsHeard
 // A cut in one direction mid-run (2 stops hearing 1; its view of 1 goes stale): the owner stops
 // moving as soon as 2's message says so, and what it moved before is taken in once 2 hears again.
 TEST(EdgeFlowLaw, AnOwnerStopsOnceTheOtherEndsViewOfItGoesStale) {
-  LawConfig cfg;
-  cfg.weight.policy = WeightPolicy::kUnweighted;
-  cfg.topology.policy = TopologyPolicy::kFixed;
-  cfg.topology.edges = {{1, 2}};
+  const LawConfig cfg = pair_config(TopologyPolicy::kFixed);
   EdgeFlowLaw a(1, Vec3(0, 0, 0), cfg), b(2, Vec3(10, 0, 0), cfg);
   a.observe({b.message()});
   b.observe({a.message()});
