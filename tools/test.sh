@@ -53,9 +53,9 @@ trap 'kill -- -"$image_job" 2>/dev/null || true' EXIT
 # file by file, so that a missing include still fails it and clang-tidy sees every file.
 unity=(-DCMAKE_UNITY_BUILD=ON -DCMAKE_UNITY_BUILD_BATCH_SIZE=16)
 
-# The sanitizer stages build only the test executables they run (ASan: tests-core,
-# tests-runtime, tests-view; TSan: the threaded ones). One left out would only leave a placeholder test
-# without labels, which `ctest -L` skips without a word: fail instead, naming it.
+# The sanitizer stages build only the test executables they run (ASan: tests-core, tests-runtime,
+# tests-view; TSan: tests-threads). One left out would only leave a placeholder test without
+# labels, which `ctest -L` skips without a word: fail instead, naming it.
 built_all_but() {
   local unbuilt
   unbuilt=$(cd "$1" && ctest -N | sed -n 's/^ *Test *#[0-9]*: \(.*\)_NOT_BUILT$/\1/p' | sort -u |
@@ -89,8 +89,7 @@ stage "threaded in-process tests under ThreadSanitizer (DDS off)"
 # fails the stage (halt_on_error).
 cmake -S . -B build-tsan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DQSWARM_WITH_DDS=OFF \
   -DQSWARM_TSAN=ON -DQSWARM_WERROR=ON -DQSWARM_BUILD_BENCH=OFF "${unity[@]}" >/dev/null
-cmake --build build-tsan --parallel "$(nproc)" \
-  --target concurrency_tests runtime_tests launcher_tests view_tests
+cmake --build build-tsan --parallel "$(nproc)" --target tests-threads
 built_all_but build-tsan "claim_tests core_tests mcap_tests record_tests scenario_tests sim_tests "
 (cd build-tsan && TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1" \
   ctest "${ctest_args[@]}" -L "runtime|view")

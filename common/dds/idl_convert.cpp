@@ -87,7 +87,7 @@ void to_idl(const StateMessage& m, qswarm_msgs::AgentState& s) {
     qswarm_msgs::FlowEntry e;
     e.peer(f.peer);
     e.flow(arr(f.flow));
-    e.active(f.active);  // the holder links the owner now: the owner may move on the edge
+    e.active(f.active);  // the holder heard the owner lately: the owner may move on the edge
     s.copies().push_back(e);
   }
   s.asking(m.view.asking);
