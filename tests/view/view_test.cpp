@@ -628,19 +628,15 @@ TEST_F(ViewServerTest, AClientThatNeverReadsLosesFramesNotTheOthers) {
   good.read();
   good.read();
   good.send(R"({"op":"subscribe","subscriptions":[{"id":1,"channelId":1}]})");
-  // 512 agents a frame: about 60 kB of JSON and 512 protobuf messages, 50 frames a second.
+  // 512 agents a frame: about 60 kB of JSON and 512 protobuf messages. The next frame comes
+  // once the good client has read this one, so how fast this process runs does not matter.
   int frames = 0;
   for (int k = 1; k <= 60; ++k) {
-    feed_swarm(feed, 512, 0.02 * k);
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
-    bool bin = false;
-    while (!good.read(0.001, &bin).empty()) ++frames;
+    feed_swarm(feed, 512, k);
+    if (!good.await_view("\"t\":" + std::to_string(k) + ",").empty()) ++frames;
   }
   EXPECT_GT(server.counts().frames_dropped, 0u);
-  // The good client still gets the newest frames.
-  feed_swarm(feed, 512, 99.0);
-  EXPECT_FALSE(good.await_view("\"t\":99,").empty());
-  EXPECT_GT(frames, 30);  // of 60, while the stuck one lost its
+  EXPECT_EQ(frames, 60);  // every one, while the stuck client lost some of its
   std::lock_guard<std::mutex> lock(log_mu_);
   EXPECT_EQ(
       std::count_if(log_.begin(), log_.end(),
