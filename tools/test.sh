@@ -74,10 +74,13 @@ built_all_but build-asan
 # lattices of FormationSwarm.SixtyFour*; they run in the release suite below. The filter itself
 # runs here in SafeVelocity.*, the place filter in Neighbourhood.* and the other formations. The
 # three 32-agent runs that take a minute or more here (the liar's, the neighbour delivery's, the
-# claimers') run the code the shorter tests run, at a larger size: the release suite runs them.
+# claimers') run the code the shorter tests run, at a larger size: the release suite runs them. So
+# do the two sweeps of the place filter's geometry (80 000 steps of two wandering agents, and every
+# border crossing 5 cm apart: half a minute each here), whose code the other Neighbourhood.* run.
 thirty_two="Insider\\.EdgeFlowFollowsTheLiar|NeighbourDelivery\\.AThirtyTwo|ClaimRunner\\.ThirtyTwo"
+sweeps="Neighbourhood\\.(EveryPairWithinTheReach|TheWorstCaseAcrossCellBorders)"
 (cd build-asan && ctest "${ctest_args[@]}" -L "core|runtime|view" \
-  -E "^(Avoidance(Flight|Swarm)|FormationSwarm\\.SixtyFour|$thirty_two)")
+  -E "^(Avoidance(Flight|Swarm)|FormationSwarm\\.SixtyFour|$thirty_two|$sweeps)")
 
 stage "threaded in-process tests under ThreadSanitizer (DDS off)"
 # The code that runs beside other threads without Fast DDS: the fault-injecting bus, the agent
