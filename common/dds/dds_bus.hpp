@@ -29,7 +29,10 @@ class DdsBus final : public NeighborBus {
   bool recorder_confirmed() const override { return state_.recorder_confirmed(); }
   int record_readers_matched() const { return state_.record_readers_matched(); }
   void set_interest(const Interest& interest) override { state_.set_interest(interest); }
-  std::vector<StateMessage> latest(AgentId self) override { return state_.latest(self); }
+  void for_each_latest(AgentId self,
+                       const std::function<void(const StateMessage&)>& visit) override {
+    state_.for_each_latest(self, visit);
+  }
   void set_listener(Listener listener) override { state_.set_listener(std::move(listener)); }
   BusCounters counters() const override { return state_.counters(); }
   int matched_readers() const override { return state_.matched_readers(); }

@@ -95,6 +95,11 @@ void to_idl(const StateMessage& m, qswarm_msgs::AgentState& s) {
 
 StateMessage from_idl(const qswarm_msgs::AgentState& s) {
   StateMessage m;
+  from_idl(s, m);
+  return m;
+}
+
+void from_idl(const qswarm_msgs::AgentState& s, StateMessage& m) {
   m.view.id = s.id();
   m.seq = s.seq();
   m.view.seq = s.view_seq();
@@ -119,15 +124,21 @@ StateMessage from_idl(const qswarm_msgs::AgentState& s) {
   m.faults = {s.faults().loss(), s.faults().burst(), s.faults().cut(), s.faults().partition(),
               s.faults().delayed()};
   m.strangers.assign(s.strangers().begin(), s.strangers().end());
+  m.suspects.clear();
   for (const auto& e : s.suspects()) m.suspects.push_back({e.id(), e.kinds()});
+  m.links.clear();
   for (const auto& e : s.links()) m.links.emplace_back(e.peer(), e.weight());
+  m.initial_links.clear();
   for (const auto& e : s.initial_links()) m.initial_links.emplace_back(e.peer(), e.weight());
+  m.view.copies.clear();
   for (const auto& e : s.copies())
     m.view.copies.push_back({e.peer(), vec(e.flow()), 0.0, e.active()});
+  m.view.flows.clear();
   for (const auto& e : s.flows())
     m.view.flows.push_back({e.peer(), vec(e.flow()), e.weight(), e.active()});
   m.view.asking.assign(s.asking().begin(), s.asking().end());
-  return m;
+  m.view.link_distance_m = NeighborView{}.link_distance_m;  // not on the wire
+  m.view.current = NeighborView{}.current;
 }
 
 void to_idl(const IdClaim& c, qswarm_msgs::IdClaim& s) {

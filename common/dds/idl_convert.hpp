@@ -17,6 +17,8 @@ static_assert(kMaxWireEntries + 1 >= kMaxSwarmAgents, "the wire must carry the l
 // wire's bound (never cuts it).
 void to_idl(const StateMessage& m, qswarm_msgs::AgentState& s);
 StateMessage from_idl(const qswarm_msgs::AgentState& s);
+// The same into `m`, every field overwritten and its lists' storage reused (the receive path).
+void from_idl(const qswarm_msgs::AgentState& s, StateMessage& m);
 
 // IdClaim <-> its DDS type.
 void to_idl(const IdClaim& c, qswarm_msgs::IdClaim& s);

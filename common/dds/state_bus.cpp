@@ -155,7 +155,10 @@ struct DdsStateBus::Impl : public dds::DataReaderListener {
 
   void on_data_available(dds::DataReader* r) override {
     try {
-      qswarm_msgs::AgentState s;
+      // Each receive thread decodes into storage of its own, reused from sample to sample: the
+      // lists of a sample (flows, copies) then allocate nothing once they have grown.
+      thread_local qswarm_msgs::AgentState s;
+      thread_local StateMessage m;
       dds::SampleInfo info;
       while (r->take_next_sample(&s, &info) == ReturnCode_t::RETCODE_OK) {
         if (!info.valid_data) continue;
@@ -165,7 +168,8 @@ struct DdsStateBus::Impl : public dds::DataReaderListener {
         // as it moves between cells: the gate judges its participant (a copy heard through two
         // names is then stale, and a move is no change of owner).
         if (opts.topic_per_name) std::fill(w.bytes.begin() + 12, w.bytes.end(), std::uint8_t{0});
-        accept(from_idl(s), w);
+        from_idl(s, m);
+        accept(m, w);
       }
     } catch (const std::exception& e) {
       spdlog::error("dds: listener caught: {}", e.what());
@@ -570,9 +574,10 @@ bool DdsStateBus::recorder_confirmed() const {
   return l.acknowledged;
 }
 
-std::vector<StateMessage> DdsStateBus::latest(AgentId self) {
+void DdsStateBus::for_each_latest(AgentId self,
+                                  const std::function<void(const StateMessage&)>& visit) {
   std::lock_guard<std::mutex> lock(impl_->mu);
-  return impl_->gate.latest(self);
+  impl_->gate.for_each_latest(self, visit);
 }
 
 void DdsStateBus::set_listener(Listener listener) {

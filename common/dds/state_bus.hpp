@@ -96,7 +96,8 @@ class DdsStateBus final : public NeighborBus {
   bool recorder_confirmed() const override;
   // Readers matched to our record writer (our side of discovery only: see recorder_confirmed).
   int record_readers_matched() const;
-  std::vector<StateMessage> latest(AgentId self) override;
+  void for_each_latest(AgentId self,
+                       const std::function<void(const StateMessage&)>& visit) override;
   // Called for every accepted sample, on a DDS thread. set_listener(nullptr) waits for a call in
   // progress to finish.
   void set_listener(Listener listener) override;

@@ -99,10 +99,13 @@ bool AgentRuntime::hears(AgentId peer) const {
 
 void AgentRuntime::consensus_tick(std::vector<AgentEvent>& events) {
   const double t = time_s();
-  std::vector<NeighborView> views;
-  for (const StateMessage& m : bus_.latest(p_.spec.id)) {
+  std::vector<NeighborView>& views = views_;
+  std::size_t n_views = 0;
+  // Under the bus's lock: read each message in place, and copy only its view, into the storage
+  // this tick's element already has.
+  bus_.for_each_latest(p_.spec.id, [&](const StateMessage& m) {
     const AgentId peer = m.view.id;
-    if (peer == p_.spec.id) continue;
+    if (peer == p_.spec.id) return;
     Peer& st = peers_[peer];
     const bool fresh = m.incarnation != st.incarnation || m.seq != st.seq;
     if (fresh) {
@@ -116,21 +119,23 @@ void AgentRuntime::consensus_tick(std::vector<AgentEvent>& events) {
       // for now (it is not moving, and its stamp is not yet on the swarm's clock).
       st.at_s = m.phase == Phase::kRunning ? m.stamp_s : t;
     }
-    if (m.phase != Phase::kRunning) continue;
-    if (!listen_to_.empty() && !listen_to_.count(peer))
-      continue;  // explicit graph: not a neighbour
+    if (m.phase != Phase::kRunning) return;
+    if (!listen_to_.empty() && !listen_to_.count(peer)) return;  // explicit graph: not a neighbour
     if (fresh && live_.insert(peer).second) events.push_back({AgentEvent::kNeighborHeard, peer, t});
     if (t - st.last_new_s > p_.config.neighbor_timeout_s) {
       if (live_.erase(peer)) events.push_back({AgentEvent::kNeighborLost, peer, t});
-      continue;
+      return;
     }
-    views.push_back(m.view);
-    views.back().current = current(st, t);
+    if (n_views == views.size()) views.emplace_back();
+    NeighborView& v = views[n_views++];
+    v = m.view;
+    v.current = current(st, t);
     // Radio range: the physical distance as this agent sees it (its own position, the
     // neighbour's last sample).
     if (p_.config.law.topology.policy == TopologyPolicy::kRange)
-      views.back().link_distance_m = (position() - m.p_W).norm();
-  }
+      v.link_distance_m = (position() - m.p_W).norm();
+  });
+  views.resize(n_views);
   if (!started_) {
     if (views.size() < p_.start.expected_peers &&
         t < p_.start.start_time_s + p_.start.start_grace_s) {

@@ -120,6 +120,9 @@ class AgentRuntime {
   RotorSpeeds rotors_ = RotorSpeeds::Zero();
   ReferenceGenerator reference_;     // the rate-limited reference the quadcopter tracks
   std::vector<Obstacle> obstacles_;  // scratch, reused every physics step
+  // The law's views of the neighbours, refilled at every consensus tick into the storage its
+  // elements already have (a tick then allocates nothing once the lists have grown).
+  std::vector<NeighborView> views_;
   // Every agent heard, in any phase: the law reads its running ones, collision avoidance all but
   // stopping ones. A peer is silent when no new sample came for the neighbour timeout.
   struct Peer {

@@ -65,14 +65,13 @@ void FaultyBus::release_due_locked(std::vector<StateMessage>* released) {
   }
 }
 
-std::vector<StateMessage> FaultyBus::latest(AgentId self) {
-  if (direct_) return inner_.latest(self);
+void FaultyBus::for_each_latest(AgentId self,
+                                const std::function<void(const StateMessage&)>& visit) {
+  if (direct_) return inner_.for_each_latest(self, visit);
   std::lock_guard<std::mutex> lock(mu_);
   release_due_locked(nullptr);
-  std::vector<StateMessage> out;
   for (const auto& [id, a] : latest_)
-    if (id != self) out.push_back(a.m);
-  return out;
+    if (id != self) visit(a.m);
 }
 
 FaultCounters FaultyBus::fault_counters() const {

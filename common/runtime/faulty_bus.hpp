@@ -29,7 +29,8 @@ class FaultyBus final : public NeighborBus {
   void record(const StateMessage& msg) override { inner_.record(msg); }
   bool recorder_confirmed() const override { return inner_.recorder_confirmed(); }
   void set_interest(const Interest& interest) override { inner_.set_interest(interest); }
-  std::vector<StateMessage> latest(AgentId self) override;
+  void for_each_latest(AgentId self,
+                       const std::function<void(const StateMessage&)>& visit) override;
   void set_listener(Listener listener) override;
   BusCounters counters() const override { return inner_.counters(); }
   int matched_readers() const override { return inner_.matched_readers(); }

@@ -64,7 +64,10 @@ class InMemoryBus final : public NeighborBus {
   Role role() const { return role_; }
   void set_interest(const Interest& interest) override { interest_ = interest; }
   const Interest& interest() const { return interest_; }
-  std::vector<StateMessage> latest(AgentId self) override { return gate_.latest(self); }
+  void for_each_latest(AgentId self,
+                       const std::function<void(const StateMessage&)>& visit) override {
+    gate_.for_each_latest(self, visit);
+  }
   void set_listener(Listener listener) override { listener_ = std::move(listener); }
   // A sample arriving from the network (or a test acting as a stranger on it).
   void receive(const StateMessage& m);

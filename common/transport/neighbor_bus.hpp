@@ -33,8 +33,17 @@ class NeighborBus {
   // Sends a sample to the recorder (the supervisor) only, on a stream of its own: agents send it
   // every k-th sample (the record rate), so what the record costs does not grow with their rate.
   virtual void record(const StateMessage& msg) = 0;
-  // Newest accepted message of every agent other than `self` (one per agent).
-  virtual std::vector<StateMessage> latest(AgentId self) = 0;
+  // Passes the newest accepted message of every agent other than `self` (one per agent, in id
+  // order) to `visit`, without copying it: an agent reads its neighbours so at every tick.
+  // `visit` runs under the bus's lock and must not call the bus.
+  virtual void for_each_latest(AgentId self,
+                               const std::function<void(const StateMessage&)>& visit) = 0;
+  // The same messages, copied.
+  std::vector<StateMessage> latest(AgentId self) {
+    std::vector<StateMessage> out;
+    for_each_latest(self, [&](const StateMessage& m) { out.push_back(m); });
+    return out;
+  }
   // Called for every accepted sample, possibly on a transport thread. When set_listener returns,
   // the previous listener is not running and is never called again: a decorator that registers
   // itself can unregister in its destructor and be destroyed safely while samples still flow.

@@ -165,10 +165,14 @@ SampleGate::Result SampleGate::admit(const StateMessage& m, const std::string& w
 
 std::vector<StateMessage> SampleGate::latest(AgentId self) const {
   std::vector<StateMessage> out;
-  out.reserve(agents_.size());
-  for (const auto& [id, a] : agents_)
-    if (id != self) out.push_back(a.held);
+  for_each_latest(self, [&](const StateMessage& m) { out.push_back(m); });
   return out;
+}
+
+void SampleGate::for_each_latest(AgentId self,
+                                 const std::function<void(const StateMessage&)>& visit) const {
+  for (const auto& [id, a] : agents_)
+    if (id != self) visit(a.held);
 }
 
 }  // namespace qswarm

@@ -2,6 +2,7 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <set>
 #include <string>
@@ -67,6 +68,8 @@ class SampleGate {
   // is new for that agent.
   bool notice(AgentId id, std::uint8_t kinds);
   std::vector<StateMessage> latest(AgentId self) const;
+  // The same messages, in id order, each passed to `visit` instead of copied.
+  void for_each_latest(AgentId self, const std::function<void(const StateMessage&)>& visit) const;
   BusCounters& counters() { return counters_; }
   const BusCounters& counters() const { return counters_; }
   // Other runs heard on this endpoint's domain (their run ids).

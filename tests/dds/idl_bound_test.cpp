@@ -35,6 +35,42 @@ TEST(WireBound, TheLargestSwarmsFlowsAllSurviveTheRoundTrip) {
   for (std::size_t k = 0; k < 2; ++k) EXPECT_EQ(back.view.copies[k].active, k % 2 == 0);
 }
 
+TEST(WireBound, DecodingIntoAReusedMessageLeavesNothingOfTheOneBefore) {
+  // The receive path decodes every sample into the same message: a small sample after a large
+  // one, from another agent, must read exactly as if decoded fresh.
+  StateMessage big = with_entries(40);
+  big.strangers = {900, 901};
+  big.suspects = {{7, 3}};
+  big.view.asking = {3, 4};
+  big.view.link_distance_m = 2.5;  // set by a receiver, never on the wire
+  big.view.current = false;
+  StateMessage small = with_entries(2);
+  small.view.id = 9;
+  small.seq = 77;
+  small.p_W = Vec3(4, 5, 6);
+  qswarm_msgs::AgentState wire_big;
+  qswarm_msgs::AgentState wire_small;
+  to_idl(big, wire_big);
+  to_idl(small, wire_small);
+  StateMessage reused;
+  from_idl(wire_big, reused);
+  reused.view.link_distance_m = 2.5;
+  reused.view.current = false;
+  from_idl(wire_small, reused);
+  const StateMessage fresh = from_idl(wire_small);
+  qswarm_msgs::AgentState again_reused;
+  qswarm_msgs::AgentState again_fresh;
+  to_idl(reused, again_reused);
+  to_idl(fresh, again_fresh);
+  EXPECT_TRUE(again_reused == again_fresh);
+  EXPECT_TRUE(again_reused == wire_small);
+  EXPECT_EQ(reused.view.link_distance_m, fresh.view.link_distance_m);
+  EXPECT_EQ(reused.view.current, fresh.view.current);
+  EXPECT_EQ(reused.view.flows.size(), 2u);
+  EXPECT_TRUE(reused.strangers.empty());
+  EXPECT_TRUE(reused.suspects.empty());
+}
+
 TEST(WireBound, OneMoreThanTheWireCarriesIsRefusedNotCut) {
   qswarm_msgs::AgentState s;
   EXPECT_THROW(to_idl(with_entries(kMaxSwarmAgents), s), std::length_error);

@@ -49,6 +49,18 @@ struct Feed {
 
 constexpr std::int64_t kLife = kNow - 5'000'000'000;  // the real agent started 5 s ago
 
+TEST(SampleGate, EachHeldAgentIsVisitedOnceInIdOrderButItsOwn) {
+  Feed f;
+  f.admit(sample(3, 1, kLife, 3.0), writer(3));
+  f.admit(sample(2, 1, kLife, 2.0), writer(2));
+  f.admit(sample(2, 2, kLife, 2.5), writer(2));
+  f.admit(sample(1, 1, kLife, 1.0), writer(1));
+  std::vector<std::pair<AgentId, double>> seen;
+  f.gate.for_each_latest(
+      1, [&](const StateMessage& m) { seen.emplace_back(m.view.id, m.view.q.x()); });
+  EXPECT_EQ(seen, (std::vector<std::pair<AgentId, double>>{{2, 2.5}, {3, 3.0}}));
+}
+
 TEST(SampleGate, AnImpersonatorBesideTheRealAgentIsNamedAndRefusedWhileTheRealOneSpeaks) {
   Feed f;
   const WriterId real = writer(1), forger = writer(2);

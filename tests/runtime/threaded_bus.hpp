@@ -29,9 +29,10 @@ class ThreadFedBus final : public NeighborBus {
     ++gate_.counters().published;
   }
   void record(const StateMessage&) override {}
-  std::vector<StateMessage> latest(AgentId self) override {
+  void for_each_latest(AgentId self,
+                       const std::function<void(const StateMessage&)>& visit) override {
     std::lock_guard<std::mutex> lock(mu_);
-    return gate_.latest(self);
+    gate_.for_each_latest(self, visit);
   }
   void set_listener(Listener listener) override {
     std::lock_guard<std::mutex> lock(listener_mu_);
