@@ -10,17 +10,12 @@
 // project's, not Fast DDS's or the kernel's (bench/wire_floor.cpp is the kernel's floor).
 // Usage: dds_floor N [SECONDS=20] [RATE_HZ=50] [multicast|unicast] [ENTRIES=N-1] [DOMAIN=20]
 #include <sys/mman.h>
-#include <sys/resource.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <atomic>
-#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <ctime>
 #include <string>
 #include <thread>
 #include <vector>
@@ -35,6 +30,7 @@
 #include <fastdds/dds/subscriber/Subscriber.hpp>
 #include <fastdds/dds/topic/TypeSupport.hpp>
 
+#include "bench/process_bench.hpp"
 #include "common/dds/participant.hpp"
 #include "common/dds/qos.hpp"
 #include "common/transport/port_plan.hpp"
@@ -44,26 +40,9 @@ namespace {
 
 namespace dds = eprosima::fastdds::dds;
 
-double now_s() {
-  timespec ts{};
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
-}
-
-void sleep_until(double t) {
-  timespec ts{};
-  ts.tv_sec = static_cast<time_t>(t);
-  ts.tv_nsec = static_cast<long>((t - static_cast<double>(ts.tv_sec)) * 1e9);
-  while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
-  }
-}
-
-double cpu_s() {
-  rusage ru{};
-  getrusage(RUSAGE_SELF, &ru);
-  return static_cast<double>(ru.ru_utime.tv_sec + ru.ru_stime.tv_sec) +
-         1e-6 * static_cast<double>(ru.ru_utime.tv_usec + ru.ru_stime.tv_usec);
-}
+using qswarm::bench::cpu_s;
+using qswarm::bench::now_s;
+using qswarm::bench::sleep_until;
 
 // Shared by the processes (an anonymous mapping made before they fork).
 struct Shared {
@@ -213,27 +192,10 @@ int main(int argc, char** argv) {
       mmap(nullptr, sizeof(Shared), PROT_READ | PROT_WRITE, MAP_SHARED | MAP_ANONYMOUS, -1, 0);
   if (mem == MAP_FAILED) return 1;
   Shared& shared = *new (mem) Shared();
-  int pipe_fd[2];
-  if (pipe(pipe_fd) != 0) return 1;
-  for (int i = 0; i < n; ++i) {
-    const pid_t pid = fork();
-    if (pid < 0) {
-      std::perror("dds_floor: fork");
-      return 1;
-    }
-    if (pid > 0) continue;
-    close(pipe_fd[0]);
-    const Result r = fly(i, n, seconds, hz, mode == "multicast", entries,
-                         static_cast<std::uint32_t>(domain), shared);
-    if (write(pipe_fd[1], &r, sizeof r) != static_cast<ssize_t>(sizeof r)) _exit(1);
-    _exit(0);
-  }
-  close(pipe_fd[1]);
-  std::vector<Result> all;
-  Result r;
-  while (read(pipe_fd[0], &r, sizeof r) == static_cast<ssize_t>(sizeof r)) all.push_back(r);
-  while (wait(nullptr) > 0) {
-  }
+  const std::vector<Result> all = qswarm::bench::in_processes<Result>(n, [&](int i) {
+    return fly(i, n, seconds, hz, mode == "multicast", entries, static_cast<std::uint32_t>(domain),
+               shared);
+  });
   const long unmatched =
       std::count_if(all.begin(), all.end(), [](const Result& x) { return !x.matched; });
   if (static_cast<int>(all.size()) != n || unmatched > 0) {

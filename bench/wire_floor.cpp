@@ -8,38 +8,25 @@
 // beyond this is the middleware's and the simulation's, not the kernel's.
 // Usage: wire_floor N [SECONDS=20] [RATE_HZ=50] [thread|drain] [DEGREE=4] [BYTES=600]
 #include <netinet/in.h>
-#include <sys/resource.h>
 #include <sys/socket.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <atomic>
-#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
-#include <ctime>
 #include <string>
 #include <thread>
 #include <vector>
 
+#include "bench/process_bench.hpp"
+
 namespace {
 
-double now_s() {
-  timespec ts{};
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
-}
-
-void sleep_until(double t) {
-  timespec ts{};
-  ts.tv_sec = static_cast<time_t>(t);
-  ts.tv_nsec = static_cast<long>((t - static_cast<double>(ts.tv_sec)) * 1e9);
-  while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
-  }
-}
+using qswarm::bench::now_s;
+using qswarm::bench::sleep_until;
 
 struct Result {
   double cpu_s = 0.0;
@@ -75,10 +62,7 @@ Result fly(int fd, const std::vector<sockaddr_in>& to, double start, double seco
   }
   stop = true;
   if (reader.joinable()) reader.join();
-  rusage ru{};
-  getrusage(RUSAGE_SELF, &ru);
-  r.cpu_s = static_cast<double>(ru.ru_utime.tv_sec + ru.ru_stime.tv_sec) +
-            1e-6 * static_cast<double>(ru.ru_utime.tv_usec + ru.ru_stime.tv_usec);
+  r.cpu_s = qswarm::bench::cpu_s();
   r.received = received;
   return r;
 }
@@ -135,16 +119,8 @@ int main(int argc, char** argv) {
     fds[static_cast<std::size_t>(i)] = fd;
     addr[static_cast<std::size_t>(i)] = a;
   }
-  int pipe_fd[2];
-  if (pipe(pipe_fd) != 0) return 1;
   const double start = std::ceil(now_s()) + 1.0 + 0.002 * n;  // after every fork
-  for (int i = 0; i < n; ++i) {
-    const pid_t pid = fork();
-    if (pid < 0) {
-      std::perror("wire_floor: fork");
-      return 1;
-    }
-    if (pid > 0) continue;
+  const std::vector<Result> all = qswarm::bench::in_processes<Result>(n, [&](int i) {
     for (int j = 0; j < n; ++j)
       if (j != i) close(fds[static_cast<std::size_t>(j)]);
     std::vector<sockaddr_in> to;
@@ -152,17 +128,9 @@ int main(int argc, char** argv) {
       const int off = (d + 1) / 2 * (d % 2 ? 1 : -1);
       to.push_back(addr[static_cast<std::size_t>(((i + off) % n + n) % n)]);
     }
-    const Result r = fly(fds[static_cast<std::size_t>(i)], to, start, seconds, hz, drain,
-                         static_cast<std::size_t>(bytes));
-    if (write(pipe_fd[1], &r, sizeof r) != static_cast<ssize_t>(sizeof r)) _exit(1);
-    _exit(0);
-  }
-  close(pipe_fd[1]);
-  std::vector<Result> all;
-  Result r;
-  while (read(pipe_fd[0], &r, sizeof r) == static_cast<ssize_t>(sizeof r)) all.push_back(r);
-  while (wait(nullptr) > 0) {
-  }
+    return fly(fds[static_cast<std::size_t>(i)], to, start, seconds, hz, drain,
+               static_cast<std::size_t>(bytes));
+  });
   if (static_cast<int>(all.size()) != n) {
     std::fprintf(stderr, "wire_floor: %zu of %d processes reported\n", all.size(), n);
     return 1;
