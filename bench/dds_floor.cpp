@@ -69,6 +69,8 @@ struct Counter : public dds::DataReaderListener {
 
 Result fly(int i, int n, double seconds, double hz, bool multicast, int entries,
            std::uint32_t domain, Shared& shared) {
+  Counter counter;  // the reader's listener: it outlives the participant
+  counter.self = static_cast<std::uint32_t>(i + 1);
   qswarm::ParticipantOptions po;
   po.domain_id = domain;
   po.name = "dds-floor-" + std::to_string(i + 1);
@@ -99,8 +101,6 @@ Result fly(int i, int n, double seconds, double hz, bool multicast, int entries,
     group.port = qswarm::PortPlan::data_multicast_port(domain);
     rq.endpoint().multicast_locator_list.push_back(group);
   }
-  Counter counter;
-  counter.self = static_cast<std::uint32_t>(i + 1);
   dds::DataReader* reader = sub->create_datareader(topic, rq, &counter);
   Result r;
   if (!writer || !reader) return r;
@@ -130,7 +130,10 @@ Result fly(int i, int n, double seconds, double hz, bool multicast, int entries,
   while (shared.start.load() == 0.0 && now_s() < give_up + 10.0)
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   const double start = shared.start.load();
-  if (start == 0.0) return r;
+  if (start == 0.0) {
+    r.matched = false;  // the others never all matched: this process did not fly
+    return r;
+  }
 
   const double period = 1.0 / hz;
   sleep_until(start);
@@ -199,8 +202,10 @@ int main(int argc, char** argv) {
   const long unmatched =
       std::count_if(all.begin(), all.end(), [](const Result& x) { return !x.matched; });
   if (static_cast<int>(all.size()) != n || unmatched > 0) {
-    std::fprintf(stderr, "dds_floor: %zu of %d processes reported, %ld never matched everyone\n",
-                 all.size(), n, unmatched);
+    std::fprintf(
+        stderr,
+        "dds_floor: %zu of %d processes reported, %ld never matched everyone or never flew\n",
+        all.size(), n, unmatched);
     return 1;
   }
   std::vector<double> cpu;

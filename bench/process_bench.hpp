@@ -38,20 +38,20 @@ inline double cpu_s() {
 
 // Runs fly(i) for i = 0 .. n - 1, each in a process of its own forked from this one, which sends
 // back the Result it returns. Returns the results that came back (fewer than n when a process
-// failed), once every process has exited; an empty list when a fork failed.
+// failed), once every process has exited; an empty list when a fork failed (after reading what
+// the processes already started send, so that none blocks on a full pipe).
 template <class Result, class Fly>
 std::vector<Result> in_processes(int n, Fly fly) {
   static_assert(std::is_trivially_copyable_v<Result>, "a result travels through a pipe");
   int pipe_fd[2];
   if (pipe(pipe_fd) != 0) return {};
-  for (int i = 0; i < n; ++i) {
+  bool forked_all = true;
+  for (int i = 0; i < n && forked_all; ++i) {
     const pid_t pid = fork();
     if (pid < 0) {
       std::perror("fork");
-      close(pipe_fd[1]);
-      while (wait(nullptr) > 0) {
-      }
-      return {};
+      forked_all = false;
+      break;
     }
     if (pid > 0) continue;
     close(pipe_fd[0]);
@@ -66,6 +66,7 @@ std::vector<Result> in_processes(int n, Fly fly) {
   close(pipe_fd[0]);
   while (wait(nullptr) > 0) {
   }
+  if (!forked_all) return {};
   return all;
 }
 

@@ -10,12 +10,12 @@
 namespace qswarm {
 
 // The fault-injecting decorator of a NeighborBus: it registers itself as the inner bus's listener,
-// passes every sample through LinkFaults (drop, or hold until a delay elapses) and serves latest()
-// from what survived. Publishing goes straight to the inner bus. With no link faults planned it
-// stands aside: samples go straight to its listener and latest() is the inner bus's (the same
-// newest accepted sample per agent), so an agent pays no copy and no lock per sample for faults
-// nobody planned. Thread-safe: samples may arrive
-// on a transport thread. The destructor unregisters first, so no sample reaches a destroyed bus.
+// passes every sample through LinkFaults (drop, or hold until a delay elapses) and serves the
+// newest samples (for_each_latest) from what survived. Publishing goes straight to the inner bus.
+// With no link faults planned it stands aside: samples go straight to its listener and
+// for_each_latest is the inner bus's (the same newest accepted sample per agent), so an agent pays
+// no copy and no lock per sample for faults nobody planned. Thread-safe: samples may arrive on a
+// transport thread. The destructor unregisters first, so no sample reaches a destroyed bus.
 class FaultyBus final : public NeighborBus {
  public:
   FaultyBus(NeighborBus& inner, LinkFaults faults, AgentId self);
