@@ -46,7 +46,7 @@ std::vector<Result> in_processes(int n, Fly fly) {
   int pipe_fd[2];
   if (pipe(pipe_fd) != 0) return {};
   bool forked_all = true;
-  for (int i = 0; i < n && forked_all; ++i) {
+  for (int i = 0; i < n; ++i) {
     const pid_t pid = fork();
     if (pid < 0) {
       std::perror("fork");

@@ -156,7 +156,9 @@ struct DdsStateBus::Impl : public dds::DataReaderListener {
   void on_data_available(dds::DataReader* r) override {
     try {
       // Each receive thread decodes into storage of its own, reused from sample to sample: the
-      // lists of a sample (flows, copies) then allocate nothing once they have grown.
+      // lists of a sample (flows, copies) then allocate nothing once they have grown. Shared by
+      // every reader on the thread: a listener that published (a same-thread delivery to
+      // another reader of this process) would overwrite it; none does, and every one copies.
       thread_local qswarm_msgs::AgentState s;
       thread_local StateMessage m;
       dds::SampleInfo info;

@@ -163,12 +163,6 @@ SampleGate::Result SampleGate::admit(const StateMessage& m, const std::string& w
   return r;
 }
 
-std::vector<StateMessage> SampleGate::latest(AgentId self) const {
-  std::vector<StateMessage> out;
-  for_each_latest(self, [&](const StateMessage& m) { out.push_back(m); });
-  return out;
-}
-
 void SampleGate::for_each_latest(AgentId self,
                                  const std::function<void(const StateMessage&)>& visit) const {
   for (const auto& [id, a] : agents_)

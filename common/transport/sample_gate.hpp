@@ -67,8 +67,8 @@ class SampleGate {
   // Names a suspicion found outside the gate (a secure transport's refusal); returns whether it
   // is new for that agent.
   bool notice(AgentId id, std::uint8_t kinds);
-  std::vector<StateMessage> latest(AgentId self) const;
-  // The same messages, in id order, each passed to `visit` instead of copied.
+  // The newest accepted message of every agent other than `self`, in id order, each passed to
+  // `visit` (NeighborBus::for_each_latest serves it).
   void for_each_latest(AgentId self, const std::function<void(const StateMessage&)>& visit) const;
   BusCounters& counters() { return counters_; }
   const BusCounters& counters() const { return counters_; }

@@ -37,9 +37,11 @@ struct Feed {
     return gate.admit(m, check_message(m), now, w);
   }
   double held_x(AgentId id) const {
-    for (const StateMessage& m : gate.latest(0))
-      if (m.view.id == id) return m.view.q.x();
-    return -1.0;
+    double x = -1.0;
+    gate.for_each_latest(0, [&](const StateMessage& m) {
+      if (m.view.id == id) x = m.view.q.x();
+    });
+    return x;
   }
   std::uint8_t suspected(AgentId id) const {
     const auto it = gate.suspects().find(id);
