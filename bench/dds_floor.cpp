@@ -46,8 +46,9 @@ using qswarm::bench::sleep_until;
 
 // Shared by the processes (an anonymous mapping made before they fork).
 struct Shared {
-  std::atomic<int> matched{0};     // processes whose reader has matched every writer
-  std::atomic<double> start{0.0};  // the flight's first tick, once everyone matched
+  std::atomic<int> matched{0};      // processes whose reader has matched every writer
+  std::atomic<double> start{0.0};   // the flight's first tick, once everyone matched
+  std::atomic<bool> failed{false};  // a process could not start: nobody flies
 };
 
 struct Result {
@@ -120,14 +121,14 @@ Result fly(int i, int n, double seconds, double hz, bool multicast, int entries,
   // Matched: every other process's writer (and its own).
   const double give_up = now_s() + 120.0;
   dds::SubscriptionMatchedStatus st;
-  while (now_s() < give_up) {
+  while (now_s() < give_up && !shared.failed) {
     reader->get_subscription_matched_status(st);
     if (st.current_count >= n) break;
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
   r.matched = st.current_count >= n;
   if (shared.matched.fetch_add(1) + 1 == n) shared.start = std::ceil(now_s()) + 1.0;
-  while (shared.start.load() == 0.0 && now_s() < give_up + 10.0)
+  while (shared.start.load() == 0.0 && !shared.failed && now_s() < give_up + 10.0)
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   const double start = shared.start.load();
   if (start == 0.0) {
@@ -190,8 +191,14 @@ int main(int argc, char** argv) {
   if (mem == MAP_FAILED) return 1;
   Shared& shared = *new (mem) Shared();
   const std::vector<Result> all = qswarm::bench::in_processes<Result>(n, [&](int i) {
-    return fly(i, n, seconds, hz, mode == "multicast", entries, static_cast<std::uint32_t>(domain),
-               shared);
+    try {
+      return fly(i, n, seconds, hz, mode == "multicast", entries,
+                 static_cast<std::uint32_t>(domain), shared);
+    } catch (const std::exception& e) {  // its ports taken (another run on DOMAIN), ...
+      std::fprintf(stderr, "dds_floor: process %d: %s\n", i + 1, e.what());
+      shared.failed = true;  // the others stop waiting for it
+      return Result{};
+    }
   });
   const long unmatched =
       std::count_if(all.begin(), all.end(), [](const Result& x) { return !x.matched; });
