@@ -20,6 +20,7 @@
 #include <cerrno>
 #include <chrono>
 #include <cstdlib>
+#include <cstring>
 #include <exception>
 #include <mutex>
 #include <stdexcept>
@@ -181,25 +182,35 @@ DdsParticipant::DdsParticipant(const ParticipantOptions& opts) : opts_(opts) {
       throw std::runtime_error("dds: " + problem);
     }
     pqos.wire_protocol().participant_id = id;
+    bool lost_ports = false;
     {
       const CreatingParticipant creating;
+      // Fast DDS ignores a port it could not open (another process took it after the check) and
+      // comes up deaf: both ports must be this process's. A participant that lost one is deleted
+      // by the thread that made it: deleting may log, and Fast DDS starts its logging thread on
+      // first use, at the nice value of the thread that logs.
       // The writer registry listens from the start: it must hear every writer before a reader
       // can match it. Discovery callbacks only (no entity status goes to it).
       const auto create = [&] {
         participant_ = dds::DomainParticipantFactory::get_instance()->create_participant(
             opts.domain_id, pqos, writers_.get(), dds::StatusMask::none());
+        if (!participant_ ||
+            (this_process_holds_udp_port(PortPlan::discovery_port(opts.domain_id, id)) &&
+             this_process_holds_udp_port(PortPlan::data_port(opts.domain_id, id))))
+          return;
+        participant_->set_listener(nullptr);
+        dds::DomainParticipantFactory::get_instance()->delete_participant(participant_);
+        participant_ = nullptr;
+        lost_ports = true;
       };
-      if (opts.threads_nice > 0) {
+      if (opts.threads_nice != 0) {
         // Threads inherit their creator's nice value, and an unprivileged process cannot take a
-        // raised one back: a helper thread made nicer creates the participant (and so starts
-        // its threads), while this thread keeps its priority.
+        // raised one back: a helper thread of another nice value creates the participant (and so
+        // starts its threads), while this thread keeps its priority.
         std::exception_ptr failed;
         std::thread helper([&] {
           try {
-            const auto tid = static_cast<id_t>(::gettid());
-            errno = 0;
-            const int base = ::getpriority(PRIO_PROCESS, tid);
-            if (errno == 0) (void)::setpriority(PRIO_PROCESS, tid, base + opts.threads_nice);
+            threads_priority_ = change_thread_nice(opts.threads_nice);
             create();
           } catch (...) {
             failed = std::current_exception();
@@ -211,17 +222,10 @@ DdsParticipant::DdsParticipant(const ParticipantOptions& opts) : opts_(opts) {
         create();
       }
     }
-    if (!participant_)
+    if (participant_) break;
+    if (!lost_ports)
       throw std::runtime_error("dds: cannot create a participant on domain " +
                                std::to_string(opts.domain_id));
-    // Fast DDS ignores a port it could not open (another process took it after the check) and
-    // comes up deaf: both ports must be this process's.
-    if (this_process_holds_udp_port(PortPlan::discovery_port(opts.domain_id, id)) &&
-        this_process_holds_udp_port(PortPlan::data_port(opts.domain_id, id)))
-      break;
-    participant_->set_listener(nullptr);
-    dds::DomainParticipantFactory::get_instance()->delete_participant(participant_);
-    participant_ = nullptr;
     if (given || attempt >= 16)
       throw std::runtime_error("dds: participant id " + std::to_string(id) + " on domain " +
                                std::to_string(opts.domain_id) +
@@ -234,6 +238,18 @@ DdsParticipant::~DdsParticipant() {
   participant_->set_listener(nullptr);  // waits for a discovery callback in progress
   participant_->delete_contained_entities();
   dds::DomainParticipantFactory::get_instance()->delete_participant(participant_);
+}
+
+std::string change_thread_nice(int delta) {
+  const auto tid = static_cast<id_t>(::gettid());
+  errno = 0;
+  const int was = ::getpriority(PRIO_PROCESS, tid);
+  if (errno != 0) return std::string("nice value unknown: ") + std::strerror(errno);
+  const int want = std::clamp(was + delta, -20, 19);
+  if (::setpriority(PRIO_PROCESS, tid, want) != 0)
+    return "nice " + std::to_string(was) + " (cannot change it to " + std::to_string(want) + ": " +
+           std::strerror(errno) + ")";
+  return "nice " + std::to_string(want) + " (was " + std::to_string(was) + ")";
 }
 
 std::vector<std::string> ipv4_addresses(const std::string& host, int& error) {

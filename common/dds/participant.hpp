@@ -56,6 +56,8 @@ struct ParticipantOptions {
   // Fast DDS's threads (receive, events, discovery) run this much nicer than the thread that
   // creates the participant: when the CPU is short, that thread (an agent's tick) goes first and
   // samples wait in their sockets, where the newest one wins anyway. 0: the same priority.
+  // Negative: ahead of it (the supervisor's receive threads, which stamp arrivals), where the
+  // host allows it (root, or RLIMIT_NICE); elsewhere they keep its priority (threads_priority()).
   int threads_nice = 0;
   // DDS-Security: a keystore written by `swarm keys` and the identity in it this participant
   // speaks as ("agent-3", "supervisor"). Empty keystore: a plain participant. Fast DDS 2.9 has no
@@ -81,12 +83,20 @@ class DdsParticipant {
   bool secure() const { return !opts_.keystore.empty(); }
   // The other participants' state and record writers, and the agent each is bound to.
   const WriterRegistry& writers() const { return *writers_; }
+  // What Fast DDS's threads run at, for the log ("" with threads_nice 0).
+  const std::string& threads_priority() const { return threads_priority_; }
 
  private:
   ParticipantOptions opts_;
   std::unique_ptr<WriterRegistry> writers_ = std::make_unique<WriterRegistry>();
   eprosima::fastdds::dds::DomainParticipant* participant_ = nullptr;
+  std::string threads_priority_;
 };
+
+// Changes the calling thread's nice value by `delta` (negative: a higher priority), before it
+// starts threads, which inherit it; says what it runs at, or why it kept its priority (an
+// unprivileged process may not raise it).
+std::string change_thread_nice(int delta);
 
 // Turns off the writer liveliness protocol (two reliable endpoints matched with every discovered
 // participant): no writer of the project asserts liveliness (every one keeps the default infinite

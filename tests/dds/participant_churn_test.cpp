@@ -169,5 +169,31 @@ TEST(ParticipantThreads, FastDdsThreadsRunNicerThanTheThreadThatCreatedThem) {
   EXPECT_EQ(thread_nice_values().at(static_cast<int>(::gettid())), self);
 }
 
+// The supervisor's receive threads stamp arrivals: they run ahead of the thread that made them
+// where the host allows it, and the participant says which it was.
+TEST(ParticipantThreads, FastDdsThreadsRunAheadWhereTheHostAllowsItAndSaySo) {
+  const std::map<int, int> before = thread_nice_values();
+  const int self = before.at(static_cast<int>(::gettid()));
+  ParticipantOptions o;
+  o.domain_id = static_cast<std::uint32_t>(test::test_domain().domain());
+  o.name = "keener-threads";
+  o.threads_nice = -3;
+  const DdsParticipant p(o);
+  const bool raised = p.threads_priority().find("cannot") == std::string::npos;
+  const int want = raised ? std::max(self - 3, -20) : self;
+  if (raised) {
+    EXPECT_EQ(p.threads_priority(),
+              "nice " + std::to_string(want) + " (was " + std::to_string(self) + ")");
+  }
+  int started = 0;
+  for (const auto& [tid, nice] : thread_nice_values()) {
+    if (before.count(tid)) continue;
+    ++started;
+    EXPECT_EQ(nice, want) << "thread " << tid << ": " << p.threads_priority();
+  }
+  EXPECT_GE(started, 2);
+  EXPECT_EQ(thread_nice_values().at(static_cast<int>(::gettid())), self);
+}
+
 }  // namespace
 }  // namespace qswarm
