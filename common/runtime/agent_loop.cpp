@@ -81,6 +81,7 @@ AgentLoop::AgentLoop(const RunConfig& rc, AgentId id, const AgentLoopOptions& op
       runtime_(params_for(rc, id, opts), faulty_),
       life_(lifecycle_config(rc, id, opts, clock.shared_origin_s()), clock.now_s()),
       neighbourhood_(rc, id) {
+  runtime_.set_wall_clock(&clock_);
   update_interest();
 }
 
@@ -119,7 +120,6 @@ AgentLoop::Poll AgentLoop::poll() {
   if (!s.warning.empty()) r.notes.push_back({true, s.warning});
   if (!s.progress.empty()) r.notes.push_back({false, s.progress});
   if (s.swarm_time_s >= 0.0) faulty_.set_time(s.swarm_time_s);
-  runtime_.set_wall_ns(clock_.wall_ns());  // what samples published now carry
   if (s.announce) runtime_.publish(*s.announce);
   if (s.start) {
     runtime_.set_start_time(s.start_time_s);

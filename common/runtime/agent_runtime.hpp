@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "common/clock/clock.hpp"
 #include "common/core/airframe.hpp"
 #include "common/core/avoidance.hpp"
 #include "common/core/dynamics.hpp"
@@ -56,8 +57,9 @@ struct AgentEvent {
 };
 
 // One agent: its quadcopter (or particle), its tracking controller and its agreement law, stepped
-// in simulated time. No clock, no I/O: AgentLoop paces it (in real time in swarm-agent, on a
-// manual clock in the in-process swarm).
+// in simulated time. No I/O, and no clock but the one it reads the wall time its samples carry
+// from: AgentLoop paces it (in real time in swarm-agent, on a manual clock in the in-process
+// swarm).
 class AgentRuntime {
  public:
   AgentRuntime(AgentParams p, NeighborBus& bus);
@@ -86,8 +88,10 @@ class AgentRuntime {
   std::uint64_t published() const { return seq_; }
   int steps_per_tick() const { return steps_per_tick_; }
 
-  // Stamps for publication: the loop injects the wall time and its counters.
-  void set_wall_ns(std::int64_t wall_ns) { wall_ns_ = wall_ns; }
+  // Stamps for publication: the loop injects its clock and counters. A sample carries the wall
+  // time at which it is handed to the transport (as DDS's source timestamp would), so that its age
+  // where it arrives is its time in transit, not also the tick that computed it (none: 0).
+  void set_wall_clock(const Clock* clock) { wall_clock_ = clock; }
   void set_fault_counters(const FaultCounters& c) { faults_ = c; }
   int recovered_flows() const { return law_->recovered_count(); }
   // Simulated time of the law's first tick (-1 before): the start barrier's first tick, or up to
@@ -139,7 +143,7 @@ class AgentRuntime {
   std::map<AgentId, Peer> peers_;
   std::set<AgentId> live_;
   std::vector<std::pair<AgentId, double>> initial_links_;  // links at the law's first tick
-  std::int64_t wall_ns_ = 0;
+  const Clock* wall_clock_ = nullptr;
   std::uint64_t received_ = 0, dropped_ = 0, overruns_ = 0;
   std::vector<AgentId> strangers_;
   std::vector<Suspect> suspects_;
