@@ -1,6 +1,7 @@
 #include "common/transport/sample_gate.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 
 namespace qswarm {
@@ -82,6 +83,35 @@ std::uint8_t SampleGate::notice_bits(AgentId id, std::uint8_t kinds) {
 
 bool SampleGate::notice(AgentId id, std::uint8_t kinds) { return notice_bits(id, kinds) != 0; }
 
+void ArrivalAges::add(std::int64_t age_ns) {
+  const double us = static_cast<double>(age_ns) * 1e-3;
+  const int bin =
+      us < 10.0 ? 0
+                : std::min(kBins - 1, 1 + static_cast<int>(std::floor(4.0 * std::log2(us / 10.0))));
+  ++count[static_cast<std::size_t>(bin)];
+}
+
+std::uint64_t ArrivalAges::total() const {
+  std::uint64_t n = 0;
+  for (const std::uint64_t c : count) n += c;
+  return n;
+}
+
+double ArrivalAges::upper_edge_ms(int bin) { return 0.01 * std::exp2(0.25 * bin); }
+
+double ArrivalAges::quantile_ms(double q) const {
+  const std::uint64_t n = total();
+  if (n == 0) return -1.0;
+  const auto want =
+      static_cast<std::uint64_t>(std::ceil(std::clamp(q, 0.0, 1.0) * static_cast<double>(n)));
+  std::uint64_t seen = 0;
+  for (int b = 0; b < kBins; ++b) {
+    seen += count[static_cast<std::size_t>(b)];
+    if (seen >= std::max<std::uint64_t>(want, 1)) return upper_edge_ms(b);
+  }
+  return upper_edge_ms(kBins - 1);
+}
+
 SampleGate::Result SampleGate::admit(const StateMessage& m, const std::string& why,
                                      std::int64_t now_wall_ns, const WriterId& writer) {
   Result r;
@@ -119,6 +149,7 @@ SampleGate::Result SampleGate::admit(const StateMessage& m, const std::string& w
     a.owner = writer;
     interleaved(a, writer);
     ++counters_.received;
+    if (now_wall_ns > 0 && m.wall_ns > 0) counters_.ages.add(now_wall_ns - m.wall_ns);
     return r;
   }
   Agent& a = it->second;
@@ -160,6 +191,7 @@ SampleGate::Result SampleGate::admit(const StateMessage& m, const std::string& w
   a.held = m;
   a.held_at_ns = now_wall_ns;
   ++counters_.received;
+  if (now_wall_ns > 0 && m.wall_ns > 0) counters_.ages.add(now_wall_ns - m.wall_ns);
   return r;
 }
 

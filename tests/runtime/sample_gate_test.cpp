@@ -63,6 +63,43 @@ TEST(SampleGate, EachHeldAgentIsVisitedOnceInIdOrderButItsOwn) {
   EXPECT_EQ(seen, (std::vector<std::pair<AgentId, double>>{{2, 2.5}, {3, 3.0}}));
 }
 
+TEST(SampleGate, CountsTheArrivalAgesOfAcceptedSamplesThatCarryAWallTime) {
+  SampleGate gate;
+  const auto at = [&](AgentId id, std::uint64_t seq, std::int64_t sent_ns, std::int64_t now_ns) {
+    StateMessage m = sample(id, seq, kLife);
+    m.wall_ns = sent_ns;
+    return gate.admit(m, check_message(m), now_ns, writer(static_cast<std::uint8_t>(id)));
+  };
+  // 98 samples 1 ms old, one 3 ms old, one 250 ms old
+  for (std::uint64_t k = 1; k <= 98; ++k) at(1, k, kNow + k * 20 * kMs, kNow + k * 20 * kMs + kMs);
+  at(2, 1, kNow, kNow + 3 * kMs);
+  at(2, 2, kNow, kNow + 250 * kMs);
+  // refused (stale), without a wall time, or without the receiver's: not counted
+  at(2, 2, kNow, kNow + 900 * kMs);
+  at(3, 1, 0, kNow);
+  at(3, 2, kNow, 0);
+  const ArrivalAges& a = gate.counters().ages;
+  EXPECT_EQ(a.total(), 100u);
+  // a bin's upper edge: at most 19 % above the true value, never below it
+  EXPECT_GE(a.quantile_ms(0.5), 1.0);
+  EXPECT_LT(a.quantile_ms(0.5), 1.19);
+  EXPECT_GE(a.quantile_ms(0.99), 3.0);
+  EXPECT_LT(a.quantile_ms(0.99), 3.57);
+  EXPECT_GE(a.quantile_ms(1.0), 250.0);
+  EXPECT_LT(a.quantile_ms(1.0), 297.5);
+  EXPECT_EQ(ArrivalAges{}.quantile_ms(0.5), -1.0);
+}
+
+TEST(SampleGate, ArrivalAgesOutsideTheBinsLandInTheFirstAndLast) {
+  ArrivalAges a;
+  a.add(-5 * kMs);  // a clock stepped back: counted, as young
+  a.add(0);
+  a.add(3'600'000 * kMs);  // an hour
+  EXPECT_EQ(a.count.front(), 2u);
+  EXPECT_EQ(a.count.back(), 1u);
+  EXPECT_DOUBLE_EQ(a.quantile_ms(0.5), 0.01);
+}
+
 TEST(SampleGate, AnImpersonatorBesideTheRealAgentIsNamedAndRefusedWhileTheRealOneSpeaks) {
   Feed f;
   const WriterId real = writer(1), forger = writer(2);
