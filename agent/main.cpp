@@ -120,6 +120,8 @@ int main(int argc, char** argv) {
     AgentLoop loop(*rc, id, f.loop, bus, clock);
     log->info("agent {} up: domain {}, {} law, time scale {}", id, rc->transport.domain_id,
               to_string(rc->agent.law.kind), f.process.time_scale);
+    if (!participant.threads_priority().empty())
+      log->info("Fast DDS's threads run at {}", participant.threads_priority());
     int exit_code = 0;
     while (!g_stop) {
       const AgentLoop::Poll p = loop.poll();

@@ -20,9 +20,6 @@
 #include "common/view/view_server.hpp"
 
 namespace {
-// How much higher than the agents the supervisor's receive threads run (nice values), where the
-// host allows it.
-constexpr int kReceivePriorityRaise = 10;
 std::atomic<bool> g_stop{false};
 void on_signal(int) { g_stop = true; }
 }  // namespace
@@ -116,13 +113,7 @@ int main(int argc, char** argv) {
     dopt.state.recorder = true;  // it reads what agents send it, not their state stream
     dopt.participant.test_drop_data_percent = 0;
     dopt.state.hear_all_runs = true;  // so that another run on this domain is seen, and said
-    // A sample's age is read when its receive thread takes it: those threads run ahead of the
-    // agents where the host allows it, so that the ages recorded are the samples' time in transit,
-    // not also a wait for a core the swarm's ticks hold. The recording itself (this thread) keeps
-    // the agents' priority: ahead of them, its graph snapshots made their ticks late.
-    dopt.participant.threads_nice = -kReceivePriorityRaise;
     DdsBus bus(dopt, clock);
-    logger->info("Fast DDS's threads run at {}", bus.participant().threads_priority());
     SupervisorOptions so;
     so.time_scale = opts.time_scale;
     so.start_timeout_s = start_timeout_s;

@@ -56,8 +56,8 @@ struct ParticipantOptions {
   // Fast DDS's threads (receive, events, discovery) run this much nicer than the thread that
   // creates the participant: when the CPU is short, that thread (an agent's tick) goes first and
   // samples wait in their sockets, where the newest one wins anyway. 0: the same priority.
-  // Negative: ahead of it (the supervisor's receive threads, which stamp arrivals), where the
-  // host allows it (root, or RLIMIT_NICE); elsewhere they keep its priority (threads_priority()).
+  // Negative: ahead of it, where the host allows it (root, or RLIMIT_NICE); elsewhere they keep
+  // its priority. threads_priority() says which.
   int threads_nice = 0;
   // DDS-Security: a keystore written by `swarm keys` and the identity in it this participant
   // speaks as ("agent-3", "supervisor"). Empty keystore: a plain participant. Fast DDS 2.9 has no

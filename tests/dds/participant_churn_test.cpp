@@ -169,8 +169,8 @@ TEST(ParticipantThreads, FastDdsThreadsRunNicerThanTheThreadThatCreatedThem) {
   EXPECT_EQ(thread_nice_values().at(static_cast<int>(::gettid())), self);
 }
 
-// The supervisor's receive threads stamp arrivals: they run ahead of the thread that made them
-// where the host allows it, and the participant says which it was.
+// Asked to run ahead of the thread that made them, Fast DDS's threads do where the host allows
+// it, and the participant says which it was.
 TEST(ParticipantThreads, FastDdsThreadsRunAheadWhereTheHostAllowsItAndSaySo) {
   const std::map<int, int> before = thread_nice_values();
   const int self = before.at(static_cast<int>(::gettid()));
