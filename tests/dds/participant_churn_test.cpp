@@ -149,50 +149,52 @@ std::map<int, int> thread_nice_values() {
   return out;
 }
 
+// What a participant made with `threads_nice` did to the nice values of the threads it started
+// and of the thread that made it, and what it said.
+struct StartedThreads {
+  int self = 0, self_after = 0;
+  std::vector<int> nice;  // of each thread it started
+  std::string said;       // DdsParticipant::threads_priority()
+};
+StartedThreads start_threads(int threads_nice, const char* name) {
+  const std::map<int, int> before = thread_nice_values();
+  StartedThreads s;
+  s.self = before.at(static_cast<int>(::gettid()));
+  ParticipantOptions o;
+  o.domain_id = static_cast<std::uint32_t>(test::test_domain().domain());
+  o.name = name;
+  o.threads_nice = threads_nice;
+  const DdsParticipant p(o);
+  s.said = p.threads_priority();
+  for (const auto& [tid, nice] : thread_nice_values())
+    if (!before.count(tid)) s.nice.push_back(nice);
+  s.self_after = thread_nice_values().at(static_cast<int>(::gettid()));
+  return s;
+}
+
 // An agent's tick goes first when the CPU is short: the threads Fast DDS starts run nicer, and
 // the thread that created the participant keeps its priority.
 TEST(ParticipantThreads, FastDdsThreadsRunNicerThanTheThreadThatCreatedThem) {
-  const std::map<int, int> before = thread_nice_values();
-  const int self = before.at(static_cast<int>(::gettid()));
-  ParticipantOptions o;
-  o.domain_id = static_cast<std::uint32_t>(test::test_domain().domain());
-  o.name = "nicer-threads";
-  o.threads_nice = 3;
-  const DdsParticipant p(o);
-  int started = 0;
-  for (const auto& [tid, nice] : thread_nice_values()) {
-    if (before.count(tid)) continue;
-    ++started;
-    EXPECT_EQ(nice, std::min(self + 3, 19)) << "thread " << tid;
-  }
-  EXPECT_GE(started, 2);  // at least a receive thread and the event thread
-  EXPECT_EQ(thread_nice_values().at(static_cast<int>(::gettid())), self);
+  const StartedThreads s = start_threads(3, "nicer-threads");
+  const int want = std::min(s.self + 3, 19);
+  EXPECT_GE(s.nice.size(), 2u);  // at least a receive thread and the event thread
+  for (const int nice : s.nice) EXPECT_EQ(nice, want);
+  EXPECT_EQ(s.said, "nice " + std::to_string(want) + " (was " + std::to_string(s.self) + ")");
+  EXPECT_EQ(s.self_after, s.self);
 }
 
 // Asked to run ahead of the thread that made them, Fast DDS's threads do where the host allows
 // it, and the participant says which it was.
 TEST(ParticipantThreads, FastDdsThreadsRunAheadWhereTheHostAllowsItAndSaySo) {
-  const std::map<int, int> before = thread_nice_values();
-  const int self = before.at(static_cast<int>(::gettid()));
-  ParticipantOptions o;
-  o.domain_id = static_cast<std::uint32_t>(test::test_domain().domain());
-  o.name = "keener-threads";
-  o.threads_nice = -3;
-  const DdsParticipant p(o);
-  const bool raised = p.threads_priority().find("cannot") == std::string::npos;
-  const int want = raised ? std::max(self - 3, -20) : self;
+  const StartedThreads s = start_threads(-3, "keener-threads");
+  const bool raised = s.said.find("cannot") == std::string::npos;
+  const int want = raised ? std::max(s.self - 3, -20) : s.self;
   if (raised) {
-    EXPECT_EQ(p.threads_priority(),
-              "nice " + std::to_string(want) + " (was " + std::to_string(self) + ")");
+    EXPECT_EQ(s.said, "nice " + std::to_string(want) + " (was " + std::to_string(s.self) + ")");
   }
-  int started = 0;
-  for (const auto& [tid, nice] : thread_nice_values()) {
-    if (before.count(tid)) continue;
-    ++started;
-    EXPECT_EQ(nice, want) << "thread " << tid << ": " << p.threads_priority();
-  }
-  EXPECT_GE(started, 2);
-  EXPECT_EQ(thread_nice_values().at(static_cast<int>(::gettid())), self);
+  EXPECT_GE(s.nice.size(), 2u);
+  for (const int nice : s.nice) EXPECT_EQ(nice, want) << s.said;
+  EXPECT_EQ(s.self_after, s.self);
 }
 
 }  // namespace
