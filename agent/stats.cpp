@@ -38,8 +38,10 @@ bool write_stats(const std::filesystem::path& path, const AgentLoop& loop, const
       << loop.overruns() << "\ndiscovery_s " << loop.lifecycle().discovery_s() << "\nmax_rss_kb "
       << ru.ru_maxrss << "\nreceived " << c.received << "\ndropped " << c.dropped
       << "\ninterest_changes " << loop.interest_changes() << "\nparticipants " << participants_known
-      << "\narrival_age_p50_ms " << c.ages.quantile_ms(0.5) << "\narrival_age_p99_ms "
-      << c.ages.quantile_ms(0.99) << "\n";
+      << "\narrival_age_early " << c.ages.early << "\n";
+  if (c.ages.total() > 0)
+    out << "arrival_age_p50_ms " << c.ages.quantile_ms(0.5) << "\narrival_age_p99_ms "
+        << c.ages.quantile_ms(0.99) << "\n";
   return static_cast<bool>(out.flush());
 }
 

@@ -12,16 +12,20 @@
 
 namespace qswarm {
 
-// How old accepted samples were when they arrived (the receiver's wall clock against the one the
-// sample carries: same-host ages), in bins four to an octave from 10 us (the first also holds
-// anything younger, the last anything older than 15 s).
+// How old accepted samples were when they arrived: the receiver's wall clock against the one the
+// sample carries, which only means something between processes of one host (one clock) and
+// which a sender may forge. Bins four to an octave from 10 us: the first holds everything younger
+// than 10 us, the last, open, everything from 14.8 s on. A sample stamped after it arrived (a
+// clock stepped back, a forged stamp) is counted apart, in no bin.
 struct ArrivalAges {
   static constexpr int kBins = 84;
   std::array<std::uint64_t, kBins> count{};
+  std::uint64_t early = 0;  // stamped after it arrived
   void add(std::int64_t age_ns);
-  std::uint64_t total() const;
-  // The q-quantile (0 < q <= 1) in milliseconds: the upper edge of its bin (at most 19 % above
-  // the true value); -1 without samples.
+  std::uint64_t total() const;  // in the bins
+  // The q-quantile (0 < q <= 1) of the binned ages in milliseconds: the upper edge of its bin,
+  // at most 19 % above the true value (0.01 ms for anything in the first), infinity in the last;
+  // -1 without samples.
   double quantile_ms(double q) const;
   static double upper_edge_ms(int bin);
 };

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 
 namespace qswarm {
 
@@ -84,6 +85,10 @@ std::uint8_t SampleGate::notice_bits(AgentId id, std::uint8_t kinds) {
 bool SampleGate::notice(AgentId id, std::uint8_t kinds) { return notice_bits(id, kinds) != 0; }
 
 void ArrivalAges::add(std::int64_t age_ns) {
+  if (age_ns < 0) {
+    ++early;
+    return;
+  }
   const double us = static_cast<double>(age_ns) * 1e-3;
   const int bin =
       us < 10.0 ? 0
@@ -97,17 +102,20 @@ std::uint64_t ArrivalAges::total() const {
   return n;
 }
 
-double ArrivalAges::upper_edge_ms(int bin) { return 0.01 * std::exp2(0.25 * bin); }
+double ArrivalAges::upper_edge_ms(int bin) {
+  if (bin >= kBins - 1) return std::numeric_limits<double>::infinity();
+  return 0.01 * std::exp2(0.25 * bin);
+}
 
 double ArrivalAges::quantile_ms(double q) const {
   const std::uint64_t n = total();
-  if (n == 0) return -1.0;
-  const auto want =
-      static_cast<std::uint64_t>(std::ceil(std::clamp(q, 0.0, 1.0) * static_cast<double>(n)));
+  if (n == 0 || !(q > 0.0)) return -1.0;
+  const auto want = std::max<std::uint64_t>(
+      1, static_cast<std::uint64_t>(std::ceil(std::min(q, 1.0) * static_cast<double>(n))));
   std::uint64_t seen = 0;
   for (int b = 0; b < kBins; ++b) {
     seen += count[static_cast<std::size_t>(b)];
-    if (seen >= std::max<std::uint64_t>(want, 1)) return upper_edge_ms(b);
+    if (seen >= want) return upper_edge_ms(b);
   }
   return upper_edge_ms(kBins - 1);
 }

@@ -4,6 +4,9 @@
 // heard again, whatever numbers the forger used.
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <limits>
+
 #include "common/transport/sample_gate.hpp"
 
 namespace qswarm {
@@ -90,14 +93,19 @@ TEST(SampleGate, CountsTheArrivalAgesOfAcceptedSamplesThatCarryAWallTime) {
   EXPECT_EQ(ArrivalAges{}.quantile_ms(0.5), -1.0);
 }
 
-TEST(SampleGate, ArrivalAgesOutsideTheBinsLandInTheFirstAndLast) {
+TEST(SampleGate, ArrivalAgesOutsideTheBinsAreCountedApartOrInTheOpenLastBin) {
   ArrivalAges a;
-  a.add(-5 * kMs);  // a clock stepped back: counted, as young
+  a.add(-5 * kMs);  // stamped after it arrived (a clock stepped back, a forged stamp): apart
   a.add(0);
-  a.add(3'600'000 * kMs);  // an hour
-  EXPECT_EQ(a.count.front(), 2u);
-  EXPECT_EQ(a.count.back(), 1u);
-  EXPECT_DOUBLE_EQ(a.quantile_ms(0.5), 0.01);
+  a.add(3'600'000 * kMs);  // an hour: the last bin, whose upper edge is open
+  a.add(std::numeric_limits<std::int64_t>::max());
+  EXPECT_EQ(a.early, 1u);
+  EXPECT_EQ(a.total(), 3u);
+  EXPECT_EQ(a.count.front(), 1u);
+  EXPECT_EQ(a.count.back(), 2u);
+  EXPECT_DOUBLE_EQ(a.quantile_ms(0.3), 0.01);
+  EXPECT_EQ(a.quantile_ms(0.99), std::numeric_limits<double>::infinity());
+  EXPECT_EQ(a.quantile_ms(std::nan("")), -1.0);
 }
 
 TEST(SampleGate, AnImpersonatorBesideTheRealAgentIsNamedAndRefusedWhileTheRealOneSpeaks) {
