@@ -194,13 +194,21 @@ DdsParticipant::DdsParticipant(const ParticipantOptions& opts) : opts_(opts) {
       const auto create = [&] {
         participant_ = dds::DomainParticipantFactory::get_instance()->create_participant(
             opts.domain_id, pqos, writers_.get(), dds::StatusMask::none());
-        if (!participant_ ||
-            (this_process_holds_udp_port(PortPlan::discovery_port(opts.domain_id, id)) &&
-             this_process_holds_udp_port(PortPlan::data_port(opts.domain_id, id))))
-          return;
-        participant_->set_listener(nullptr);
-        dds::DomainParticipantFactory::get_instance()->delete_participant(participant_);
-        participant_ = nullptr;
+        if (!participant_) return;
+        const auto drop = [&] {
+          participant_->set_listener(nullptr);  // it points at writers_, which may be going
+          dds::DomainParticipantFactory::get_instance()->delete_participant(participant_);
+          participant_ = nullptr;
+        };
+        try {
+          if (this_process_holds_udp_port(PortPlan::discovery_port(opts.domain_id, id)) &&
+              this_process_holds_udp_port(PortPlan::data_port(opts.domain_id, id)))
+            return;
+        } catch (...) {
+          drop();
+          throw;
+        }
+        drop();
         lost_ports = true;
       };
       if (opts.threads_nice != 0) {
@@ -246,9 +254,11 @@ std::string change_thread_nice(int delta) {
   const int was = ::getpriority(PRIO_PROCESS, tid);
   if (errno != 0) return std::string("nice value unknown: ") + std::strerror(errno);
   const int want = std::clamp(was + delta, -20, 19);
-  if (::setpriority(PRIO_PROCESS, tid, want) != 0)
+  if (::setpriority(PRIO_PROCESS, tid, want) != 0) {
+    const int error = errno;
     return "nice " + std::to_string(was) + " (cannot change it to " + std::to_string(want) + ": " +
-           std::strerror(errno) + ")";
+           std::strerror(error) + ")";
+  }
   return "nice " + std::to_string(want) + " (was " + std::to_string(was) + ")";
 }
 
