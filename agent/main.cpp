@@ -120,8 +120,11 @@ int main(int argc, char** argv) {
     AgentLoop loop(*rc, id, f.loop, bus, clock);
     log->info("agent {} up: domain {}, {} law, time scale {}", id, rc->transport.domain_id,
               to_string(rc->agent.law.kind), f.process.time_scale);
+    // Those it starts later run at the tick's: a reader's own multicast receive thread is started
+    // by the thread that makes the reader.
     if (!participant.threads_priority().empty())
-      log->info("Fast DDS's threads run at {}", participant.threads_priority());
+      log->info("Fast DDS's threads started with the participant run at {}",
+                participant.threads_priority());
     int exit_code = 0;
     while (!g_stop) {
       const AgentLoop::Poll p = loop.poll();

@@ -57,7 +57,9 @@ struct ParticipantOptions {
   // creates the participant: when the CPU is short, that thread (an agent's tick) goes first and
   // samples wait in their sockets, where the newest one wins anyway. 0: the same priority.
   // Negative: ahead of it, where the host allows it (root, or RLIMIT_NICE); elsewhere they keep
-  // its priority. threads_priority() says which.
+  // its priority. threads_priority() says which. Only the threads the participant starts as it is
+  // made: a thread Fast DDS starts later (a reader's own multicast receive thread, started by the
+  // thread that makes the reader) runs at its maker's priority.
   int threads_nice = 0;
   // DDS-Security: a keystore written by `swarm keys` and the identity in it this participant
   // speaks as ("agent-3", "supervisor"). Empty keystore: a plain participant. Fast DDS 2.9 has no
