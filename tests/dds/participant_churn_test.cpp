@@ -133,17 +133,23 @@ TEST(ParticipantPorts, AnExplicitIdHoldsItsPortsAndASecondOneOnThemIsRefusedNami
   }
 }
 
-// The nice value of each of this process's threads (/proc/self/task/*/stat, field 19).
+// The nice value of each of this process's threads (/proc/self/task/*/stat, field 19). A thread
+// that ended after the directory was listed (the participant's helper, joined a moment ago, can
+// still be listed) has no stat to read any more: it is left out.
 std::map<int, int> thread_nice_values() {
   std::map<int, int> out;
   for (const auto& t : std::filesystem::directory_iterator("/proc/self/task")) {
     std::ifstream stat(t.path() / "stat");
     std::string line;
-    std::getline(stat, line);
-    std::istringstream rest(line.substr(line.rfind(')') + 2));  // after "pid (comm) "
+    if (!std::getline(stat, line)) continue;
+    const auto paren = line.rfind(')');
+    if (paren == std::string::npos || paren + 2 > line.size()) continue;
+    std::istringstream rest(line.substr(paren + 2));  // after "pid (comm) "
     std::string field;
-    for (int i = 3; i <= 19 && rest >> field; ++i) {
+    int i = 3;
+    for (; i <= 19 && rest >> field; ++i) {
     }
+    if (i <= 19) continue;
     out[std::stoi(t.path().filename().string())] = std::stoi(field);
   }
   return out;
