@@ -252,7 +252,8 @@ std::string change_thread_nice(int delta) {
   const auto tid = static_cast<id_t>(::gettid());
   errno = 0;
   const int was = ::getpriority(PRIO_PROCESS, tid);
-  if (errno != 0) return std::string("nice value unknown: ") + std::strerror(errno);
+  if (const int error = errno; error != 0)
+    return std::string("nice value unknown: ") + std::strerror(error);
   const int want = std::clamp(was + delta, -20, 19);
   if (::setpriority(PRIO_PROCESS, tid, want) != 0) {
     const int error = errno;

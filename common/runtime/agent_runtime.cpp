@@ -63,14 +63,14 @@ void AgentRuntime::publish(Phase phase) {
   m.faults = faults_;
   m.strangers = strangers_;
   m.suspects = suspects_;
-  m.wall_ns = wall_clock_ ? wall_clock_->wall_ns() : 0;
+  m.wall_ns = wall_now_ns();
   bus_.publish(m);
   // The recorder gets every k-th sample, and the goodbye (a departure it sees at once), with the
   // links and the initial links.
   if (m.seq % p_.start.record_every == 0 || phase == Phase::kStopping) {
     if (!p_.start.links_to_neighbours) add_links();
     m.initial_links = initial_links_;
-    m.wall_ns = wall_clock_ ? wall_clock_->wall_ns() : 0;  // handed over after the state sample
+    m.wall_ns = wall_now_ns();  // handed over after the state sample
     bus_.record(m);
   }
 }

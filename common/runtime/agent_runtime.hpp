@@ -109,6 +109,8 @@ class AgentRuntime {
 
  private:
   void consensus_tick(std::vector<AgentEvent>& events);
+  // The wall time a sample handed over now carries (0 without a clock).
+  std::int64_t wall_now_ns() const { return wall_clock_ ? wall_clock_->wall_ns() : 0; }
   void physics(double dt);
 
   AgentParams p_;

@@ -120,6 +120,11 @@ double ArrivalAges::quantile_ms(double q) const {
   return upper_edge_ms(kBins - 1);
 }
 
+void SampleGate::count_accepted(const StateMessage& m, std::int64_t now_wall_ns) {
+  ++counters_.received;
+  if (now_wall_ns > 0 && m.wall_ns > 0) counters_.ages.add(now_wall_ns - m.wall_ns);
+}
+
 SampleGate::Result SampleGate::admit(const StateMessage& m, const std::string& why,
                                      std::int64_t now_wall_ns, const WriterId& writer) {
   Result r;
@@ -156,8 +161,7 @@ SampleGate::Result SampleGate::admit(const StateMessage& m, const std::string& w
     a.held_at_ns = now_wall_ns;
     a.owner = writer;
     interleaved(a, writer);
-    ++counters_.received;
-    if (now_wall_ns > 0 && m.wall_ns > 0) counters_.ages.add(now_wall_ns - m.wall_ns);
+    count_accepted(m, now_wall_ns);
     return r;
   }
   Agent& a = it->second;
@@ -198,8 +202,7 @@ SampleGate::Result SampleGate::admit(const StateMessage& m, const std::string& w
   }
   a.held = m;
   a.held_at_ns = now_wall_ns;
-  ++counters_.received;
-  if (now_wall_ns > 0 && m.wall_ns > 0) counters_.ages.add(now_wall_ns - m.wall_ns);
+  count_accepted(m, now_wall_ns);
   return r;
 }
 

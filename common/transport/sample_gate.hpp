@@ -118,6 +118,8 @@ class SampleGate {
   static bool implausible(const StateMessage& m, std::int64_t now_wall_ns);
   bool interleaved(Agent& a, const WriterId& w);
   std::uint8_t notice_bits(AgentId id, std::uint8_t kinds);
+  // Counts an accepted sample, and its age on arrival where both clocks are known.
+  void count_accepted(const StateMessage& m, std::int64_t now_wall_ns);
 
   std::map<AgentId, Agent> agents_;
   std::set<AgentId> warned_;
