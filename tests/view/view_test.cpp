@@ -20,6 +20,7 @@
 #include <functional>
 #include <future>
 #include <limits>
+#include <map>
 #include <mutex>
 #include <optional>
 #include <set>
@@ -607,12 +608,52 @@ TEST_F(ViewServerTest, ProtobufChannelsCarryTheRecordsMessages) {
 
 TEST_F(ViewServerTest, AClientThatNeverReadsLosesFramesNotTheOthers) {
   ViewServerOptions o = options();
-  o.max_queue_frames = 8;
+  // Room for two frames of 512 samples (the queue counts messages): a client that reads keeps
+  // up, one that never reads fills it within a few frames.
+  o.max_queue_frames = 1100;
   ViewFeed feed;
   ViewServer server(o, feed, "{}", SceneSettings{});
   server.start();
-  // The stuck client: a real WebSocket that subscribes, then never reads again (its receive
-  // buffer kept small, so the server's socket fills soon).
+  const std::string both =
+      R"({"op":"subscribe","subscriptions":[{"id":1,"channelId":1},{"id":2,"channelId":2}]})";
+  Client good(server.port());
+  good.read();
+  good.read();
+  good.send(both);
+  // Reads until frame k's view, counting the samples (subscription 2) by their stamp on the way:
+  // frame k's samples follow its view, so they are counted on the way to frame k + 1's.
+  std::map<std::uint64_t, int> samples_at;
+  auto await_frame = [&](int k) {
+    const std::string needle = "\"t\":" + std::to_string(k) + ",";
+    const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+    while (std::chrono::steady_clock::now() < until) {
+      bool bin = false;
+      const std::string m = good.read(0.5, &bin);
+      if (!bin || m.size() < 13 || m[0] != '\x01') continue;
+      std::uint32_t sub = 0;
+      std::memcpy(&sub, m.data() + 1, 4);
+      std::uint64_t t_ns = 0;
+      std::memcpy(&t_ns, m.data() + 5, 8);
+      if (sub == 2) ++samples_at[t_ns / 1'000'000'000u];
+      if (sub == 1 && m.find(needle, 13) != std::string::npos) return true;
+    }
+    return false;
+  };
+  // 512 agents a frame: about 60 kB of JSON and 512 protobuf messages. The next frame comes
+  // once the good client has read this one, so how fast this process runs does not matter.
+  int frames = 0;
+  auto fly = [&](int from, int to) {
+    for (int k = from; k <= to; ++k) {
+      feed_swarm(feed, 512, k);
+      if (!await_frame(k)) return;  // stuck too
+      ++frames;
+    }
+  };
+  // Alone, a client that reads what it subscribed to loses nothing under these limits.
+  fly(1, 5);
+  EXPECT_EQ(server.counts().frames_dropped, 0u);
+  // The stuck client: a real WebSocket with the same subscriptions, which then never reads
+  // again (its receive buffer kept small, so the server's socket fills soon).
   asio::io_context ioc;
   websocket::stream<tcp::socket> stuck(ioc);
   stuck.next_layer().open(tcp::v4());
@@ -622,22 +663,12 @@ TEST_F(ViewServerTest, AClientThatNeverReadsLosesFramesNotTheOthers) {
     r.set(http::field::sec_websocket_protocol, "foxglove.websocket.v1");
   }));
   stuck.handshake("127.0.0.1", "/");
-  stuck.write(asio::buffer(std::string(
-      R"({"op":"subscribe","subscriptions":[{"id":1,"channelId":1},{"id":2,"channelId":2}]})")));
-  Client good(server.port());
-  good.read();
-  good.read();
-  good.send(R"({"op":"subscribe","subscriptions":[{"id":1,"channelId":1}]})");
-  // 512 agents a frame: about 60 kB of JSON and 512 protobuf messages. The next frame comes
-  // once the good client has read this one, so how fast this process runs does not matter.
-  int frames = 0;
-  for (int k = 1; k <= 60; ++k) {
-    feed_swarm(feed, 512, k);
-    if (good.await_view("\"t\":" + std::to_string(k) + ",").empty()) break;  // stuck too
-    ++frames;
-  }
+  stuck.write(asio::buffer(both));
+  fly(6, 60);
+  fly(61, 61);            // frame 60's samples come before this one's view
+  EXPECT_EQ(frames, 61);  // every one, while the stuck client lost some of its
   EXPECT_GT(server.counts().frames_dropped, 0u);
-  EXPECT_EQ(frames, 60);  // every one, while the stuck client lost some of its
+  for (std::uint64_t k = 1; k <= 60; ++k) EXPECT_EQ(samples_at[k], 512) << "frame " << k;
   std::lock_guard<std::mutex> lock(log_mu_);
   EXPECT_EQ(
       std::count_if(log_.begin(), log_.end(),
