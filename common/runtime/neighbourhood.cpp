@@ -60,9 +60,16 @@ Neighbourhood::Neighbourhood(const RunConfig& rc, AgentId self) : self_(self) {
   // partitions, and make DDS re-match, at every link that comes and goes).
   by_name_ = t.policy == TopologyPolicy::kStickyProximity;
   const double reach = t.threshold_m + t.hysteresis_m;
+  // A sender within the reach plus margin of the listener lies in a cell at most kSpan cells
+  // away: the two keep their cells up to keep_m outside them, so cells kSpan + 1 apart leave
+  // kSpan * cell_m - 2 * keep_m = the reach plus margin between them. Finer cells than one reach
+  // wide listen to less space around the agent (5 cells of half the width: 0.83 times as far each
+  // way, so its cells hold 0.69 times the senders in a plane and 0.58 times in space), for more
+  // partitions per reader and more frequent moves.
   const auto space = [&](char tag, double r) {
-    spaces_.push_back({tag, r + 2.0 * margin_m(r), 0.5 * margin_m(r), r + margin_m(r), std::nullopt,
-                       std::nullopt});
+    const double keep = 0.5 * margin_m(r), radius = r + margin_m(r);
+    spaces_.push_back(
+        {tag, (radius + 2.0 * keep) / kSpan, keep, radius, std::nullopt, std::nullopt});
   };
   if (t.policy == TopologyPolicy::kProximity || t.policy == TopologyPolicy::kStickyProximity)
     space('q', reach);
@@ -89,9 +96,9 @@ Interest Neighbourhood::update(const Vec3& p_W, const Vec3& q, const std::set<Ag
       in.near.push_back({s.tag, *s.anchor - keep, *s.anchor + keep, s.radius_m});
     }
     in.publish.push_back(cell_name(s.tag, *s.cell));
-    for (int dx = -1; dx <= 1; ++dx)
-      for (int dy = -1; dy <= 1; ++dy)
-        for (int dz = -1; dz <= 1; ++dz)
+    for (int dx = -kSpan; dx <= kSpan; ++dx)
+      for (int dy = -kSpan; dy <= kSpan; ++dy)
+        for (int dz = -kSpan; dz <= kSpan; ++dz)
           in.subscribe.push_back(cell_name(s.tag, *s.cell + Eigen::Vector3i(dx, dy, dz)));
   }
   if (reach_ && !spaces_.empty()) {

@@ -15,9 +15,9 @@ namespace qswarm {
 // neighbours soon, and no others, so that the traffic each process handles follows its degree, not
 // the swarm's size.
 //
-// Space is cut into cubic cells of the link reach (threshold + hysteresis) plus twice a margin; an
-// agent publishes into its cell and listens to that cell and the 26 around it. It keeps its cell
-// until it is half a margin outside it (moving cells makes DDS re-match its endpoints with every
+// Space is cut into cubic cells half as wide as the link reach (threshold + hysteresis) plus twice
+// a margin; an agent publishes into its cell and listens to the 5 x 5 x 5 cells about it (kSpan).
+// It keeps its cell until it is half a margin outside it (moving cells makes DDS re-match its endpoints with every
 // peer: an agent resting on a cell's border must not flap). The cells are in the space the topology
 // measures: consensus states for proximity, physical positions for radio range; and, with collision
 // avoidance, physical cells of the filter's reach too (a radio hears everyone near, whatever the
@@ -58,6 +58,8 @@ class Neighbourhood {
 
   // The margin beyond the link reach a cell leaves for links about to form.
   static double margin_m(double reach_m);
+  // How many cells on each side of its own an agent listens to.
+  static constexpr int kSpan = 2;
 
  private:
   struct Space {

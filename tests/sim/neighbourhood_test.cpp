@@ -27,19 +27,22 @@ RunConfig load(const std::string& text, const std::string& extra = "") {
 }
 
 TEST(Neighbourhood, CellsCoverTheLinkReachAndIdsCoverTheGraph) {
-  // Radio range 4.5 m (+ 0.5 hysteresis): cells of 5 + 1.25 m in physical space.
+  // Radio range 4.5 m (+ 0.5 hysteresis) and a margin of 1.25 m: cells of (5 + 2.5) / 2 m in
+  // physical space.
   const std::string four =
       "agents { id: 1 position { x: 0 y: 0 z: 0 } }\n"
       "agents { id: 2 position { x: 6 y: 0 z: 0 } }\n"
       "agents { id: 3 position { x: 10 y: 0 z: 0 } }\n"
       "agents { id: 4 position { x: 40 y: 0 z: 0 } }\n"
+      "agents { id: 5 position { x: 0 y: 12 z: 0 } }\n"
       "topology { policy: RANGE threshold_m: 4.5 hysteresis_m: 0.5 edges { a: 1 b: 4 } }\n";
   // Delivery NEIGHBOURS: the cells and the names, and everything they bring (3, 10 m from 1, is
-  // in the cells around it).
+  // in the cells around it; 5, 12 m from it, is three cells away, where cells a reach wide would
+  // have brought it too).
   const RunConfig cells = load(four, "transport { delivery: NEIGHBOURS }\n");
   const Interest by_cell = Neighbourhood(cells, 1).update(Vec3(0, 0, 0), Vec3(0, 0, 0), {});
   EXPECT_EQ(by_cell.publish, (std::vector<std::string>{"a1", "p0.0.0"}));
-  EXPECT_EQ(by_cell.subscribe.size(), 27u + 1u);  // 27 cells, the listed edge's agent
+  EXPECT_EQ(by_cell.subscribe.size(), 125u + 1u);  // 5 x 5 x 5 cells, the listed edge's agent
   EXPECT_TRUE(by_cell.near.empty());
   EXPECT_EQ(Neighbourhood::heard_at_start(cells, 1), (std::set<AgentId>{2, 3, 4}));
   // Delivery REACH: the same cells, an inbox, and a box about itself.
@@ -47,7 +50,7 @@ TEST(Neighbourhood, CellsCoverTheLinkReachAndIdsCoverTheGraph) {
   Neighbourhood n1(rc, 1);
   const Interest in = n1.update(Vec3(0, 0, 0), Vec3(0, 0, 0), {});
   EXPECT_EQ(in.publish, (std::vector<std::string>{"a1", "p0.0.0"}));
-  EXPECT_EQ(in.subscribe.size(), 27u + 1u + 1u);  // 27 cells, the listed edge's agent, its inbox
+  EXPECT_EQ(in.subscribe.size(), 125u + 1u + 1u);  // the cells, the listed edge's agent, its inbox
   EXPECT_TRUE(std::binary_search(in.subscribe.begin(), in.subscribe.end(), "in1"));
   // Of what the cells bring, it hears the reach plus a margin (5 + 1.25 m) of a box about itself
   // (half a margin on each side).
