@@ -422,15 +422,16 @@ void DdsStateBus::publish(const StateMessage& msg) {
 }
 
 namespace {
-// The DDS partitions of an interest: the run's partition, or one under it per name; and the
-// writer's own agent partition (`self`, 0: none), which binds it to its agent.
+// The DDS partitions of an interest: the run's partition, or one under it per name (a reader's
+// cells as patterns: dds_partition_names); and the writer's own agent partition (`self`, 0:
+// none), which binds it to its agent.
 dds::PartitionQosPolicy partitions(const std::string& run, std::vector<std::string> names,
-                                   AgentId self = 0) {
+                                   bool reader, AgentId self = 0) {
   dds::PartitionQosPolicy p;
   if (names.empty()) p.push_back(run.c_str());
   if (self != 0 && std::find(names.begin(), names.end(), agent_partition(self)) == names.end())
     names.push_back(agent_partition(self));
-  for (const std::string& n : names) {
+  for (const std::string& n : dds_partition_names(names, reader)) {
     std::string full = run;
     full += '/';
     full += n;
@@ -443,7 +444,7 @@ dds::PartitionQosPolicy partitions(const std::string& run, std::vector<std::stri
 void DdsStateBus::Impl::move_writer(const std::vector<std::string>& names, AgentId self) {
   if (!publisher) return;
   dds::PublisherQos q = publisher->get_qos();
-  q.partition() = partitions(run_partition(opts.run_id), names, self);
+  q.partition() = partitions(run_partition(opts.run_id), names, /*reader=*/false, self);
   if (publisher->set_qos(q) != ReturnCode_t::RETCODE_OK)
     throw std::runtime_error("dds: cannot move the state writer's partitions");
 }
@@ -451,7 +452,7 @@ void DdsStateBus::Impl::move_writer(const std::vector<std::string>& names, Agent
 void DdsStateBus::Impl::move_reader(const std::vector<std::string>& names) {
   if (opts.hear_all_runs) return;
   dds::SubscriberQos q = subscriber->get_qos();
-  q.partition() = partitions(run_partition(opts.run_id), names);
+  q.partition() = partitions(run_partition(opts.run_id), names, /*reader=*/true);
   if (subscriber->set_qos(q) != ReturnCode_t::RETCODE_OK)
     throw std::runtime_error("dds: cannot move the state reader's partitions");
 }

@@ -17,14 +17,14 @@ namespace qswarm {
 //
 // Space is cut into cubic cells half as wide as the link reach (threshold + hysteresis) plus twice
 // a margin; an agent publishes into its cell and listens to the 5 x 5 x 5 cells about it (kSpan).
-// It keeps its cell until it is half a margin outside it (moving cells makes DDS re-match its endpoints with every
-// peer: an agent resting on a cell's border must not flap). The cells are in the space the topology
-// measures: consensus states for proximity, physical positions for radio range; and, with collision
-// avoidance, physical cells of the filter's reach too (a radio hears everyone near, whatever the
-// graph). Every agent also publishes into a partition of its own id, which others listen to when
-// they must hear it by name: listed edges (a FIXED graph hears only those), and, under sticky
-// proximity, the links it holds (kept however far). Under `transport { delivery: ALL }` everyone
-// hears everyone (the empty interest).
+// It keeps its cell until it is half a margin outside it (moving cells makes DDS re-match its
+// endpoints with every peer: an agent resting on a cell's border must not flap). The cells are in
+// the space the topology measures: consensus states for proximity, physical positions for radio
+// range; and, with collision avoidance, physical cells of the filter's reach too (a radio hears
+// everyone near, whatever the graph). Every agent also publishes into a partition of its own id,
+// which others listen to when they must hear it by name: listed edges (a FIXED graph hears only
+// those), and, under sticky proximity, the links it holds (kept however far). Under `transport {
+// delivery: ALL }` everyone hears everyone (the empty interest).
 //
 // Under `delivery: REACH` (experimental) the cells only bound who is matched with whom: of the
 // samples its cells bring, an agent takes only those of senders within the reach plus a margin of

@@ -1,7 +1,12 @@
 #include "common/transport/interest.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <map>
+#include <set>
 
 namespace qswarm {
 namespace {
@@ -90,5 +95,88 @@ std::optional<AgentId> agent_of_partition(const std::string& name) { return id_a
 std::string inbox_partition(AgentId id) { return "in" + std::to_string(id); }
 
 std::optional<AgentId> inbox_of_partition(const std::string& name) { return id_after(name, "in"); }
+
+}  // namespace qswarm
+
+namespace qswarm {
+namespace {
+
+// A cell's name ("p-1.0.2") taken apart: its tag and indices; nothing for any other name.
+std::optional<std::pair<char, std::array<std::int64_t, 3>>> parse_cell(const std::string& name) {
+  if (name.size() < 6 || (name[0] != 'p' && name[0] != 'q')) return std::nullopt;
+  long long x = 0, y = 0, z = 0;
+  int used = 0;
+  if (std::sscanf(name.c_str() + 1, "%lld.%lld.%lld%n", &x, &y, &z, &used) != 3 ||
+      static_cast<std::size_t>(used) + 1 != name.size())
+    return std::nullopt;
+  const std::array<std::int64_t, 3> c{x, y, z};
+  for (const std::int64_t v : c)
+    if (v < -(std::int64_t{1} << 31) || v >= (std::int64_t{1} << 31)) return std::nullopt;
+  return std::make_pair(name[0], c);
+}
+
+std::string hex8(std::int64_t index) {
+  char buf[12];
+  std::snprintf(buf, sizeof buf, "%08llx",
+                static_cast<unsigned long long>(index + (std::int64_t{1} << 31)));
+  return buf;
+}
+
+// fnmatch patterns that match exactly the indices lo..hi in hex8 form: one per run of indices
+// that share all but the last digit, the last digits listed ("8000000[0123]").
+std::vector<std::string> range_patterns(std::int64_t lo, std::int64_t hi) {
+  std::vector<std::string> out;
+  for (std::int64_t v = lo; v <= hi;) {
+    const std::string h = hex8(v);
+    std::string last;
+    do {
+      last += hex8(v).back();
+      ++v;
+    } while (v <= hi && hex8(v).compare(0, 7, h, 0, 7) == 0);
+    out.push_back(h.substr(0, 7) + (last.size() == 1 ? last : "[" + last + "]"));
+  }
+  return out;
+}
+
+}  // namespace
+
+std::vector<std::string> dds_partition_names(const std::vector<std::string>& names, bool patterns) {
+  std::vector<std::string> out;
+  std::map<char, std::set<std::array<std::int64_t, 3>>> cells;
+  for (const std::string& n : names) {
+    const auto cell = parse_cell(n);
+    if (!cell) {
+      out.push_back(n);
+    } else if (!patterns) {
+      out.push_back(cell->first + hex8(cell->second[0]) + '.' + hex8(cell->second[1]) + '.' +
+                    hex8(cell->second[2]));
+    } else {
+      cells[cell->first].insert(cell->second);
+    }
+  }
+  for (const auto& [tag, set] : cells) {
+    std::array<std::int64_t, 3> lo = *set.begin(), hi = lo;
+    for (const auto& c : set)
+      for (int k = 0; k < 3; ++k) {
+        lo[k] = std::min(lo[k], c[k]);
+        hi[k] = std::max(hi[k], c[k]);
+      }
+    const auto side = [&](int k) { return static_cast<std::uint64_t>(hi[k] - lo[k] + 1); };
+    const bool fills = side(0) <= set.size() && side(1) <= set.size() && side(2) <= set.size() &&
+                       side(0) * side(1) * side(2) == set.size();
+    if (fills) {
+      for (const std::string& x : range_patterns(lo[0], hi[0]))
+        for (const std::string& y : range_patterns(lo[1], hi[1]))
+          for (const std::string& z : range_patterns(lo[2], hi[2]))
+            out.push_back(tag + x + '.' + y + '.' + z);
+    } else {
+      for (const auto& c : set)
+        out.push_back(tag + hex8(c[0]) + '.' + hex8(c[1]) + '.' + hex8(c[2]));
+    }
+  }
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+  return out;
+}
 
 }  // namespace qswarm

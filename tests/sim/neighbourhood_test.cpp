@@ -1,6 +1,7 @@
 // Traffic that follows the graph: an agent hears the agents that can be its neighbours soon and no
 // others (Neighbourhood), and no agent misses a neighbour it should have had: in-process runs give
 // the same graph, edge for edge and tick for tick, as the same runs with everyone hearing everyone.
+#include <fnmatch.h>
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -8,6 +9,7 @@
 #include <filesystem>
 #include <fstream>
 #include <random>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -139,6 +141,58 @@ TEST(Neighbourhood, TheWorstCaseAcrossCellBordersStillHearsWithinTheReachPlusMar
                 Interest::hears(ia, ib, Vec3::Zero(), Vec3(x + d, 0, 0)))
         << "at x = " << x;
   }
+}
+
+// What a listener's cells become on the wire: patterns that fnmatch (as Fast DDS matches
+// partitions) exactly the names its cells' writers publish under, however the cells lie about
+// the borders of the hex digits and zero.
+TEST(Neighbourhood, AListenersCellPatternsMatchExactlyItsCellsNames) {
+  const auto cell = [](char tag, int x, int y, int z) {
+    return tag + std::to_string(x) + "." + std::to_string(y) + "." + std::to_string(z);
+  };
+  const auto wire = [](const std::string& name) {
+    const std::vector<std::string> w = dds_partition_names({name}, /*patterns=*/false);
+    EXPECT_EQ(w.size(), 1u);
+    return w.front();
+  };
+  std::mt19937_64 rng(11);
+  std::uniform_int_distribution<int> at(-40, 40), drop(0, 9);
+  for (int trial = 0; trial < 300; ++trial) {
+    const int x0 = at(rng), y0 = at(rng), z0 = at(rng);
+    const bool box = trial % 3 != 0;  // every third set has holes: named cell by cell
+    std::vector<std::string> names{"a7", "in3", "c"};
+    std::set<std::string> mine;
+    for (int dx = -Neighbourhood::kSpan; dx <= Neighbourhood::kSpan; ++dx)
+      for (int dy = -Neighbourhood::kSpan; dy <= Neighbourhood::kSpan; ++dy)
+        for (int dz = -Neighbourhood::kSpan; dz <= Neighbourhood::kSpan; ++dz) {
+          if (!box && drop(rng) == 0) continue;
+          for (const char tag : {'p', 'q'}) {
+            names.push_back(cell(tag, x0 + dx, y0 + dy, z0 + dz));
+            mine.insert(names.back());
+          }
+        }
+    const std::vector<std::string> patterns = dds_partition_names(names, /*patterns=*/true);
+    for (const char* other : {"a7", "in3", "c"})
+      EXPECT_EQ(std::count(patterns.begin(), patterns.end(), other), 1) << other;
+    if (box) {
+      EXPECT_LE(patterns.size(), 3u + 2u * 8u);  // each space's box: at most 8 patterns
+    }
+    for (int x = x0 - 4; x <= x0 + 4; ++x)
+      for (int y = y0 - 4; y <= y0 + 4; ++y)
+        for (int z = z0 - 4; z <= z0 + 4; ++z)
+          for (const char tag : {'p', 'q'}) {
+            const std::string name = cell(tag, x, y, z), published = wire(name);
+            const bool matched = std::any_of(patterns.begin(), patterns.end(), [&](auto& p) {
+              return fnmatch(p.c_str(), published.c_str(), FNM_NOESCAPE) == 0 ||
+                     fnmatch(published.c_str(), p.c_str(), FNM_NOESCAPE) == 0;
+            });
+            ASSERT_EQ(matched, mine.count(name) == 1) << name << " as " << published;
+          }
+  }
+  // Names that are not cells, or cells out of range, pass as they are.
+  EXPECT_EQ(dds_partition_names({"p1.2", "p1.2.3x", "q1.2.99999999999", "a3"}, true),
+            (std::vector<std::string>{"a3", "p1.2", "p1.2.3x", "q1.2.99999999999"}));
+  EXPECT_EQ(wire("p-1.0.15"), "p7fffffff.80000000.8000000f");
 }
 
 TEST(Neighbourhood, APeerLeftToSettleWithIsPushedToItsInboxUntilSettled) {
