@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <map>
 #include <set>
+#include <utility>
 
 namespace qswarm {
 namespace {
@@ -117,9 +118,15 @@ std::optional<std::pair<char, std::array<std::int64_t, 3>>> parse_cell(const std
 
 std::string hex8(std::int64_t index) {
   char buf[12];
-  std::snprintf(buf, sizeof buf, "%08llx",
-                static_cast<unsigned long long>(index + (std::int64_t{1} << 31)));
+  std::snprintf(buf, sizeof buf, "%08llx", static_cast<unsigned long long>(index) + (1ULL << 31));
   return buf;
+}
+
+// A cell's name on the wire, or a pattern of them: the tag and the three axes' parts.
+std::string wire_name(char tag, const std::string& x, const std::string& y, const std::string& z) {
+  std::string out(1, tag);
+  out.append(x).append(1, '.').append(y).append(1, '.').append(z);
+  return out;
 }
 
 // fnmatch patterns that match exactly the indices lo..hi in hex8 form: one per run of indices
@@ -133,7 +140,13 @@ std::vector<std::string> range_patterns(std::int64_t lo, std::int64_t hi) {
       last += hex8(v).back();
       ++v;
     } while (v <= hi && hex8(v).compare(0, 7, h, 0, 7) == 0);
-    out.push_back(h.substr(0, 7) + (last.size() == 1 ? last : "[" + last + "]"));
+    std::string p = h.substr(0, 7);
+    if (last.size() == 1) {
+      p += last;
+    } else {
+      p.append(1, '[').append(last).append(1, ']');
+    }
+    out.push_back(std::move(p));
   }
   return out;
 }
@@ -148,8 +161,8 @@ std::vector<std::string> dds_partition_names(const std::vector<std::string>& nam
     if (!cell) {
       out.push_back(n);
     } else if (!patterns) {
-      out.push_back(cell->first + hex8(cell->second[0]) + '.' + hex8(cell->second[1]) + '.' +
-                    hex8(cell->second[2]));
+      const auto& c = cell->second;
+      out.push_back(wire_name(cell->first, hex8(c[0]), hex8(c[1]), hex8(c[2])));
     } else {
       cells[cell->first].insert(cell->second);
     }
@@ -168,10 +181,9 @@ std::vector<std::string> dds_partition_names(const std::vector<std::string>& nam
       for (const std::string& x : range_patterns(lo[0], hi[0]))
         for (const std::string& y : range_patterns(lo[1], hi[1]))
           for (const std::string& z : range_patterns(lo[2], hi[2]))
-            out.push_back(tag + x + '.' + y + '.' + z);
+            out.push_back(wire_name(tag, x, y, z));
     } else {
-      for (const auto& c : set)
-        out.push_back(tag + hex8(c[0]) + '.' + hex8(c[1]) + '.' + hex8(c[2]));
+      for (const auto& c : set) out.push_back(wire_name(tag, hex8(c[0]), hex8(c[1]), hex8(c[2])));
     }
   }
   std::sort(out.begin(), out.end());
