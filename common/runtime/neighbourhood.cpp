@@ -9,7 +9,9 @@ namespace {
 
 Eigen::Vector3i cell_of(const Vec3& x, double cell_m) {
   const auto c = [&](double v) {
-    // Far-off coordinates stay far off without overflowing (a sample is never beyond 1000 km).
+    // Far-off coordinates stay far off without overflowing (a sample is never beyond 1000 km);
+    // a NaN goes to the origin (such an agent's samples are refused anyway).
+    if (std::isnan(v)) return 0;
     return static_cast<int>(std::clamp(std::floor(v / cell_m), -1e9, 1e9));
   };
   return {c(x.x()), c(x.y()), c(x.z())};

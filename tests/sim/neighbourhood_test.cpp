@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <random>
 #include <set>
 #include <string>
@@ -189,6 +190,13 @@ TEST(Neighbourhood, AListenersCellPatternsMatchExactlyItsCellsNames) {
             ASSERT_EQ(matched, mine.count(name) == 1) << name << " as " << published;
           }
   }
+  // A place that is not a number (an agent whose samples are refused anyway) lies at the origin.
+  const RunConfig rc = load(
+      "agents { id: 1 } agents { id: 2 position { x: 1 } }\n"
+      "topology { policy: RANGE threshold_m: 4.5 hysteresis_m: 0.5 }\n");
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_EQ(Neighbourhood(rc, 1).update(Vec3(nan, 0, -nan), Vec3::Zero(), {}).publish,
+            (std::vector<std::string>{"a1", "p0.0.0"}));
   // Names that are not cells, or cells out of range, pass as they are.
   EXPECT_EQ(dds_partition_names({"p1.2", "p1.2.3x", "q1.2.99999999999", "a3"}, true),
             (std::vector<std::string>{"a3", "p1.2", "p1.2.3x", "q1.2.99999999999"}));
