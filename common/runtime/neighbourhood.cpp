@@ -71,7 +71,7 @@ Neighbourhood::Neighbourhood(const RunConfig& rc, AgentId self) : self_(self) {
   const auto space = [&](char tag, double r) {
     const double keep = 0.5 * margin_m(r), radius = r + margin_m(r);
     spaces_.push_back(
-        {tag, (radius + 2.0 * keep) / kSpan, keep, radius, std::nullopt, std::nullopt});
+        {tag, (radius + 2.0 * keep) / kSpan, keep, radius, std::nullopt, std::nullopt, {}, {}});
   };
   if (t.policy == TopologyPolicy::kProximity || t.policy == TopologyPolicy::kStickyProximity)
     space('q', reach);
@@ -91,17 +91,23 @@ Interest Neighbourhood::update(const Vec3& p_W, const Vec3& q, const std::set<Ag
   in.publish.push_back(agent_partition(self_));
   for (Space& s : spaces_) {
     const Vec3& x = s.tag == 'q' ? q : p_W;
-    if (!s.cell || !near_cell(x, *s.cell, s.cell_m, s.keep_m)) s.cell = cell_of(x, s.cell_m);
+    if (!s.cell || !near_cell(x, *s.cell, s.cell_m, s.keep_m)) {
+      s.cell = cell_of(x, s.cell_m);
+      s.cell_name = cell_name(s.tag, *s.cell);
+      s.listened.clear();
+      for (int dx = -kSpan; dx <= kSpan; ++dx)
+        for (int dy = -kSpan; dy <= kSpan; ++dy)
+          for (int dz = -kSpan; dz <= kSpan; ++dz)
+            s.listened.push_back(cell_name(s.tag, *s.cell + Eigen::Vector3i(dx, dy, dz)));
+      std::sort(s.listened.begin(), s.listened.end());
+    }
     if (reach_) {
       if (!s.anchor || !((x - *s.anchor).cwiseAbs().maxCoeff() <= s.keep_m)) s.anchor = clamped(x);
       const Vec3 keep = Vec3::Constant(s.keep_m);
       in.near.push_back({s.tag, *s.anchor - keep, *s.anchor + keep, s.radius_m});
     }
-    in.publish.push_back(cell_name(s.tag, *s.cell));
-    for (int dx = -kSpan; dx <= kSpan; ++dx)
-      for (int dy = -kSpan; dy <= kSpan; ++dy)
-        for (int dz = -kSpan; dz <= kSpan; ++dz)
-          in.subscribe.push_back(cell_name(s.tag, *s.cell + Eigen::Vector3i(dx, dy, dz)));
+    in.publish.push_back(s.cell_name);
+    in.subscribe.insert(in.subscribe.end(), s.listened.begin(), s.listened.end());
   }
   if (reach_ && !spaces_.empty()) {
     in.subscribe.push_back(inbox_partition(self_));

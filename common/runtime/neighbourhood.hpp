@@ -69,6 +69,10 @@ class Neighbourhood {
     double radius_m;                      // the link reach plus the margin: what it hears
     std::optional<Eigen::Vector3i> cell;  // the agent's cell, once placed
     std::optional<Vec3> anchor;  // the centre of its box (keep_m on each side), once placed
+    // The names of its cell and of the cells it listens to (sorted), made when it moves cells:
+    // update() runs every tick, and a move is rare.
+    std::string cell_name;
+    std::vector<std::string> listened;
   };
   AgentId self_;
   bool whole_run_ = false;
