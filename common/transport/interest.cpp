@@ -97,9 +97,6 @@ std::string inbox_partition(AgentId id) { return "in" + std::to_string(id); }
 
 std::optional<AgentId> inbox_of_partition(const std::string& name) { return id_after(name, "in"); }
 
-}  // namespace qswarm
-
-namespace qswarm {
 namespace {
 
 // A cell's name ("p-1.0.2") taken apart: its tag and indices; nothing for any other name.

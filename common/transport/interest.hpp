@@ -53,7 +53,7 @@ struct Interest {
 // three cell indices, as Neighbourhood names it) becomes fixed-width hex ("p7fffffff.80000000.
 // 80000002", each index plus 2^31), so that a listener (`patterns`) can name the cells of each
 // space that fill a box with a few fnmatch(3) patterns, one per run of indices that share all
-// but the last hex digit on each axis ("p7fffffff.8000000[0-2]..." ), instead of one name per
+// but the last hex digit on each axis ("p7fffffff.8000000[012]..."), instead of one name per
 // cell: Fast DDS matches partitions with fnmatch both ways, and a reader's announcement, which the
 // Discovery Server relays to every peer on its topic, then carries at most 8 names for 125 cells.
 // Other names pass unchanged; cells that do not fill a box are named one by one.
