@@ -190,17 +190,21 @@ TEST(Neighbourhood, AListenersCellPatternsMatchExactlyItsCellsNames) {
             ASSERT_EQ(matched, mine.count(name) == 1) << name << " as " << published;
           }
   }
-  // A place that is not a number (an agent whose samples are refused anyway) lies at the origin.
+  // Names that are not cells, or cells out of range, pass as they are.
+  EXPECT_EQ(dds_partition_names({"p1.2", "p1.2.3x", "q1.2.99999999999", "a3"}, true),
+            (std::vector<std::string>{"a3", "p1.2", "p1.2.3x", "q1.2.99999999999"}));
+  EXPECT_EQ(wire("p-1.0.15"), "p7fffffff.80000000.8000000f");
+}
+
+// A place that is not a number (an agent whose samples are refused anyway) lies in the origin's
+// cell, not in one cast from NaN.
+TEST(Neighbourhood, APlaceThatIsNotANumberLiesInTheOriginsCell) {
   const RunConfig rc = load(
       "agents { id: 1 } agents { id: 2 position { x: 1 } }\n"
       "topology { policy: RANGE threshold_m: 4.5 hysteresis_m: 0.5 }\n");
   const double nan = std::numeric_limits<double>::quiet_NaN();
   EXPECT_EQ(Neighbourhood(rc, 1).update(Vec3(nan, 0, -nan), Vec3::Zero(), {}).publish,
             (std::vector<std::string>{"a1", "p0.0.0"}));
-  // Names that are not cells, or cells out of range, pass as they are.
-  EXPECT_EQ(dds_partition_names({"p1.2", "p1.2.3x", "q1.2.99999999999", "a3"}, true),
-            (std::vector<std::string>{"a3", "p1.2", "p1.2.3x", "q1.2.99999999999"}));
-  EXPECT_EQ(wire("p-1.0.15"), "p7fffffff.80000000.8000000f");
 }
 
 TEST(Neighbourhood, APeerLeftToSettleWithIsPushedToItsInboxUntilSettled) {
