@@ -123,11 +123,27 @@ struct DdsStateBus::Impl : public dds::DataReaderListener {
     dds::ContentFilteredTopic* filtered = nullptr;  // the roster filter on its topic
     dds::DataReader* reader = nullptr;
   };
-  std::map<std::string, dds::Topic*> named_topics;
+  std::map<std::string, dds::Topic*> named_topics;  // agent names', inboxes' and regions' topics
   std::map<std::string, NamedWriter> named_writers;
   std::map<std::string, NamedReader> named_readers;
+  // Cells are partitions of their region's topic (region_of_cell). A reader per region the
+  // listened cells touch, in `subscriber` (whose partitions are those cells). A writer per region
+  // the published cell lies in (active: written, its partition that cell), and one per other
+  // region within a cell of it (idle: matched with the readers of those cells, never written), so
+  // that a move into another region finds a writer its new readers already matched: a new writer
+  // would be heard only once the server had relayed it. Each has a publisher of its own, whose
+  // partitions are its cells.
+  struct RegionWriter {
+    dds::Publisher* publisher = nullptr;
+    dds::DataWriter* writer = nullptr;
+    std::unique_ptr<WriterListener> listener;
+    std::vector<std::string> cells;
+    bool active = false;
+  };
+  std::map<std::string, RegionWriter> region_writers;
+  std::map<std::string, NamedReader> region_readers;
   bool interest_told = false;
-  std::vector<std::string> place_params;  // the shared topic's reader's place filter, as told
+  std::vector<std::string> place_params;  // the shared or region readers' place filter, as told
 
   static std::string topic_of(const std::string& name) { return "qswarm/agent_state/" + name; }
   dds::Topic* named_topic(const std::string& name) {
@@ -150,8 +166,17 @@ struct DdsStateBus::Impl : public dds::DataReaderListener {
   // the same topic, whom by name).
   void set_place(const Interest& interest, const std::vector<std::string>& names);
   void set_named_interest(const Interest& interest);
+  // The region topics' endpoints for these published and listened cells.
+  void set_regions(const std::vector<std::string>& pub, const std::vector<std::string>& sub,
+                   const Interest& interest);
   // Deletes the name's reader and/or writer, and its topic once neither is left.
   void drop_named(const std::string& name, bool its_reader, bool its_writer);
+  void drop_region(const std::string& region, bool its_reader, bool its_writer);
+  // Deletes the topic of a name or region once no endpoint uses it.
+  void drop_topic_if_unused(const std::string& name);
+  // Deletes the shared topic's writer or reader (the interest moved to regions and names).
+  void drop_shared_writer();
+  void drop_shared_reader();
 
   void on_data_available(dds::DataReader* r) override {
     try {
@@ -391,6 +416,8 @@ DdsStateBus::~DdsStateBus() {
     d.reader->set_listener(nullptr);
     d.subscriber->delete_datareader(d.reader);
   }
+  while (!d.region_readers.empty()) d.drop_region(d.region_readers.begin()->first, true, true);
+  while (!d.region_writers.empty()) d.drop_region(d.region_writers.begin()->first, true, true);
   while (!d.named_readers.empty()) d.drop_named(d.named_readers.begin()->first, true, true);
   while (!d.named_writers.empty()) d.drop_named(d.named_writers.begin()->first, true, true);
   if (d.named_subscriber) d.participant->delete_subscriber(d.named_subscriber);
@@ -410,11 +437,13 @@ DdsStateBus::~DdsStateBus() {
 void DdsStateBus::publish(const StateMessage& msg) {
   Impl& d = *impl_;
   if (d.opts.topic_per_name && !d.interest_told && !d.opts.recorder) set_interest({});
-  if (!d.writer && d.named_writers.empty()) return;
+  if (!d.writer && d.named_writers.empty() && d.region_writers.empty()) return;
   to_idl(msg, d.out_sample);
   bool written = !d.writer || d.writer->write(&d.out_sample);
   for (auto& [name, w] : d.named_writers)  // an agent name nobody listens to costs nothing
     if (w.listener->matched > 0) written = w.writer->write(&d.out_sample) && written;
+  for (auto& [region, w] : d.region_writers)
+    if (w.active && w.listener->matched > 0) written = w.writer->write(&d.out_sample) && written;
   if (written) {
     std::lock_guard<std::mutex> lock(d.mu);
     ++d.gate.counters().published;
@@ -468,32 +497,154 @@ void DdsStateBus::Impl::drop_named(const std::string& name, bool its_reader, boo
     named_publisher->delete_datawriter(w->second.writer);
     named_writers.erase(w);
   }
-  if (named_readers.count(name) || named_writers.count(name)) return;
+  drop_topic_if_unused(name);
+}
+
+void DdsStateBus::Impl::drop_topic_if_unused(const std::string& name) {
+  if (named_readers.count(name) || named_writers.count(name) || region_readers.count(name) ||
+      region_writers.count(name))
+    return;
   if (auto t = named_topics.find(name); t != named_topics.end()) {
     participant->delete_topic(t->second);
     named_topics.erase(t);
   }
 }
 
+void DdsStateBus::Impl::drop_region(const std::string& region, bool its_reader, bool its_writer) {
+  if (auto r = region_readers.find(region); its_reader && r != region_readers.end()) {
+    r->second.reader->set_listener(nullptr);
+    subscriber->delete_datareader(r->second.reader);
+    if (r->second.filtered) participant->delete_contentfilteredtopic(r->second.filtered);
+    region_readers.erase(r);
+  }
+  if (auto w = region_writers.find(region); its_writer && w != region_writers.end()) {
+    w->second.publisher->delete_datawriter(w->second.writer);
+    participant->delete_publisher(w->second.publisher);
+    region_writers.erase(w);
+  }
+  drop_topic_if_unused(region);
+}
+
+void DdsStateBus::Impl::drop_shared_writer() {
+  if (!writer) return;
+  publisher->delete_datawriter(writer);
+  writer = nullptr;
+  writer_listener.matched = 0;
+}
+
+void DdsStateBus::Impl::drop_shared_reader() {
+  if (!reader) return;
+  reader->set_listener(nullptr);
+  subscriber->delete_datareader(reader);
+  reader = nullptr;
+  if (roster_topic) participant->delete_contentfilteredtopic(roster_topic);
+  roster_topic = nullptr;
+}
+
+void DdsStateBus::Impl::set_regions(const std::vector<std::string>& pub,
+                                    const std::vector<std::string>& sub, const Interest& interest) {
+  // Readers: new ones first (the subscriber's partitions are every listened cell, whatever the
+  // region: a writer of one region never publishes another's cells), then the old ones go.
+  std::set<std::string> regions;
+  for (const std::string& c : sub) regions.insert(*region_of_cell(c));
+  if (!sub.empty()) move_reader(sub);
+  const std::vector<std::string> params = place_filter(interest.near, {});
+  if (params != place_params) {
+    for (auto& [region, r] : region_readers)
+      if (r.filtered && r.filtered->set_expression_parameters(params) != ReturnCode_t::RETCODE_OK)
+        throw std::runtime_error("dds: cannot set a state reader's place filter");
+    place_params = params;
+  }
+  for (const std::string& region : regions) {
+    if (region_readers.count(region)) continue;
+    NamedReader r;
+    r.reader = state_reader(subscriber, named_topic(region), r.filtered, place_params);
+    region_readers.emplace(region, r);
+  }
+  std::vector<std::string> gone;
+  for (const auto& [region, r] : region_readers)
+    if (!regions.count(region)) gone.push_back(region);
+  for (const std::string& region : gone) drop_region(region, true, false);
+
+  // Writers: the cells each region's writer publishes into, those of the active ones first.
+  std::map<std::string, std::pair<std::vector<std::string>, bool>> want;  // region: cells, active
+  if (opts.publish) {
+    for (const std::string& c : pub) {
+      auto& [cells, active] = want[*region_of_cell(c)];
+      cells.push_back(c);
+      active = true;
+    }
+    for (const std::string& c : pub)
+      for (const std::string& near : cells_about(c, 1)) {
+        const std::optional<std::string> region = region_of_cell(near);
+        if (!region) continue;  // past the cells' bounds
+        auto& [cells, active] = want[*region];
+        if (!active) cells.push_back(near);
+      }
+  }
+  for (auto& [region, w] : want) {
+    auto& [cells, active] = w;
+    std::sort(cells.begin(), cells.end());
+    cells.erase(std::unique(cells.begin(), cells.end()), cells.end());
+    auto it = region_writers.find(region);
+    if (it != region_writers.end()) {
+      RegionWriter& rw = it->second;
+      rw.active = active;
+      if (rw.cells == cells) continue;
+      dds::PublisherQos q = rw.publisher->get_qos();
+      q.partition() = partitions(run_partition(opts.run_id), cells, /*reader=*/false);
+      if (rw.publisher->set_qos(q) != ReturnCode_t::RETCODE_OK)
+        throw std::runtime_error("dds: cannot move a state writer's partitions");
+      rw.cells = cells;
+      continue;
+    }
+    RegionWriter rw;
+    dds::PublisherQos q = dds::PUBLISHER_QOS_DEFAULT;
+    q.partition() = partitions(run_partition(opts.run_id), cells, /*reader=*/false);
+    rw.publisher = participant->create_publisher(q);
+    if (!rw.publisher) throw std::runtime_error("dds: cannot create a state publisher");
+    rw.listener = std::make_unique<WriterListener>();
+    rw.writer =
+        rw.publisher->create_datawriter(named_topic(region), shared_writer_qos, rw.listener.get());
+    if (!rw.writer) {
+      participant->delete_publisher(rw.publisher);
+      throw std::runtime_error("dds: cannot create a state writer of " + topic_of(region));
+    }
+    rw.cells = cells;
+    rw.active = active;
+    region_writers.emplace(region, std::move(rw));
+  }
+  gone.clear();
+  for (const auto& [region, w] : region_writers)
+    if (!want.count(region)) gone.push_back(region);
+  for (const std::string& region : gone) drop_region(region, false, true);
+}
+
 void DdsStateBus::Impl::set_named_interest(const Interest& interest) {
   interest_told = true;
-  // Agent names and inboxes are topics; the other names (cells) partitions of the shared topic,
-  // which also carries the whole run (the empty interest).
+  // Agent names and inboxes are topics, cells partitions of their region's topic; other names
+  // partitions of the shared topic, which also carries the whole run (the empty interest).
   const auto named = [](const std::string& n) {
     return agent_of_partition(n).has_value() || inbox_of_partition(n).has_value();
   };
-  std::vector<std::string> agents_pub, cells_pub, agents_sub, cells_sub;
-  for (const std::string& n : interest.publish) (named(n) ? agents_pub : cells_pub).push_back(n);
-  for (const std::string& n : interest.subscribe) (named(n) ? agents_sub : cells_sub).push_back(n);
+  std::vector<std::string> agents_pub, cells_pub, shared_pub, agents_sub, cells_sub, shared_sub;
+  for (const std::string& n : interest.publish)
+    (named(n) ? agents_pub : region_of_cell(n) ? cells_pub : shared_pub).push_back(n);
+  for (const std::string& n : interest.subscribe)
+    (named(n) ? agents_sub : region_of_cell(n) ? cells_sub : shared_sub).push_back(n);
   // The shared topic's endpoints are made once needed, after their partitions are set: they
   // never hear the whole run on the way.
-  if (opts.publish && (interest.publish.empty() || !cells_pub.empty())) {
-    move_writer(cells_pub, 0);
+  if (opts.publish && (interest.publish.empty() || !shared_pub.empty())) {
+    move_writer(shared_pub, 0);
     if (!writer) writer = publisher->create_datawriter(topic, shared_writer_qos, &writer_listener);
     if (!writer) throw std::runtime_error("dds: cannot create the state writer");
+  } else {
+    drop_shared_writer();
   }
-  if (interest.subscribe.empty() || !cells_sub.empty()) {
-    move_reader(cells_sub);
+  if (interest.subscribe.empty() || !shared_sub.empty()) {
+    if (!cells_sub.empty())  // the subscriber's partitions are the cells' (set_regions)
+      throw std::invalid_argument("dds: an interest listens to cells and to names of no cell");
+    move_reader(shared_sub);
     // Its names have topics of their own: the place filter needs none of them.
     if (!reader) {
       place_params = place_filter(interest.near, {});
@@ -501,7 +652,10 @@ void DdsStateBus::Impl::set_named_interest(const Interest& interest) {
     } else {
       set_place(interest, {});
     }
+  } else {
+    drop_shared_reader();
   }
+  set_regions(cells_pub, cells_sub, interest);
   // The agent names: new endpoints first, then the old ones go.
   const auto has = [](const std::vector<std::string>& v, const std::string& n) {
     return std::find(v.begin(), v.end(), n) != v.end();
@@ -625,6 +779,8 @@ std::set<std::uint64_t> DdsStateBus::foreign_runs() const {
 int DdsStateBus::matched_readers() const {
   int n = impl_->writer_listener.matched;
   for (const auto& [name, w] : impl_->named_writers) n += w.listener->matched;
+  for (const auto& [region, w] : impl_->region_writers)
+    if (w.active) n += w.listener->matched;
   return n;
 }
 

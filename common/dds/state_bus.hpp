@@ -37,13 +37,16 @@ struct StateBusOptions {
   // as (a compose keystore's shared member identity may name any: docs/security.md).
   AgentId self = 0;
   // The agent names of an interest (set_interest: "a7") become topics of their own
-  // ("qswarm/agent_state/a7"), not partitions of the shared topic; cells stay partitions. For a
-  // Discovery Server client: the server relays a participant's announcement only to participants
-  // with an endpoint on a topic it uses (partitions are matched by the clients, after discovery),
-  // so an agent that hears its neighbours by name (a FIXED graph) discovers only them, not the
-  // swarm. Cells stay partitions because a move between topics would replace the writer, and its
-  // readers would hear it only once the server has relayed the new one (a 64-agent formation lost
-  // neighbours and, once in five runs, edge-flow's exact average that way). No binding of writers
+  // ("qswarm/agent_state/a7"), not partitions of the shared topic, and cells partitions of their
+  // region's topic ("qswarm/agent_state/rp0.1.0": region_of_cell). For a Discovery Server client:
+  // the server relays a participant's announcement only to participants with an endpoint on a
+  // topic it uses (partitions are matched by the clients, after discovery), so an agent that
+  // hears its neighbours by name (a FIXED graph) discovers only them, and one that hears by place
+  // the agents of the regions about it, not the swarm. Cells are not topics of their own because
+  // a move between topics would replace the writer, and its readers would hear it only once the
+  // server has relayed the new one (a 64-agent formation lost neighbours and, once in five runs,
+  // edge-flow's exact average that way): an agent keeps idle writers, already matched, on the
+  // regions within a cell of its own. No binding of writers
   // to agents (the agent partitions DDS-Security's permissions name; Fast DDS 2.9 has no secure
   // Discovery Server); the gate judges a sample's participant, not its writer, since an agent
   // speaks through two. Until set_interest the state stream has no endpoints.

@@ -150,6 +150,37 @@ std::vector<std::string> range_patterns(std::int64_t lo, std::int64_t hi) {
 
 }  // namespace
 
+namespace {
+std::int64_t floor_div(std::int64_t a, std::int64_t b) { return a / b - ((a % b != 0) && (a < 0)); }
+
+std::string cell_text(char tag, std::int64_t x, std::int64_t y, std::int64_t z) {
+  char buf[80];
+  std::snprintf(buf, sizeof buf, "%c%lld.%lld.%lld", tag, static_cast<long long>(x),
+                static_cast<long long>(y), static_cast<long long>(z));
+  return buf;
+}
+}  // namespace
+
+std::optional<std::string> region_of_cell(const std::string& name) {
+  const auto cell = parse_cell(name);
+  if (!cell) return std::nullopt;
+  const auto& c = cell->second;
+  return "r" + cell_text(cell->first, floor_div(c[0], kRegionCells), floor_div(c[1], kRegionCells),
+                         floor_div(c[2], kRegionCells));
+}
+
+std::vector<std::string> cells_about(const std::string& cell, int span) {
+  std::vector<std::string> out;
+  const auto parsed = parse_cell(cell);
+  if (!parsed) return out;
+  const auto& c = parsed->second;
+  for (int dx = -span; dx <= span; ++dx)
+    for (int dy = -span; dy <= span; ++dy)
+      for (int dz = -span; dz <= span; ++dz)
+        out.push_back(cell_text(parsed->first, c[0] + dx, c[1] + dy, c[2] + dz));
+  return out;
+}
+
 std::vector<std::string> dds_partition_names(const std::vector<std::string>& names, bool patterns) {
   std::vector<std::string> out;
   std::map<char, std::set<std::array<std::int64_t, 3>>> cells;

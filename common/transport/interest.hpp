@@ -59,6 +59,17 @@ struct Interest {
 // Other names pass unchanged; cells that do not fill a box are named one by one.
 std::vector<std::string> dds_partition_names(const std::vector<std::string>& names, bool patterns);
 
+// Regions: blocks of kRegionCells cells on each axis. Through a Discovery Server each region is a
+// topic of its own ("qswarm/agent_state/rp0.-1.2") whose partitions are its cells: the server
+// introduces two participants only when they share a topic, so an agent discovers the agents of
+// the regions its cells touch, not the whole swarm (StateBusOptions::topic_per_name).
+constexpr int kRegionCells = 5;
+// The region of a cell ("p-1.0.7" -> "rp-1.0.1"); nothing for a name that is no cell.
+std::optional<std::string> region_of_cell(const std::string& name);
+// The cells within `span` cells of a cell on each axis, itself included, in order; none for a name
+// that is no cell.
+std::vector<std::string> cells_about(const std::string& cell, int span);
+
 // The partition every agent publishes into, named for its id ("a3"): others listen to it to hear
 // that agent by name, and under DDS-Security its certificate's permissions let it publish state
 // only there (and in partitions that name no agent), which binds its samples to its id

@@ -3,6 +3,7 @@
 // names as partitions of one topic (the control) every participant discovers every other.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <memory>
 #include <string>
 #include <vector>
@@ -25,7 +26,7 @@ struct Swarm {
   std::vector<std::unique_ptr<DdsBus>> agents;  // agents 1 to 4
   std::uint64_t seq = 0;
 
-  explicit Swarm(bool topic_per_name) {
+  explicit Swarm(bool topic_per_name, bool pairs = true) {
     const auto domain = static_cast<std::uint32_t>(test::test_domain().domain());
     const std::optional<int> id = free_participant_block(domain, 1, "127.0.0.1");
     if (!id) throw std::runtime_error("no free participant id on the test's domain");
@@ -39,6 +40,7 @@ struct Swarm {
       o.state.roster = {1, 2, 3, 4};
       agents.push_back(std::make_unique<DdsBus>(o));
     }
+    if (!pairs) return;
     // Two pairs: 1 and 2 hear each other by name, 3 and 4 share a cell.
     agent(1).set_interest({{"a1"}, {"a2"}, {}});
     agent(2).set_interest({{"a2"}, {"a1"}, {}});
@@ -107,6 +109,69 @@ TEST(NeighbourTopics, ThroughADiscoveryServerAnAgentDiscoversOnlyThoseItSharesAN
       },
       30.0));
   EXPECT_LE(s.seq_heard(3, 1), stopped);
+}
+
+// Agent `id` in the cell "p<x>.0.0", listening to the cells about it as Neighbourhood does.
+Interest in_cell(AgentId id, int x) {
+  const std::string cell = "p" + std::to_string(x) + ".0.0";
+  Interest in;
+  in.publish = {agent_partition(id), cell};
+  in.subscribe = cells_about(cell, 2);
+  std::sort(in.publish.begin(), in.publish.end());
+  std::sort(in.subscribe.begin(), in.subscribe.end());
+  return in;
+}
+
+// Cells are partitions of their region's topic (regions of kRegionCells = 5 cells: x 0..4 is
+// one, 5..9 the next): agents discover the agents of the regions about them, and one moving
+// into another region is heard there at once, through a writer its new listeners matched while
+// it was a cell away.
+TEST(NeighbourTopics, CellsArePartitionsOfRegionTopicsAndAMoveAcrossNeedsNoDiscovery) {
+  Swarm s(/*topic_per_name=*/true, /*pairs=*/false);
+  s.agent(1).set_interest(in_cell(1, 4));  // the mover, at the edge of region 0
+  s.agent(2).set_interest(in_cell(2, 2));  // listens to x 0..4: region 0 alone
+  s.agent(3).set_interest(in_cell(3, 7));  // listens to x 5..9: region 1 alone
+  s.agent(4).set_interest(in_cell(4, 8));
+  ASSERT_TRUE(test::wait_for(
+      [&] {
+        s.publish();
+        return s.heard(2, 1) && s.heard(1, 2) && s.heard(3, 4) && s.heard(4, 3) && s.known(3) == 3;
+      },
+      30.0));
+  // Agent 3 knows the mover (an idle writer of it on region 1 matched its reader) but hears
+  // nothing from it; agent 2 shares no region with 3 and 4 and never meets them.
+  const std::uint64_t before = s.seq;
+  ASSERT_TRUE(test::wait_for(
+      [&] {
+        s.publish();
+        return s.seq_heard(3, 4) >= before + 20;
+      },
+      30.0));
+  EXPECT_FALSE(s.heard(3, 1));
+  EXPECT_EQ(s.known(2), 2);                    // the mover and the server
+  EXPECT_EQ(s.agent(1).matched_readers(), 2);  // its own reader and agent 2's hear its cell
+
+  // Into region 1: the idle writer becomes the one written, already matched with agent 3's
+  // reader (no discovery round: a new writer would have matched only its own reader yet), and
+  // agent 2 no longer hears the mover (nor does agent 4, whose cells begin at x = 6).
+  s.agent(1).set_interest(in_cell(1, 5));
+  const std::uint64_t moved = s.seq;
+  EXPECT_EQ(s.agent(1).matched_readers(), 2);  // its own and agent 3's
+  ASSERT_TRUE(test::wait_for(
+      [&] {
+        s.publish();
+        return s.heard(3, 1);
+      },
+      30.0));
+  ASSERT_TRUE(test::wait_for(
+      [&] {
+        s.publish();
+        return s.seq_heard(3, 1) >= moved + 20;
+      },
+      30.0));
+  EXPECT_LE(s.seq_heard(2, 1), moved);
+  EXPECT_FALSE(s.heard(4, 1));
+  EXPECT_EQ(s.known(2), 2);
 }
 
 // The control: the same interests as partitions of one topic. The server relays every participant

@@ -196,6 +196,34 @@ TEST(Neighbourhood, AListenersCellPatternsMatchExactlyItsCellsNames) {
   EXPECT_EQ(wire("p-1.0.15"), "p7fffffff.80000000.8000000f");
 }
 
+// Regions are blocks of kRegionCells cells on each axis, counted down from 0 for negative
+// indices; a listener's box of 2 kSpan + 1 cells touches at most two of them on each axis, and
+// the cells about a cell are named as Neighbourhood names them.
+TEST(Neighbourhood, RegionsAreBlocksOfCellsThatABoxTouchesAtMostTwoOfPerAxis) {
+  EXPECT_EQ(region_of_cell("p0.0.0"), "rp0.0.0");
+  EXPECT_EQ(region_of_cell("p4.-1.5"), "rp0.-1.1");
+  EXPECT_EQ(region_of_cell("q-5.-6.-10"), "rq-1.-2.-2");
+  EXPECT_EQ(region_of_cell("p-2147483648.2147483647.0"), "rp-429496730.429496729.0");
+  for (const std::string bad : {"a3", "in3", "c.0.0.0", "p1.2", "p1.2.3x", "q1.2.99999999999"}) {
+    EXPECT_FALSE(region_of_cell(bad)) << bad;
+    EXPECT_TRUE(cells_about(bad, 1).empty()) << bad;
+  }
+  const std::vector<std::string> about = cells_about("p-1.0.7", 1);
+  ASSERT_EQ(about.size(), 27u);
+  EXPECT_EQ(about.front(), "p-2.-1.6");
+  EXPECT_EQ(about[13], "p-1.0.7");
+  EXPECT_EQ(about.back(), "p0.1.8");
+  static_assert(kRegionCells >= 2 * Neighbourhood::kSpan + 1);
+  for (int x = -12; x <= 12; ++x) {
+    std::set<std::string> regions;
+    for (const std::string& c :
+         cells_about("p" + std::to_string(x) + ".3.-4", Neighbourhood::kSpan))
+      regions.insert(*region_of_cell(c));
+    EXPECT_LE(regions.size(), 8u) << x;
+    EXPECT_GE(regions.size(), 4u) << x;  // y 1..5 and z -6..-2 straddle two regions each
+  }
+}
+
 // A place that is not a number (an agent whose samples are refused anyway) lies in the origin's
 // cell, not in one cast from NaN.
 TEST(Neighbourhood, APlaceThatIsNotANumberLiesInTheOriginsCell) {
