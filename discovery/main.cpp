@@ -7,6 +7,8 @@
 #include <chrono>
 #include <csignal>
 #include <cstdio>
+#include <fstream>
+#include <string>
 #include <thread>
 
 #include <unistd.h>
@@ -30,6 +32,9 @@ int main(int argc, char** argv) {
   app.add_option("--port", port, "UDP port")->check(CLI::Range(1, 65535));
   app.add_option("--domain", domain, "DDS domain id")
       ->check(CLI::Range(0, static_cast<int>(qswarm::PortPlan::kMaxDomain)));
+  std::string ready_file;
+  app.add_option("--ready-file", ready_file,
+                 "a file to create once it listens (swarm run waits for it)");
   app.add_option("--participant-id", participant_id,
                  "its participant id in the port plan (swarm run's own server; its ports are "
                  "taken exactly, a taken one is an error)")
@@ -52,6 +57,10 @@ int main(int argc, char** argv) {
     std::printf("swarm-discovery: serving domain %u on %s:%u\n", domain, server.address().c_str(),
                 port);
     std::fflush(stdout);
+    if (!ready_file.empty() && !std::ofstream(ready_file)) {
+      std::fprintf(stderr, "swarm-discovery: cannot write %s\n", ready_file.c_str());
+      return 1;
+    }
     int last = -1;
     while (!g_stop) {
       std::this_thread::sleep_for(std::chrono::milliseconds(200));

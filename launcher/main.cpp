@@ -215,11 +215,10 @@ int run(const RunOptions& opt) {
   spec.participant_base = *base;
   if (own_server) {
     spec.discovery_id = *base + participants - 1;
-    spec.discovery_ready = [domain = rc.transport.domain_id, id = spec.discovery_id,
-                            iface = rc.transport.interface] {
-      // Its ports taken: the server (the only process given this id) is listening.
-      return !participant_ports_problem(domain, id, iface).empty();
-    };
+    // Written by the server once its participant listens. Not its ports seen taken: the server
+    // binds them briefly itself to check them first, and a probe of them from here could take
+    // them in that instant.
+    spec.discovery_ready = [ready = dir.discovery_ready()] { return fs::exists(ready); };
   }
   spec.view_port = opt.view_port;
   spec.view_listen = opt.view_listen;

@@ -121,6 +121,7 @@ std::vector<RunDir::File> RunDir::files() {
       {kSupervisorLog, "the supervisor's log"},
       {kSupervisorOut, "the supervisor's stdout, with --quiet"},
       {kDiscoveryOut, "the run's Discovery Server's output (transport.discovery SERVER)"},
+      {kDiscoveryReady, "written by the run's Discovery Server once it listens"},
       {kPlots, "swarm plot's figures (a directory; not written by the run)"},
       {"agent-N.log", "an agent's log"},
       {"agent-N.out",

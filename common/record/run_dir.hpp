@@ -53,6 +53,7 @@ class RunDir {
   std::filesystem::path supervisor_log() const { return file(kSupervisorLog); }
   std::filesystem::path supervisor_out() const { return file(kSupervisorOut); }
   std::filesystem::path discovery_out() const { return file(kDiscoveryOut); }
+  std::filesystem::path discovery_ready() const { return file(kDiscoveryReady); }
   std::filesystem::path plots() const { return file(kPlots); }
   std::filesystem::path agent_log(AgentId id) const;
   // The agent's process output: its first life's, or the k-th restart's.
@@ -104,6 +105,7 @@ class RunDir {
   static constexpr const char* kSupervisorLog = "supervisor.log";
   static constexpr const char* kSupervisorOut = "supervisor.out";
   static constexpr const char* kDiscoveryOut = "discovery.out";
+  static constexpr const char* kDiscoveryReady = "discovery.ready";
   static constexpr const char* kPlots = "plots";
 
  private:

@@ -164,6 +164,42 @@ TEST(Launcher, ADiscoveryServerThatNeverListensStartsNothingElse) {
   EXPECT_EQ(procs.children().size(), 1u);
 }
 
+// The server is up once seen up, and the agents start. When readiness was its ports seen taken,
+// the server's own check of them (it binds each briefly) looked like it listening, the next look
+// saw them free, and a 256-agent run ended at once "not listening after 20 s".
+TEST(Launcher, ADiscoveryServerSeenListeningOnceIsUpAndTheWaitSaysHowLongItTook) {
+  FakeProcesses procs;
+  ManualClock clock;
+  LaunchSpec spec = spec_for("");
+  spec.participant_base = 0;
+  spec.discovery_id = 4;
+  int polls = 0;
+  spec.discovery_ready = [&] { return ++polls == 2; };
+  Launcher l(spec, procs, clock, [] { return true; });
+  EXPECT_NO_THROW(l.start());
+  EXPECT_EQ(procs.children().size(), 5u);  // the server, the supervisor, agents 1..3
+  EXPECT_EQ(polls, 2);
+  EXPECT_TRUE(has(l.discovery_argv(), spec.dir.discovery_ready().string()));
+
+  // One that dies before it listens: its exit is the reason, after the time it really took.
+  FakeProcesses dying;
+  ManualClock clock2;
+  spec.discovery_ready = [&] {
+    if (clock2.now_s() >= 1.0) dying.exit_child("discovery", 0, exited(2));
+    return false;
+  };
+  Launcher l2(spec, dying, clock2, [] { return true; });
+  try {
+    l2.start();
+    ADD_FAILURE() << "started without a server";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("exit"), std::string::npos) << e.what();
+    EXPECT_EQ(std::string(e.what()).find("20 s"), std::string::npos) << e.what();
+  }
+  EXPECT_LT(clock2.now_s(), 2.0);
+  EXPECT_EQ(dying.children().size(), 1u);
+}
+
 TEST(Launcher, ADiscoveryServerThatCrashesMidRunIsACrashTheRecordMustShow) {
   FakeProcesses procs;
   ManualClock clock;
