@@ -44,10 +44,13 @@ std::string partition(const char* stream, std::uint64_t run_id) {
 
 // A state or record writer's settings: no filtering on the writer's side (it would evaluate each
 // sample for every filtering reader and send per reader: 64 agents on 2 cores fell behind with
-// it; readers filter), and a history that allocates nothing in steady state.
+// it; readers filter), and a history that allocates nothing in steady state. It reserves one
+// payload (of the type's largest size), not Fast DDS's 100: a writer keeps its agent's last
+// sample, and every topic has a pool of its own (an agent writes up to 9 region topics).
 dds::DataWriterQos unfiltered(dds::DataWriterQos wq) {
   wq.writer_resource_limits().reader_filters_allocation =
       eprosima::fastrtps::ResourceLimitedContainerConfig(0, 0, 0);
+  wq.resource_limits().allocated_samples = 1;
   wq.endpoint().history_memory_policy =
       eprosima::fastrtps::rtps::PREALLOCATED_WITH_REALLOC_MEMORY_MODE;
   return wq;
@@ -343,7 +346,9 @@ DdsStateBus::DdsStateBus(DdsParticipant& participant, const StateBusOptions& opt
   rq.resource_limits().max_instances = opts.max_agents + 16;
   rq.resource_limits().max_samples_per_instance = 1;
   rq.resource_limits().max_samples = opts.max_agents + 16;
-  rq.resource_limits().allocated_samples = 32;
+  // Reserved at creation, grown when needed: a state reader is one of up to 8 (one per region
+  // topic), each with a pool of its own, and its listener takes what arrives at once.
+  rq.resource_limits().allocated_samples = opts.recorder ? 32 : 4;
   rq.endpoint().history_memory_policy =
       eprosima::fastrtps::rtps::PREALLOCATED_WITH_REALLOC_MEMORY_MODE;
   std::memcpy(d.roster_factory.local.data(), d.own_prefix.data(), d.own_prefix.size());
