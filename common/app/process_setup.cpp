@@ -29,6 +29,9 @@ namespace qswarm {
 
 namespace {
 
+// Past this many agents, cells are region topics (StateBusOptions::region_topics).
+constexpr std::size_t kRegionTopicsAbove = 128;
+
 // "a,b,,c" -> {"a", "b", "", "c"}; "" -> {}.
 std::vector<std::string> split_names(const std::string& text) {
   std::vector<std::string> out;
@@ -264,6 +267,9 @@ DdsOptions dds_options(const RunConfig& rc, const std::string& participant_name,
   // A Discovery Server relays announcements by topic: with a topic per agent name, an agent that
   // hears its neighbours by name discovers only them (StateBusOptions::topic_per_name).
   s.topic_per_name = !p.discovery_server.empty();
+  // And cells as partitions of region topics where one shared topic would introduce everyone to
+  // everyone past the wall (StateBusOptions::region_topics says what it costs below it).
+  s.region_topics = s.topic_per_name && rc.agents.size() > kRegionTopicsAbove;
   // Writers never filter for their readers (StateBusOptions::filter_at_writer says why).
   // Where everyone hears everyone on loopback, a sample is one datagram to the run's multicast
   // group rather than one per reader (docs/benchmarks.md, "One datagram per sample"). Discovery

@@ -627,16 +627,20 @@ void DdsStateBus::Impl::set_regions(const std::vector<std::string>& pub,
 
 void DdsStateBus::Impl::set_named_interest(const Interest& interest) {
   interest_told = true;
-  // Agent names and inboxes are topics, cells partitions of their region's topic; other names
-  // partitions of the shared topic, which also carries the whole run (the empty interest).
+  // Agent names and inboxes are topics, cells partitions of their region's topic (region_topics);
+  // other names partitions of the shared topic, which also carries the whole run (the empty
+  // interest).
   const auto named = [](const std::string& n) {
     return agent_of_partition(n).has_value() || inbox_of_partition(n).has_value();
   };
   std::vector<std::string> agents_pub, cells_pub, shared_pub, agents_sub, cells_sub, shared_sub;
+  const auto cell = [&](const std::string& n) {
+    return opts.region_topics && region_of_cell(n).has_value();
+  };
   for (const std::string& n : interest.publish)
-    (named(n) ? agents_pub : region_of_cell(n) ? cells_pub : shared_pub).push_back(n);
+    (named(n) ? agents_pub : cell(n) ? cells_pub : shared_pub).push_back(n);
   for (const std::string& n : interest.subscribe)
-    (named(n) ? agents_sub : region_of_cell(n) ? cells_sub : shared_sub).push_back(n);
+    (named(n) ? agents_sub : cell(n) ? cells_sub : shared_sub).push_back(n);
   // The shared topic's endpoints are made once needed, after their partitions are set: they
   // never hear the whole run on the way.
   if (opts.publish && (interest.publish.empty() || !shared_pub.empty())) {

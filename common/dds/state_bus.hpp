@@ -46,11 +46,19 @@ struct StateBusOptions {
   // a move between topics would replace the writer, and its readers would hear it only once the
   // server has relayed the new one (a 64-agent formation lost neighbours and, once in five runs,
   // edge-flow's exact average that way): an agent keeps idle writers, already matched, on the
-  // regions within a cell of its own. No binding of writers
+  // regions within a cell of its own. Cells are region topics only with `region_topics`, else
+  // partitions of the shared topic. No binding of writers
   // to agents (the agent partitions DDS-Security's permissions name; Fast DDS 2.9 has no secure
   // Discovery Server); the gate judges a sample's participant, not its writer, since an agent
   // speaks through two. Until set_interest the state stream has no endpoints.
   bool topic_per_name = false;
+  // With topic_per_name, cells are partitions of their region's topic rather than of the shared
+  // one. Each move then updates up to 8 readers and several writers through the server instead
+  // of one of each, and where agents cross regions fast that is slower: in a 64-agent formation
+  // flown out of a cube about the origin (a region corner), 2 of 4 runs lost edge-flow's exact
+  // average by millimetres (none at a quarter of real time). Worth it where the shared topic
+  // cannot discover at all (256 agents: 159 s).
+  bool region_topics = false;
   // The state writer evaluates its readers' place filters (Interest::near) and sends a sample only
   // to the readers it passes (Fast DDS's writer-side content filtering, for up to max_agents + 16
   // readers), so an agent is sent only what it hears. Each sample then carries 16 bytes per

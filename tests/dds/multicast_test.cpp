@@ -245,6 +245,24 @@ TEST(StateMulticast, OnlyAllToAllRunsOnLoopbackWithoutTheTestTransportOrUnicastD
   EXPECT_NE(to_text(rc.resolved).find("multicast: true"), std::string::npos);
 }
 
+// Cells become region topics only through a Discovery Server and past 128 agents, where one
+// shared topic would have the server introduce everyone to everyone.
+TEST(RegionTopics, OnlyThroughADiscoveryServerAndPastOneHundredTwentyEightAgents) {
+  const auto regions = [](int agents, const std::string& server) {
+    const RunConfig rc = resolve_scenario(parse_scenario_text(
+        "random_agents { count: " + std::to_string(agents) + " box_m: 100 } seed: 1", "test"));
+    ProcessOptions po;
+    po.discovery_server = server;
+    const DdsOptions d = dds_options(rc, "agent", po);
+    EXPECT_EQ(d.state.topic_per_name, !server.empty());
+    return d.state.region_topics;
+  };
+  EXPECT_FALSE(regions(128, "127.0.0.1:11811"));
+  EXPECT_TRUE(regions(129, "127.0.0.1:11811"));
+  EXPECT_TRUE(regions(256, "127.0.0.1:11811"));
+  EXPECT_FALSE(regions(256, ""));
+}
+
 // --peer-hosts: one participant per host (a container), so id 0 of the port plan and the peers
 // 0:1 at each host, unless told otherwise; never the multicast group.
 TEST(PeerHosts, MeanOneParticipantPerHostUnlessTold) {

@@ -26,7 +26,7 @@ struct Swarm {
   std::vector<std::unique_ptr<DdsBus>> agents;  // agents 1 to 4
   std::uint64_t seq = 0;
 
-  explicit Swarm(bool topic_per_name, bool pairs = true) {
+  explicit Swarm(bool topic_per_name, bool pairs = true, bool region_topics = false) {
     const auto domain = static_cast<std::uint32_t>(test::test_domain().domain());
     const std::optional<int> id = free_participant_block(domain, 1, "127.0.0.1");
     if (!id) throw std::runtime_error("no free participant id on the test's domain");
@@ -36,6 +36,7 @@ struct Swarm {
       DdsOptions o = test::dds_options(("agent-" + std::to_string(a)).c_str(), kRun);
       o.participant.discovery_server = "127.0.0.1:" + std::to_string(port);
       o.state.topic_per_name = topic_per_name;
+      o.state.region_topics = region_topics;
       o.state.self = a;
       o.state.roster = {1, 2, 3, 4};
       agents.push_back(std::make_unique<DdsBus>(o));
@@ -127,7 +128,7 @@ Interest in_cell(AgentId id, int x) {
 // into another region is heard there at once, through a writer its new listeners matched while
 // it was a cell away.
 TEST(NeighbourTopics, CellsArePartitionsOfRegionTopicsAndAMoveAcrossNeedsNoDiscovery) {
-  Swarm s(/*topic_per_name=*/true, /*pairs=*/false);
+  Swarm s(/*topic_per_name=*/true, /*pairs=*/false, /*region_topics=*/true);
   s.agent(1).set_interest(in_cell(1, 4));  // the mover, at the edge of region 0
   s.agent(2).set_interest(in_cell(2, 2));  // listens to x 0..4: region 0 alone
   s.agent(3).set_interest(in_cell(3, 7));  // listens to x 5..9: region 1 alone
