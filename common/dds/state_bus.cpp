@@ -46,7 +46,7 @@ std::string partition(const char* stream, std::uint64_t run_id) {
 // sample for every filtering reader and send per reader: 64 agents on 2 cores fell behind with
 // it; readers filter), and a history that allocates nothing in steady state. It reserves one
 // payload (of the type's largest size), not Fast DDS's 100: a writer keeps its agent's last
-// sample, and every topic has a pool of its own (an agent writes up to 9 region topics).
+// sample, and every topic has a pool of its own (an agent writes up to 8 region topics).
 dds::DataWriterQos unfiltered(dds::DataWriterQos wq) {
   wq.writer_resource_limits().reader_filters_allocation =
       eprosima::fastrtps::ResourceLimitedContainerConfig(0, 0, 0);
@@ -110,9 +110,9 @@ struct DdsStateBus::Impl : public dds::DataReaderListener {
   qswarm_msgs::AgentState out_sample;  // reused: publishing allocates nothing in steady state
 
   // StateBusOptions::topic_per_name: the writer and reader of each agent name of the interest,
-  // on topics of their own in the run's partition; the other names (cells) stay partitions of
-  // the shared topic, in `writer` and `reader`, made when first needed. Touched only by the
-  // thread that calls set_interest and publish.
+  // on topics of their own in the run's partition; the other names (cells) are partitions of
+  // their region's topic (region_topics) or of the shared topic, in `writer` and `reader`, made
+  // when first needed. Touched only by the thread that calls set_interest and publish.
   dds::DataWriterQos state_writer_qos;   // the names' writers
   dds::DataWriterQos shared_writer_qos;  // the shared topic's, filtering for its readers if asked
   dds::DataReaderQos state_reader_qos;
@@ -172,6 +172,8 @@ struct DdsStateBus::Impl : public dds::DataReaderListener {
   // The region topics' endpoints for these published and listened cells.
   void set_regions(const std::vector<std::string>& pub, const std::vector<std::string>& sub,
                    const Interest& interest);
+  // Deletes a reader of a name or region, and its filter.
+  void delete_reader(dds::Subscriber* sub, const NamedReader& r);
   // Deletes the name's reader and/or writer, and its topic once neither is left.
   void drop_named(const std::string& name, bool its_reader, bool its_writer);
   void drop_region(const std::string& region, bool its_reader, bool its_writer);
@@ -491,11 +493,15 @@ void DdsStateBus::Impl::move_reader(const std::vector<std::string>& names) {
     throw std::runtime_error("dds: cannot move the state reader's partitions");
 }
 
+void DdsStateBus::Impl::delete_reader(dds::Subscriber* sub, const NamedReader& r) {
+  r.reader->set_listener(nullptr);
+  sub->delete_datareader(r.reader);
+  if (r.filtered) participant->delete_contentfilteredtopic(r.filtered);
+}
+
 void DdsStateBus::Impl::drop_named(const std::string& name, bool its_reader, bool its_writer) {
   if (auto r = named_readers.find(name); its_reader && r != named_readers.end()) {
-    r->second.reader->set_listener(nullptr);
-    named_subscriber->delete_datareader(r->second.reader);
-    if (r->second.filtered) participant->delete_contentfilteredtopic(r->second.filtered);
+    delete_reader(named_subscriber, r->second);
     named_readers.erase(r);
   }
   if (auto w = named_writers.find(name); its_writer && w != named_writers.end()) {
@@ -517,9 +523,7 @@ void DdsStateBus::Impl::drop_topic_if_unused(const std::string& name) {
 
 void DdsStateBus::Impl::drop_region(const std::string& region, bool its_reader, bool its_writer) {
   if (auto r = region_readers.find(region); its_reader && r != region_readers.end()) {
-    r->second.reader->set_listener(nullptr);
-    subscriber->delete_datareader(r->second.reader);
-    if (r->second.filtered) participant->delete_contentfilteredtopic(r->second.filtered);
+    delete_reader(subscriber, r->second);
     region_readers.erase(r);
   }
   if (auto w = region_writers.find(region); its_writer && w != region_writers.end()) {
@@ -603,14 +607,14 @@ void DdsStateBus::Impl::set_regions(const std::vector<std::string>& pub,
       rw.cells = cells;
       continue;
     }
+    dds::Topic* on = named_topic(region);
     RegionWriter rw;
     dds::PublisherQos q = dds::PUBLISHER_QOS_DEFAULT;
     q.partition() = partitions(run_partition(opts.run_id), cells, /*reader=*/false);
     rw.publisher = participant->create_publisher(q);
     if (!rw.publisher) throw std::runtime_error("dds: cannot create a state publisher");
     rw.listener = std::make_unique<WriterListener>();
-    rw.writer =
-        rw.publisher->create_datawriter(named_topic(region), shared_writer_qos, rw.listener.get());
+    rw.writer = rw.publisher->create_datawriter(on, shared_writer_qos, rw.listener.get());
     if (!rw.writer) {
       participant->delete_publisher(rw.publisher);
       throw std::runtime_error("dds: cannot create a state writer of " + topic_of(region));
@@ -634,8 +638,14 @@ void DdsStateBus::Impl::set_named_interest(const Interest& interest) {
     return agent_of_partition(n).has_value() || inbox_of_partition(n).has_value();
   };
   std::vector<std::string> agents_pub, cells_pub, shared_pub, agents_sub, cells_sub, shared_sub;
+  // Regions for the cells of one space only: with two (proximity and collision avoidance) a
+  // sample would go out once per space's region, and a listener of both would count it twice.
+  std::set<char> spaces;
+  for (const auto* names : {&interest.publish, &interest.subscribe})
+    for (const std::string& n : *names)
+      if (region_of_cell(n)) spaces.insert(n[0]);
   const auto cell = [&](const std::string& n) {
-    return opts.region_topics && region_of_cell(n).has_value();
+    return opts.region_topics && spaces.size() == 1 && region_of_cell(n).has_value();
   };
   for (const std::string& n : interest.publish)
     (named(n) ? agents_pub : cell(n) ? cells_pub : shared_pub).push_back(n);
@@ -783,6 +793,11 @@ std::map<AgentId, std::uint8_t> DdsStateBus::suspects() const {
 std::set<std::uint64_t> DdsStateBus::foreign_runs() const {
   std::lock_guard<std::mutex> lock(impl_->mu);
   return impl_->gate.foreign_runs();
+}
+
+int DdsStateBus::region_readers_matched(const std::string& region) const {
+  const auto it = impl_->region_writers.find(region);
+  return it == impl_->region_writers.end() ? 0 : it->second.listener->matched.load();
 }
 
 int DdsStateBus::matched_readers() const {

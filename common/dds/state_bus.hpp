@@ -53,11 +53,11 @@ struct StateBusOptions {
   // speaks through two. Until set_interest the state stream has no endpoints.
   bool topic_per_name = false;
   // With topic_per_name, cells are partitions of their region's topic rather than of the shared
-  // one. Each move then updates up to 8 readers and several writers through the server instead
-  // of one of each, and where agents cross regions fast that is slower: in a 64-agent formation
-  // flown out of a cube about the origin (a region corner), 2 of 4 runs lost edge-flow's exact
-  // average by millimetres (none at a quarter of real time). Worth it where the shared topic
-  // cannot discover at all (256 agents: 159 s).
+  // one (where the interest's cells are of one space). Each move then updates up to 8 readers and
+  // several writers through the server instead of one of each, and where agents cross regions fast
+  // that is slower: in a 64-agent formation flown out of a cube about the origin (a region corner),
+  // 5 of 12 runs lost edge-flow's exact average by 0.8 to 7 mm (none of 3 at a quarter of real
+  // time). Worth it where the shared topic cannot discover at all (256 agents: 159 s).
   bool region_topics = false;
   // The state writer evaluates its readers' place filters (Interest::near) and sends a sample only
   // to the readers it passes (Fast DDS's writer-side content filtering, for up to max_agents + 16
@@ -116,6 +116,9 @@ class DdsStateBus final : public NeighborBus {
   // Readers matched to our writer (DDS discovery; the start barrier waits on it); with
   // topic_per_name, summed over the writers of its names.
   int matched_readers() const override;
+  // The readers matched with its writer on a region's topic ("rp1.0.0"), written or idle (0:
+  // none). For tests and diagnostics.
+  int region_readers_matched(const std::string& region) const;
   // Run ids of other runs heard on this domain (only a hear_all_runs bus hears them).
   std::set<std::uint64_t> foreign_runs() const override;
   // Ids outside the roster whose samples the roster filter dropped (the first 64 of them; their

@@ -141,11 +141,14 @@ TEST(NeighbourTopics, CellsArePartitionsOfRegionTopicsAndAMoveAcrossNeedsNoDisco
       30.0));
   // Agent 3 knows the mover (an idle writer of it on region 1 matched its reader) but hears
   // nothing from it; agent 2 shares no region with 3 and 4 and never meets them.
+  // The mover's idle writer on region 1's topic rp1.0.0 (cells p5.0..1.0..1) matched with its
+  // own reader and agent 3's, not agent 4's (whose cells begin at x = 6).
   const std::uint64_t before = s.seq;
   ASSERT_TRUE(test::wait_for(
       [&] {
         s.publish();
-        return s.seq_heard(3, 4) >= before + 20;
+        return s.seq_heard(3, 4) >= before + 20 &&
+               s.agent(1).state().region_readers_matched("rp1.0.0") == 2;
       },
       30.0));
   EXPECT_FALSE(s.heard(3, 1));
@@ -173,6 +176,29 @@ TEST(NeighbourTopics, CellsArePartitionsOfRegionTopicsAndAMoveAcrossNeedsNoDisco
   EXPECT_LE(s.seq_heard(2, 1), moved);
   EXPECT_FALSE(s.heard(4, 1));
   EXPECT_EQ(s.known(2), 2);
+}
+
+// Cells of two spaces (proximity and collision avoidance) stay partitions of the shared topic: as
+// regions, each sample would go out once per space, and a listener of both would hear it twice.
+TEST(NeighbourTopics, CellsOfTwoSpacesStayOnTheSharedTopic) {
+  Swarm s(/*topic_per_name=*/true, /*pairs=*/false, /*region_topics=*/true);
+  for (AgentId a = 1; a <= 2; ++a) {
+    Interest in = in_cell(a, 0);
+    const std::vector<std::string> q = cells_about("q0.0.0", 2);
+    in.publish.push_back("q0.0.0");
+    in.subscribe.insert(in.subscribe.end(), q.begin(), q.end());
+    std::sort(in.publish.begin(), in.publish.end());
+    std::sort(in.subscribe.begin(), in.subscribe.end());
+    s.agent(a).set_interest(in);
+  }
+  ASSERT_TRUE(test::wait_for(
+      [&] {
+        s.publish();
+        return s.heard(1, 2) && s.heard(2, 1) && s.agent(1).matched_readers() == 2;
+      },
+      30.0));
+  EXPECT_EQ(s.agent(1).state().region_readers_matched("rp0.0.0"), 0);
+  EXPECT_EQ(s.agent(1).state().region_readers_matched("rq0.0.0"), 0);
 }
 
 // The control: the same interests as partitions of one topic. The server relays every participant
