@@ -90,6 +90,14 @@ LaunchSpec spec_for(const std::string& extra) {
   return spec;
 }
 
+// The same, with the run's own Discovery Server on the block's last id (supervisor 0, agents 1..3).
+LaunchSpec spec_with_server() {
+  LaunchSpec spec = spec_for("");
+  spec.participant_base = 0;
+  spec.discovery_id = 4;
+  return spec;
+}
+
 bool has(const std::vector<std::string>& argv, const std::string& a) {
   return std::find(argv.begin(), argv.end(), a) != argv.end();
 }
@@ -155,9 +163,7 @@ TEST(Launcher, ASecureRunsProcessesDiscoverByUnicastWithinItsBlockAndAPlainRunsD
 TEST(Launcher, ADiscoveryServerThatNeverListensStartsNothingElse) {
   FakeProcesses procs;
   ManualClock clock;
-  LaunchSpec spec = spec_for("");
-  spec.participant_base = 0;
-  spec.discovery_id = 4;
+  LaunchSpec spec = spec_with_server();
   spec.discovery_ready = [] { return false; };
   Launcher l(spec, procs, clock, [] { return true; });
   EXPECT_THROW(l.start(), std::runtime_error);
@@ -170,9 +176,7 @@ TEST(Launcher, ADiscoveryServerThatNeverListensStartsNothingElse) {
 TEST(Launcher, ADiscoveryServerSeenListeningOnceIsUpAndTheWaitSaysHowLongItTook) {
   FakeProcesses procs;
   ManualClock clock;
-  LaunchSpec spec = spec_for("");
-  spec.participant_base = 0;
-  spec.discovery_id = 4;
+  LaunchSpec spec = spec_with_server();
   int polls = 0;
   spec.discovery_ready = [&] { return ++polls == 2; };
   Launcher l(spec, procs, clock, [] { return true; });
@@ -216,9 +220,7 @@ TEST(Launcher, ADiscoveryServerSeenListeningOnceIsUpAndTheWaitSaysHowLongItTook)
 TEST(Launcher, ADiscoveryServerThatCrashesMidRunIsACrashTheRecordMustShow) {
   FakeProcesses procs;
   ManualClock clock;
-  LaunchSpec spec = spec_for("");
-  spec.participant_base = 0;
-  spec.discovery_id = 4;
+  LaunchSpec spec = spec_with_server();
   Launcher l(spec, procs, clock, [] { return true; });
   l.start();
   procs.exit_child("discovery", 0, signalled(SIGSEGV));
