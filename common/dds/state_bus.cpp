@@ -419,10 +419,7 @@ DdsStateBus::~DdsStateBus() {
   set_listener(nullptr);
   // Deleted here, not left to the participant: the reader's listener is this object, and the
   // filter's factory lives in it.
-  if (d.reader) {
-    d.reader->set_listener(nullptr);
-    d.subscriber->delete_datareader(d.reader);
-  }
+  d.drop_shared_reader();
   while (!d.region_readers.empty()) d.drop_region(d.region_readers.begin()->first, true, true);
   while (!d.region_writers.empty()) d.drop_region(d.region_writers.begin()->first, true, true);
   while (!d.named_readers.empty()) d.drop_named(d.named_readers.begin()->first, true, true);
@@ -434,7 +431,6 @@ DdsStateBus::~DdsStateBus() {
   if (d.publisher) d.participant->delete_publisher(d.publisher);
   if (d.record_writer) d.record_publisher->delete_datawriter(d.record_writer);
   if (d.record_publisher) d.participant->delete_publisher(d.record_publisher);
-  if (d.roster_topic) d.participant->delete_contentfilteredtopic(d.roster_topic);
   if (!d.opts.roster.empty())
     d.participant->unregister_content_filter_factory(RosterFilterFactory::kRosterFilterClass);
   if (d.topic) d.participant->delete_topic(d.topic);
@@ -543,10 +539,8 @@ void DdsStateBus::Impl::drop_shared_writer() {
 
 void DdsStateBus::Impl::drop_shared_reader() {
   if (!reader) return;
-  reader->set_listener(nullptr);
-  subscriber->delete_datareader(reader);
+  delete_reader(subscriber, {roster_topic, reader});
   reader = nullptr;
-  if (roster_topic) participant->delete_contentfilteredtopic(roster_topic);
   roster_topic = nullptr;
 }
 
@@ -557,13 +551,7 @@ void DdsStateBus::Impl::set_regions(const std::vector<std::string>& pub,
   std::set<std::string> regions;
   for (const std::string& c : sub) regions.insert(*region_of_cell(c));
   if (!sub.empty()) move_reader(sub);
-  const std::vector<std::string> params = place_filter(interest.near, {});
-  if (params != place_params) {
-    for (auto& [region, r] : region_readers)
-      if (r.filtered && r.filtered->set_expression_parameters(params) != ReturnCode_t::RETCODE_OK)
-        throw std::runtime_error("dds: cannot set a state reader's place filter");
-    place_params = params;
-  }
+  set_place(interest, {});
   for (const std::string& region : regions) {
     if (region_readers.count(region)) continue;
     NamedReader r;
@@ -705,14 +693,17 @@ void DdsStateBus::Impl::set_named_interest(const Interest& interest) {
 }
 
 void DdsStateBus::Impl::set_place(const Interest& interest, const std::vector<std::string>& names) {
-  if (!roster_topic) return;  // no filter to tell (no roster: a test's bus)
   std::vector<AgentId> ids;
   for (const std::string& n : names)
     if (const auto id = agent_of_partition(n)) ids.push_back(*id);
   std::vector<std::string> params = place_filter(interest.near, ids);
   if (params == place_params) return;  // each change travels to every matched peer
-  if (roster_topic->set_expression_parameters(params) != ReturnCode_t::RETCODE_OK)
-    throw std::runtime_error("dds: cannot set the state reader's place filter");
+  // The shared topic's reader and the region readers (no filter without a roster: a test's bus).
+  std::vector<dds::ContentFilteredTopic*> filters{roster_topic};
+  for (const auto& [region, r] : region_readers) filters.push_back(r.filtered);
+  for (dds::ContentFilteredTopic* f : filters)
+    if (f && f->set_expression_parameters(params) != ReturnCode_t::RETCODE_OK)
+      throw std::runtime_error("dds: cannot set a state reader's place filter");
   place_params = std::move(params);
 }
 

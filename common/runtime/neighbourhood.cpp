@@ -94,11 +94,7 @@ Interest Neighbourhood::update(const Vec3& p_W, const Vec3& q, const std::set<Ag
     if (!s.cell || !near_cell(x, *s.cell, s.cell_m, s.keep_m)) {
       s.cell = cell_of(x, s.cell_m);
       s.cell_name = cell_name(s.tag, *s.cell);
-      s.listened.clear();
-      for (int dx = -kSpan; dx <= kSpan; ++dx)
-        for (int dy = -kSpan; dy <= kSpan; ++dy)
-          for (int dz = -kSpan; dz <= kSpan; ++dz)
-            s.listened.push_back(cell_name(s.tag, *s.cell + Eigen::Vector3i(dx, dy, dz)));
+      s.listened = cells_about(s.cell_name, kSpan);
       std::sort(s.listened.begin(), s.listened.end());
     }
     if (reach_) {
