@@ -57,6 +57,14 @@ DiscoveryServer::DiscoveryServer(std::uint32_t domain_id, const std::string& lis
   // An infinite lease, as every DdsBus participant announces: no client runs a lease check on the
   // server, the check that races the server's removal when it leaves (participant.cpp says more).
   disc.leaseDuration = eprosima::fastrtps::c_TimeInfinite;
+  // Nor does it announce itself on a timer. Fast DDS 2.9.1's periodic announcement of a server is
+  // sent straight to every client its database holds, and a client that has just arrived can be
+  // there before its locators have an output channel: the UDP transport's statistics then assert
+  // (OutputTrafficManager.hpp:87) and the server aborts. Clients need no such refresh: the lease
+  // is infinite, and a client gets the server's DATA(p) from the server's reliable PDP writer once
+  // matched (docs/architecture.md, "The Discovery Server never announces on a timer").
+  disc.initial_announcements.count = 0;
+  disc.leaseDuration_announcementperiod = eprosima::fastrtps::Duration_t(kNeverSeconds, 0);
   rtps::get_server_client_default_guidPrefix(0, pqos.wire_protocol().prefix);
   eprosima::fastrtps::rtps::Locator_t loc;
   eprosima::fastrtps::rtps::IPLocator::setIPv4(loc, address_);
@@ -77,5 +85,12 @@ DiscoveryServer::~DiscoveryServer() {
 }
 
 int DiscoveryServer::clients() const { return impl_->clients; }
+
+DiscoveryServer::Announcements DiscoveryServer::announcements() const {
+  const auto qos = impl_->participant->get_qos();
+  const auto& disc = qos.wire_protocol().builtin.discovery_config;
+  return {disc.initial_announcements.count,
+          static_cast<double>(disc.leaseDuration_announcementperiod.seconds)};
+}
 
 }  // namespace qswarm

@@ -26,6 +26,15 @@ class DiscoveryServer {
   // Participants (clients) the server currently knows.
   int clients() const;
 
+  // The server's own announcements as its participant applied them: none at start, and a period
+  // no run reaches (discovery_server.cpp says why).
+  static constexpr std::int32_t kNeverSeconds = 100 * 24 * 3600;
+  struct Announcements {
+    std::uint32_t initial = 0;
+    double period_s = 0;
+  };
+  Announcements announcements() const;
+
   struct Impl;
 
  private:
