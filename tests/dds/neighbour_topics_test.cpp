@@ -57,6 +57,15 @@ struct Swarm {
     return 0;
   }
   bool heard(AgentId by, AgentId from) { return seq_heard(by, from) > 0; }
+  // Publishes until agents 1 and 2, and 3 and 4, hear each other (false: not within 30 s).
+  bool pairs_meet() {
+    return test::wait_for(
+        [&] {
+          publish();
+          return heard(1, 2) && heard(2, 1) && heard(3, 4) && heard(4, 3);
+        },
+        30.0);
+  }
   void publish() {
     ++seq;
     for (AgentId a = 1; a <= 4; ++a) agent(a).publish(test::state_sample(a, kRun, seq));
@@ -75,23 +84,13 @@ TEST(NeighbourTopics, TheDiscoveryServerNeverAnnouncesOnATimerAndItsClientsStill
   const DiscoveryServer::Announcements own = s.server->announcements();
   EXPECT_EQ(own.initial, 0u);
   EXPECT_GE(own.period_s, 30.0 * 24 * 3600);
-  ASSERT_TRUE(test::wait_for(
-      [&] {
-        s.publish();
-        return s.heard(1, 2) && s.heard(2, 1) && s.heard(3, 4) && s.heard(4, 3);
-      },
-      30.0));
+  ASSERT_TRUE(s.pairs_meet());
   for (AgentId a = 1; a <= 4; ++a) EXPECT_EQ(s.known(a), 2) << "agent " << a;
 }
 
 TEST(NeighbourTopics, ThroughADiscoveryServerAnAgentDiscoversOnlyThoseItSharesANameWith) {
   Swarm s(/*topic_per_name=*/true);
-  ASSERT_TRUE(test::wait_for(
-      [&] {
-        s.publish();
-        return s.heard(1, 2) && s.heard(2, 1) && s.heard(3, 4) && s.heard(4, 3);
-      },
-      30.0));
+  ASSERT_TRUE(s.pairs_meet());
   // Each knows its partner and the server, and was sent nothing of the other pair.
   for (AgentId a = 1; a <= 4; ++a) EXPECT_EQ(s.known(a), 2) << "agent " << a;
   EXPECT_FALSE(s.heard(1, 3) || s.heard(1, 4) || s.heard(3, 1) || s.heard(3, 2));
