@@ -259,6 +259,19 @@ int Launcher::stop() {
     const auto& c = children[i];
     if (!was_running[i]) continue;
     if (c.role == "agent") at_teardown_.push_back(c.id);
+    if (c.killed_at_teardown && c.role == "discovery") {
+      // An agent or supervisor killed so leaves its record incomplete, which conclude() says. A
+      // server that ignores SIGTERM has hung: Fast DDS 2.9.1's server can spin with a writer's
+      // lock held, and from then on relays nothing (docs/architecture.md, "A hung Discovery
+      // Server"), so peers that should have met since never did. The record must say so.
+      char grace[32];
+      std::snprintf(grace, sizeof grace, "%g", spec_.grace_s);
+      problems_.push_back(std::string("the Discovery Server hung: it did not stop within ") +
+                          grace +
+                          " s of SIGTERM (a hung server relays no discovery; peers that were to "
+                          "meet after it hung did not)");
+      continue;
+    }
     if (c.killed_at_teardown) continue;
     // A child that stopped on our SIGTERM exits 0 (agents, supervisor) or by SIGTERM; anything
     // else (an abort, a segfault, a non-zero exit) is a crash the record must not hide.
@@ -323,7 +336,9 @@ Launcher::Outcome Launcher::conclude(double wall_time_s) {
     out.exit_code = 3;
     return out;
   }
-  const bool converged = WIFEXITED(sup) && WEXITSTATUS(sup) == 0 && problems_.empty();
+  // As in the amended summary: what the supervisor could not see (a crash, the wall limit) leaves
+  // the run unconverged, whatever the supervisor's own exit said.
+  const bool converged = WIFEXITED(sup) && WEXITSTATUS(sup) == 0 && unseen.empty();
   out.lines.push_back(std::string(converged ? "converged" : "not converged") + "; run record in " +
                       dir.str());
   out.exit_code = converged ? 0 : 1;

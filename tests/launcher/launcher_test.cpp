@@ -38,12 +38,13 @@ class FakeProcesses final : public ChildProcesses {
     for (Child& c : children_) {
       if (!c.running) continue;
       c.running = false;
-      if (c.id == stubborn_) {
+      if (c.role == stubborn_role_ && c.id == stubborn_) {
         c.status = signalled(SIGKILL);
         c.killed_at_teardown = true;
         ++killed;
       } else {
-        c.status = c.id == aborts_at_teardown_ ? signalled(SIGABRT) : exited(0);
+        c.status =
+            c.role == "agent" && c.id == aborts_at_teardown_ ? signalled(SIGABRT) : exited(0);
       }
     }
     return killed;
@@ -69,6 +70,7 @@ class FakeProcesses final : public ChildProcesses {
   }
   std::vector<std::vector<std::string>> argv_;
   unsigned stubborn_ = 0, aborts_at_teardown_ = 0;
+  std::string stubborn_role_ = "agent";  // with stubborn_: the child that needs SIGKILL
 
  private:
   std::vector<Child> children_, exited_;
@@ -227,6 +229,23 @@ TEST(Launcher, ADiscoveryServerThatCrashesMidRunIsACrashTheRecordMustShow) {
   EXPECT_FALSE(l.poll(false));  // the matched participants fly on
   ASSERT_EQ(l.problems().size(), 1u);
   EXPECT_NE(l.problems()[0].find("Discovery Server"), std::string::npos) << l.problems()[0];
+}
+
+// A server that needs SIGKILL had hung, and a hung Fast DDS server relays nothing: the run's
+// record says so and the run is not "converged".
+TEST(Launcher, ADiscoveryServerThatHangsAtTeardownIsAProblemTheRecordMustShow) {
+  FakeProcesses procs;
+  ManualClock clock;
+  Launcher l(spec_with_server(), procs, clock, [] { return true; });
+  l.start();
+  procs.stubborn_role_ = "discovery";
+  procs.stubborn_ = 0;
+  EXPECT_EQ(l.poll(true), "interrupted");
+  EXPECT_EQ(l.stop(), 1);
+  ASSERT_EQ(l.problems().size(), 1u);
+  EXPECT_NE(l.problems()[0].find("the Discovery Server hung"), std::string::npos)
+      << l.problems()[0];
+  EXPECT_NE(l.problems()[0].find("within 5 s of SIGTERM"), std::string::npos) << l.problems()[0];
 }
 
 TEST(Launcher, AnUnmarkedSigkillIsNotThePlansEvenWithKillsPlanned) {
