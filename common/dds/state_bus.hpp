@@ -54,10 +54,10 @@ struct StateBusOptions {
   bool topic_per_name = false;
   // With topic_per_name, cells are partitions of their region's topic rather than of the shared
   // one (where the interest's cells are of one space). Each move then updates up to 8 readers and
-  // several writers through the server instead of one of each, and where agents cross regions fast
-  // that is slower: in a 64-agent formation flown out of a cube about the origin (a region corner),
-  // 5 of 12 runs lost edge-flow's exact average by 0.8 to 7 mm (none of 3 at a quarter of real
-  // time). Worth it where the shared topic cannot discover at all (256 agents: 159 s).
+  // several writers through the server instead of one of each, and under that churn Fast DDS
+  // 2.9.1's server can hang and relay nothing more (docs/architecture.md, "A hung Discovery
+  // Server"): pairs stay deaf to each other, and edge-flow's exact average can be lost. Worth it
+  // only where the shared topic cannot discover at all (256 agents: 159 s).
   bool region_topics = false;
   // The state writer evaluates its readers' place filters (Interest::near) and sends a sample only
   // to the readers it passes (Fast DDS's writer-side content filtering, for up to max_agents + 16
