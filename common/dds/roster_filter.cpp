@@ -147,7 +147,9 @@ bool mentioned(const dds::IContentFilter::SerializedPayload& payload,
 class RosterFilter final : public dds::IContentFilter {
  public:
   RosterFilter(RosterExpression expr, PlaceFilter place, RosterFilterFactory& factory)
-      : expr_(std::move(expr)), place_(std::move(place)), factory_(factory) {}
+      : expr_(std::move(expr)), factory_(factory) {
+    own_.place = std::move(place);
+  }
   bool evaluate(const SerializedPayload& payload, const FilterSampleInfo& info,
                 const GUID_t& reader) const override {
     if (payload.data == nullptr || payload.length < kRosterIdOffset + 4) return false;
@@ -164,16 +166,18 @@ class RosterFilter final : public dds::IContentFilter {
       return false;
     }
     if (id == expr_.self) return false;
-    std::lock_guard<std::mutex> lock(mu_);
-    if (place_.near.empty()) return true;
     const bool ours =
         std::memcmp(reader.guidPrefix.value, factory_.local.data(), factory_.local.size()) == 0;
+    const PlaceSlot& slot = ours && factory_.place_is_local() ? factory_.local_place() : own_;
+    std::lock_guard<std::mutex> lock(slot.mu);
+    const PlaceFilter& place = slot.place;
+    if (place.near.empty()) return true;
     if (ours) factory_.judged_on_arrival.fetch_add(1, std::memory_order_relaxed);
-    if (in_ranges(place_.names, id)) return true;
+    if (in_ranges(place.names, id)) return true;
     if (payload.length < kPositionOffset + 24) return false;
     const Vec3 q = read_vec3(d, kConsensusOffset, little),
                p = read_vec3(d, kPositionOffset, little);
-    if (std::any_of(place_.near.begin(), place_.near.end(),
+    if (std::any_of(place.near.begin(), place.near.end(),
                     [&](const Reach& r) { return r.contains(r.space == 'q' ? q : p); }))
       return true;
     // A bond, whatever the place: the same verdict on the writer's side and on the reader's.
@@ -181,14 +185,13 @@ class RosterFilter final : public dds::IContentFilter {
   }
   const RosterExpression& expression() const { return expr_; }
   void set_place(PlaceFilter place) {
-    std::lock_guard<std::mutex> lock(mu_);
-    place_ = std::move(place);
+    std::lock_guard<std::mutex> lock(own_.mu);
+    own_.place = std::move(place);
   }
 
  private:
   const RosterExpression expr_;
-  mutable std::mutex mu_;  // place_: changed while DDS threads evaluate
-  PlaceFilter place_;
+  PlaceSlot own_;                 // its parameters' place: changed while DDS threads evaluate
   RosterFilterFactory& factory_;  // its tally and counts (evaluate is const to Fast DDS only)
 };
 
@@ -221,6 +224,14 @@ RosterFilterFactory::ReturnCode_t RosterFilterFactory::create_content_filter(
   if (!expr) return ReturnCode_t::RETCODE_BAD_PARAMETER;
   filter = new RosterFilter(std::move(*expr), std::move(*place), *this);
   return ReturnCode_t::RETCODE_OK;
+}
+
+void RosterFilterFactory::set_local_place(PlaceFilter place) {
+  {
+    std::lock_guard<std::mutex> lock(local_place_.mu);
+    local_place_.place = std::move(place);
+  }
+  place_is_local_.store(true, std::memory_order_release);
 }
 
 RosterFilterFactory::ReturnCode_t RosterFilterFactory::delete_content_filter(

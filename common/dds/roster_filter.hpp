@@ -60,6 +60,12 @@ std::vector<std::string> place_filter(const std::vector<Reach>& near,
 // a box upside down, more than 64 parameters, names with no place.
 std::optional<PlaceFilter> parse_place_filter(const std::vector<std::string>& params);
 
+// A place filter that DDS threads read while another thread changes it.
+struct PlaceSlot {
+  mutable std::mutex mu;
+  PlaceFilter place;
+};
+
 // What a reader's roster filter turned away: the first ids, and every sample.
 struct StrangerTally {
   static constexpr std::size_t kMaxIds = 64;
@@ -87,12 +93,29 @@ class RosterFilterFactory final : public eprosima::fastdds::dds::IContentFilterF
   // them (a sample a writer judged carries its verdict), only those of writers that do not.
   std::atomic<std::uint64_t> judged_on_arrival{0};
 
+  // From now on the local readers' filters judge by this place, not by their parameters, and
+  // set_local_place changes it without discovery. For readers no writer filters for
+  // (StateBusOptions::filter_at_writer false), which need not tell anyone where they listen: new
+  // parameters travel to every peer as an update of each reader, and a move that also changes
+  // the readers' partitions would then update each of them twice at once. Fast DDS 2.9.1's
+  // Discovery Server releases the first of two updates of one endpoint that reach it together
+  // while it still means to relay it, and corrupts its history (docs/architecture.md, "A hung
+  // Discovery Server").
+  void set_local_place(PlaceFilter place);
+  // Whether set_local_place was called.
+  bool place_is_local() const { return place_is_local_.load(std::memory_order_acquire); }
+  const PlaceSlot& local_place() const { return local_place_; }
+
   ReturnCode_t create_content_filter(const char* filter_class_name, const char* type_name,
                                      const eprosima::fastdds::dds::TopicDataType* data_type,
                                      const char* expression, const ParameterSeq& params,
                                      eprosima::fastdds::dds::IContentFilter*& filter) override;
   ReturnCode_t delete_content_filter(const char* filter_class_name,
                                      eprosima::fastdds::dds::IContentFilter* filter) override;
+
+ private:
+  PlaceSlot local_place_;
+  std::atomic<bool> place_is_local_{false};
 };
 
 }  // namespace qswarm

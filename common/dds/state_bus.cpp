@@ -403,8 +403,10 @@ dds::DataReader* DdsStateBus::Impl::state_reader(dds::Subscriber* sub, dds::Topi
                                                  const std::vector<std::string>& place) {
   dds::TopicDescription* from = on;
   if (!opts.roster.empty()) {
+    // Where it listens is in its parameters only where writers judge it for it (set_place).
     filtered = participant->create_contentfilteredtopic(
-        on->get_name() + "/roster", on, roster_filter(opts.roster, opts.self), place,
+        on->get_name() + "/roster", on, roster_filter(opts.roster, opts.self),
+        opts.filter_at_writer ? place : std::vector<std::string>{},
         RosterFilterFactory::kRosterFilterClass);
     if (!filtered) throw std::runtime_error("dds: cannot create the roster filter");
     from = filtered;
@@ -476,7 +478,11 @@ dds::PartitionQosPolicy partitions(const std::string& run, std::vector<std::stri
 void DdsStateBus::Impl::move_writer(const std::vector<std::string>& names, AgentId self) {
   if (!publisher) return;
   dds::PublisherQos q = publisher->get_qos();
-  q.partition() = partitions(run_partition(opts.run_id), names, /*reader=*/false, self);
+  const dds::PartitionQosPolicy want =
+      partitions(run_partition(opts.run_id), names, /*reader=*/false, self);
+  // set_qos updates each of its endpoints through discovery, even with nothing changed.
+  if (q.partition().names() == want.names()) return;
+  q.partition() = want;
   if (publisher->set_qos(q) != ReturnCode_t::RETCODE_OK)
     throw std::runtime_error("dds: cannot move the state writer's partitions");
 }
@@ -484,7 +490,10 @@ void DdsStateBus::Impl::move_writer(const std::vector<std::string>& names, Agent
 void DdsStateBus::Impl::move_reader(const std::vector<std::string>& names) {
   if (opts.hear_all_runs) return;
   dds::SubscriberQos q = subscriber->get_qos();
-  q.partition() = partitions(run_partition(opts.run_id), names, /*reader=*/true);
+  const dds::PartitionQosPolicy want =
+      partitions(run_partition(opts.run_id), names, /*reader=*/true);
+  if (q.partition().names() == want.names()) return;  // as move_writer
+  q.partition() = want;
   if (subscriber->set_qos(q) != ReturnCode_t::RETCODE_OK)
     throw std::runtime_error("dds: cannot move the state reader's partitions");
 }
@@ -546,10 +555,17 @@ void DdsStateBus::Impl::drop_shared_reader() {
 
 void DdsStateBus::Impl::set_regions(const std::vector<std::string>& pub,
                                     const std::vector<std::string>& sub, const Interest& interest) {
-  // Readers: new ones first (the subscriber's partitions are every listened cell, whatever the
-  // region: a writer of one region never publishes another's cells), then the old ones go.
+  // Readers: the old ones go first, before a change of the subscriber's partitions (every
+  // listened cell, whatever the region: a writer of one region never publishes another's cells)
+  // updates each reader left through discovery, then the new ones come with those partitions.
+  // A reader updated and then deleted at once would reach the server as two changes together
+  // (StateBusOptions::region_topics), and it hears nothing of its region's cells meanwhile.
   std::set<std::string> regions;
   for (const std::string& c : sub) regions.insert(*region_of_cell(c));
+  std::vector<std::string> gone;
+  for (const auto& [region, r] : region_readers)
+    if (!regions.count(region)) gone.push_back(region);
+  for (const std::string& region : gone) drop_region(region, true, false);
   if (!sub.empty()) move_reader(sub);
   set_place(interest, {});
   for (const std::string& region : regions) {
@@ -558,10 +574,6 @@ void DdsStateBus::Impl::set_regions(const std::vector<std::string>& pub,
     r.reader = state_reader(subscriber, named_topic(region), r.filtered, place_params);
     region_readers.emplace(region, r);
   }
-  std::vector<std::string> gone;
-  for (const auto& [region, r] : region_readers)
-    if (!regions.count(region)) gone.push_back(region);
-  for (const std::string& region : gone) drop_region(region, true, false);
 
   // Writers: the cells each region's writer publishes into, those of the active ones first.
   std::map<std::string, std::pair<std::vector<std::string>, bool>> want;  // region: cells, active
@@ -653,12 +665,8 @@ void DdsStateBus::Impl::set_named_interest(const Interest& interest) {
       throw std::invalid_argument("dds: an interest listens to cells and to names of no cell");
     move_reader(shared_sub);
     // Its names have topics of their own: the place filter needs none of them.
-    if (!reader) {
-      place_params = place_filter(interest.near, {});
-      reader = state_reader(subscriber, topic, roster_topic, place_params);
-    } else {
-      set_place(interest, {});
-    }
+    set_place(interest, {});
+    if (!reader) reader = state_reader(subscriber, topic, roster_topic, place_params);
   } else {
     drop_shared_reader();
   }
@@ -698,6 +706,15 @@ void DdsStateBus::Impl::set_place(const Interest& interest, const std::vector<st
     if (const auto id = agent_of_partition(n)) ids.push_back(*id);
   std::vector<std::string> params = place_filter(interest.near, ids);
   if (params == place_params) return;  // each change travels to every matched peer
+  if (!opts.filter_at_writer) {
+    // No writer judges for its readers: the place stays in this process, and a move updates
+    // each reader through discovery once (its partitions), not twice.
+    const std::optional<PlaceFilter> place = parse_place_filter(params);
+    if (!place) throw std::runtime_error("dds: cannot set a state reader's place filter");
+    roster_factory.set_local_place(*place);
+    place_params = std::move(params);
+    return;
+  }
   // The shared topic's reader and the region readers (no filter without a roster: a test's bus).
   std::vector<dds::ContentFilteredTopic*> filters{roster_topic};
   for (const auto& [region, r] : region_readers) filters.push_back(r.filtered);

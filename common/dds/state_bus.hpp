@@ -54,10 +54,11 @@ struct StateBusOptions {
   bool topic_per_name = false;
   // With topic_per_name, cells are partitions of their region's topic rather than of the shared
   // one (where the interest's cells are of one space). Each move then updates up to 8 readers and
-  // several writers through the server instead of one of each, and under that churn Fast DDS
-  // 2.9.1's server can hang and relay nothing more (docs/architecture.md, "A hung Discovery
-  // Server"): pairs stay deaf to each other, and edge-flow's exact average can be lost. Worth it
-  // only where the shared topic cannot discover at all (256 agents: 159 s).
+  // several writers through the server instead of one of each. Fast DDS 2.9.1's server corrupts
+  // its history, hangs and relays nothing more when two changes of one endpoint reach it in one
+  // batch (docs/architecture.md, "A hung Discovery Server"): a move changes each endpoint once,
+  // but two moves a few ticks apart still can, the more often the less CPU the server gets.
+  // Worth it only where the shared topic cannot discover at all (256 agents: 159 s).
   bool region_topics = false;
   // The state writer evaluates its readers' place filters (Interest::near) and sends a sample only
   // to the readers it passes (Fast DDS's writer-side content filtering, for up to max_agents + 16
@@ -101,8 +102,9 @@ class DdsStateBus final : public NeighborBus {
   void record(const StateMessage& msg) override;
   // Moves the state writer's and reader's partitions (DDS re-matches them with their peers); with
   // topic_per_name, creates and deletes the writers and readers of the names that come and go.
-  // Where it hears by place goes into its reader's filter (its peers' writers learn it through
-  // discovery).
+  // Where it hears by place goes into its readers' filter: into the filter's parameters, which its
+  // peers' writers learn through discovery, only where they judge it (filter_at_writer); else it
+  // stays in this process, and a move updates each reader through discovery once.
   void set_interest(const Interest& interest) override;
   bool recorder_confirmed() const override;
   // Readers matched to our record writer (our side of discovery only: see recorder_confirmed).
