@@ -412,7 +412,12 @@ dds::DataReader* DdsStateBus::Impl::state_reader(dds::Subscriber* sub, dds::Topi
     from = filtered;
   }
   dds::DataReader* r = sub->create_datareader(from, state_reader_qos, this);
-  if (!r) throw std::runtime_error("dds: cannot create a state reader of " + on->get_name());
+  if (!r) {
+    // Its filter goes too: left behind, its name would refuse the next reader of this topic.
+    if (filtered) participant->delete_contentfilteredtopic(filtered);
+    filtered = nullptr;
+    throw std::runtime_error("dds: cannot create a state reader of " + on->get_name());
+  }
   return r;
 }
 
