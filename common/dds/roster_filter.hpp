@@ -46,7 +46,8 @@ bool serialized_mentions(const unsigned char* data, std::size_t length, AgentId 
 
 // Where a reader hears by place (Interest::near), in the filter's parameters, which the reader
 // may change while it runs (its peers' writers learn them through discovery and filter with
-// them): one parameter per Reach ("p LO.x LO.y LO.z HI.x HI.y HI.z RADIUS", 'q' for consensus
+// them; kept in the process instead where they do not, RosterFilterFactory::set_local_place):
+// one parameter per Reach ("p LO.x LO.y LO.z HI.x HI.y HI.z RADIUS", 'q' for consensus
 // states) and the agents it hears by name as ranges ("n 1-3,9"; several parameters when that is
 // longer than Fast DDS's 255 characters a parameter). No parameter: no place filter.
 struct PlaceFilter {
@@ -78,12 +79,13 @@ struct StrangerTally {
 // state reader reads through it, and on every agent's, whose state writer evaluates its peers'
 // readers' filters: the filter reads the key, the agent id, straight from the serialized sample
 // (CDR: a 4-byte encapsulation header, then the id) and admits only the run's ids, so a stranger
-// publishing many keys cannot fill the reader's instances; with a place filter in its parameters,
-// only the senders heard by name or by place. Fast DDS's SQL filter was not used: it needs the
-// type's description and decodes every sample in full (a 32-agent swarm fell behind real time
-// with it). The parameters change in place (receive threads and writers evaluate the filter
-// meanwhile); the expression never does. Counts strangers into its tally for the readers of the
-// participant `local` names (a writer evaluating a peer's filter counts nothing).
+// publishing many keys cannot fill the reader's instances; with a place filter (in its
+// parameters, or the factory's local place), only the senders heard by name or by place, or bound
+// to it. Fast DDS's SQL filter was not used: it needs the type's description and decodes every
+// sample in full (a 32-agent swarm fell behind real time with it). The parameters change in place
+// (receive threads and writers evaluate the filter meanwhile); the expression never does. Counts
+// strangers into its tally for the readers of the participant `local` names (a writer evaluating a
+// peer's filter counts nothing).
 class RosterFilterFactory final : public eprosima::fastdds::dds::IContentFilterFactory {
  public:
   static constexpr const char* kRosterFilterClass = "QSWARM_ROSTER";

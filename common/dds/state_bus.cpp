@@ -165,13 +165,12 @@ struct DdsStateBus::Impl : public dds::DataReaderListener {
   dds::DataReader* state_reader(dds::Subscriber* sub, dds::Topic* on,
                                 dds::ContentFilteredTopic*& filtered,
                                 const std::vector<std::string>& place = {});
-  // Tells the shared topic's reader where it hears by place (and, with names as partitions of
-  // the same topic, whom by name).
+  // Tells the state readers where they hear by place, and whom by name (`names`, as partitions
+  // or topics).
   void set_place(const Interest& interest, const std::vector<std::string>& names);
   void set_named_interest(const Interest& interest);
-  // The region topics' endpoints for these published and listened cells.
-  void set_regions(const std::vector<std::string>& pub, const std::vector<std::string>& sub,
-                   const Interest& interest);
+  // The region topics' endpoints for these published and listened cells (after set_place).
+  void set_regions(const std::vector<std::string>& pub, const std::vector<std::string>& sub);
   // Deletes a reader of a name or region, and its filter.
   void delete_reader(dds::Subscriber* sub, const NamedReader& r);
   // Deletes the name's reader and/or writer, and its topic once neither is left.
@@ -559,7 +558,7 @@ void DdsStateBus::Impl::drop_shared_reader() {
 }
 
 void DdsStateBus::Impl::set_regions(const std::vector<std::string>& pub,
-                                    const std::vector<std::string>& sub, const Interest& interest) {
+                                    const std::vector<std::string>& sub) {
   // Readers: the old ones go first, before a change of the subscriber's partitions (every
   // listened cell, whatever the region: a writer of one region never publishes another's cells)
   // updates each reader left through discovery, then the new ones come with those partitions.
@@ -572,7 +571,6 @@ void DdsStateBus::Impl::set_regions(const std::vector<std::string>& pub,
     if (!regions.count(region)) gone.push_back(region);
   for (const std::string& region : gone) drop_region(region, true, false);
   if (!sub.empty()) move_reader(sub);
-  set_place(interest, {});
   for (const std::string& region : regions) {
     if (region_readers.count(region)) continue;
     NamedReader r;
@@ -656,6 +654,10 @@ void DdsStateBus::Impl::set_named_interest(const Interest& interest) {
     (named(n) ? agents_pub : cell(n) ? cells_pub : shared_pub).push_back(n);
   for (const std::string& n : interest.subscribe)
     (named(n) ? agents_sub : cell(n) ? cells_sub : shared_sub).push_back(n);
+  // Where it hears by place. Kept in the process (set_place), the place also judges what the
+  // names' own topics bring: it names them, so that a sample heard by name passes wherever it
+  // is. Told to writers, it need not (the names' readers have no place of their own).
+  set_place(interest, opts.filter_at_writer ? std::vector<std::string>{} : agents_sub);
   // The shared topic's endpoints are made once needed, after their partitions are set: they
   // never hear the whole run on the way.
   if (opts.publish && (interest.publish.empty() || !shared_pub.empty())) {
@@ -668,14 +670,14 @@ void DdsStateBus::Impl::set_named_interest(const Interest& interest) {
   if (interest.subscribe.empty() || !shared_sub.empty()) {
     if (!cells_sub.empty())  // the subscriber's partitions are the cells' (set_regions)
       throw std::invalid_argument("dds: an interest listens to cells and to names of no cell");
+    // Region readers share the subscriber: they go before its partitions change (set_regions).
+    while (!region_readers.empty()) drop_region(region_readers.begin()->first, true, false);
     move_reader(shared_sub);
-    // Its names have topics of their own: the place filter needs none of them.
-    set_place(interest, {});
     if (!reader) reader = state_reader(subscriber, topic, roster_topic, place_params);
   } else {
     drop_shared_reader();
   }
-  set_regions(cells_pub, cells_sub, interest);
+  set_regions(cells_pub, cells_sub);
   // The agent names: new endpoints first, then the old ones go.
   const auto has = [](const std::vector<std::string>& v, const std::string& n) {
     return std::find(v.begin(), v.end(), n) != v.end();

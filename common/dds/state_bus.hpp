@@ -56,8 +56,9 @@ struct StateBusOptions {
   // one (where the interest's cells are of one space). Each move then updates up to 8 readers and
   // several writers through the server instead of one of each. Fast DDS 2.9.1's server corrupts
   // its history, hangs and relays nothing more when two changes of one endpoint reach it in one
-  // batch (docs/architecture.md, "A hung Discovery Server"): a move changes each endpoint once,
-  // but two moves a few ticks apart still can, the more often the less CPU the server gets.
+  // batch (docs/architecture.md, "A hung Discovery Server"): a move changes each endpoint once
+  // (twice with filter_at_writer: partitions, then the place in the filter's parameters), but two
+  // moves a few ticks apart still can, the more often the less CPU the server gets.
   // Worth it only where the shared topic cannot discover at all (256 agents: 159 s).
   bool region_topics = false;
   // The state writer evaluates its readers' place filters (Interest::near) and sends a sample only

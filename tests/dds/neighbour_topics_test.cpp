@@ -293,7 +293,8 @@ std::vector<int> updates_per_reader(bool region_topics, int to_x, double near_x)
   observer.get()->set_listener(&updates);
 
   // A marker: the readers a participant announces reach a peer in order, so once the observer
-  // has discovered a marker reader, it has heard of everything announced before it.
+  // has discovered a marker reader, it has heard of everything announced before it. (Left behind
+  // by a throw, the markers go with the participant's contained entities.)
   dds::Subscriber* sub = p->create_subscriber(dds::SUBSCRIBER_QOS_DEFAULT);
   std::vector<std::pair<dds::Topic*, dds::DataReader*>> markers;
   const auto heard_all = [&] {

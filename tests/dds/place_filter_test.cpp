@@ -31,12 +31,14 @@ struct Three {
   std::vector<Vec3> at{Vec3(0, 0, 0), Vec3(100, 0, 0), Vec3(1, 0, 0)};
   std::uint64_t seq = 0;
 
-  explicit Three(bool filter_at_writer) {
+  // topic_per_name: agent names are topics of their own (as for a Discovery Server's clients).
+  explicit Three(bool filter_at_writer, bool topic_per_name = false) {
     for (AgentId a = 1; a <= 3; ++a) {
       DdsOptions o = test::dds_options(("agent-" + std::to_string(a)).c_str(), kRun);
       o.state.self = a;
       o.state.roster = {1, 2, 3};
       o.state.filter_at_writer = filter_at_writer;
+      o.state.topic_per_name = topic_per_name;
       agents.push_back(std::make_unique<DdsBus>(o));
     }
     for (AgentId a = 1; a <= 3; ++a) listen_at(a, at[a - 1], {});
@@ -124,6 +126,21 @@ TEST(PlaceFilter, WithoutTheWritersHelpEverySampleIsSentAndJudgedOnArrival) {
   ASSERT_TRUE(s.publish_until([&] { return s.seq_heard(1, 3) >= from + 50; }));
   EXPECT_EQ(s.seq_heard(1, 2), 0u);
   EXPECT_GE(s.judged(1), judged + 50);
+}
+
+// The place stays in the process (no writer judges it), and an agent's name is a topic of its
+// own: what arrives on it passes wherever its sender is, as on the shared topic.
+TEST(PlaceFilter, AnAgentHeardByNameOnATopicOfItsOwnIsHeardWhereverItIs) {
+  Three s(/*filter_at_writer=*/false, /*topic_per_name=*/true);
+  ASSERT_TRUE(s.publish_until([&] { return s.seq_heard(1, 3) > 10; }));
+  const std::uint64_t from = s.seq;
+  ASSERT_TRUE(s.publish_until([&] { return s.seq_heard(1, 3) >= from + 50; }));
+  EXPECT_EQ(s.seq_heard(1, 2), 0u);  // 100 m away, and not heard by name
+
+  s.listen_at(1, Vec3(0, 0, 0), {agent_partition(2)});
+  const std::uint64_t named = s.seq;
+  ASSERT_TRUE(s.publish_until(
+      [&] { return s.seq_heard(1, 2) >= named + 20 && s.seq_heard(1, 3) >= named + 20; }));
 }
 
 TEST(PlaceFilter, ParametersBothWaysAndWhatIsRefused) {
