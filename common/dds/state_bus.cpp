@@ -169,7 +169,13 @@ struct DdsStateBus::Impl : public dds::DataReaderListener {
   // or topics).
   void set_place(const Interest& interest, const std::vector<std::string>& names);
   void set_named_interest(const Interest& interest);
-  // The region topics' endpoints for these published and listened cells (after set_place).
+  // Deletes the readers of regions none of these listened cells lies in. They share the
+  // subscriber with every state reader, and go before its partitions change: a reader updated
+  // and then deleted at once would reach a Discovery Server as two changes together
+  // (StateBusOptions::region_topics), and it hears nothing of its region's cells meanwhile.
+  void drop_region_readers_beyond(const std::vector<std::string>& cells);
+  // The region topics' endpoints for these published and listened cells (after set_place and
+  // drop_region_readers_beyond).
   void set_regions(const std::vector<std::string>& pub, const std::vector<std::string>& sub);
   // Deletes a reader of a name or region, and its filter.
   void delete_reader(dds::Subscriber* sub, const NamedReader& r);
@@ -557,19 +563,22 @@ void DdsStateBus::Impl::drop_shared_reader() {
   roster_topic = nullptr;
 }
 
-void DdsStateBus::Impl::set_regions(const std::vector<std::string>& pub,
-                                    const std::vector<std::string>& sub) {
-  // Readers: the old ones go first, before a change of the subscriber's partitions (every
-  // listened cell, whatever the region: a writer of one region never publishes another's cells)
-  // updates each reader left through discovery, then the new ones come with those partitions.
-  // A reader updated and then deleted at once would reach the server as two changes together
-  // (StateBusOptions::region_topics), and it hears nothing of its region's cells meanwhile.
+void DdsStateBus::Impl::drop_region_readers_beyond(const std::vector<std::string>& cells) {
   std::set<std::string> regions;
-  for (const std::string& c : sub) regions.insert(*region_of_cell(c));
+  for (const std::string& c : cells) regions.insert(*region_of_cell(c));
   std::vector<std::string> gone;
   for (const auto& [region, r] : region_readers)
     if (!regions.count(region)) gone.push_back(region);
   for (const std::string& region : gone) drop_region(region, true, false);
+}
+
+void DdsStateBus::Impl::set_regions(const std::vector<std::string>& pub,
+                                    const std::vector<std::string>& sub) {
+  // Readers: those that go are gone (drop_region_readers_beyond); the subscriber's partitions
+  // are every listened cell, whatever the region (a writer of one region never publishes
+  // another's cells), and the new ones come with them.
+  std::set<std::string> regions;
+  for (const std::string& c : sub) regions.insert(*region_of_cell(c));
   if (!sub.empty()) move_reader(sub);
   for (const std::string& region : regions) {
     if (region_readers.count(region)) continue;
@@ -626,7 +635,7 @@ void DdsStateBus::Impl::set_regions(const std::vector<std::string>& pub,
     rw.active = active;
     region_writers.emplace(region, std::move(rw));
   }
-  gone.clear();
+  std::vector<std::string> gone;
   for (const auto& [region, w] : region_writers)
     if (!want.count(region)) gone.push_back(region);
   for (const std::string& region : gone) drop_region(region, false, true);
@@ -667,11 +676,11 @@ void DdsStateBus::Impl::set_named_interest(const Interest& interest) {
   } else {
     drop_shared_writer();
   }
-  if (interest.subscribe.empty() || !shared_sub.empty()) {
-    if (!cells_sub.empty())  // the subscriber's partitions are the cells' (set_regions)
-      throw std::invalid_argument("dds: an interest listens to cells and to names of no cell");
-    // Region readers share the subscriber: they go before its partitions change (set_regions).
-    while (!region_readers.empty()) drop_region(region_readers.begin()->first, true, false);
+  const bool shared_reader = interest.subscribe.empty() || !shared_sub.empty();
+  if (shared_reader && !cells_sub.empty())  // the subscriber's partitions are the cells'
+    throw std::invalid_argument("dds: an interest listens to cells and to names of no cell");
+  drop_region_readers_beyond(cells_sub);
+  if (shared_reader) {
     move_reader(shared_sub);
     if (!reader) reader = state_reader(subscriber, topic, roster_topic, place_params);
   } else {
