@@ -226,7 +226,9 @@ struct DdsStateBus::Impl : public dds::DataReaderListener {
     const WriterRegistry::Binding b = writers->binding(w);
     if (b.agent && *b.agent == m.view.id) return true;
     std::string bound_to = "no agent";
-    if (b.changed) {
+    if (b.pattern) {
+      bound_to = "no agent (it publishes into a partition pattern)";
+    } else if (b.changed) {
       bound_to = "no agent any more (its partitions changed)";
     } else if (b.agent) {
       bound_to = "agent " + std::to_string(*b.agent);

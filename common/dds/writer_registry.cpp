@@ -24,6 +24,10 @@ std::optional<AgentId> agent_named_by(const std::string& partition) {
   return agent_of_partition(partition.substr(at + 17));
 }
 
+bool is_partition_pattern(const std::string& partition) {
+  return partition.find_first_of("*?[\\") != std::string::npos;
+}
+
 WriterId WriterRegistry::id_of(const frtps::GUID_t& guid) {
   WriterId w;
   std::memcpy(w.bytes.data(), guid.guidPrefix.value, 12);
@@ -76,15 +80,23 @@ void WriterRegistry::on_publisher_discovery(eprosima::fastdds::dds::DomainPartic
       return;
     }
     std::set<AgentId> named;
-    for (const std::string& p : info.info.m_qos.m_partition.getNames())
+    bool pattern = false;
+    for (const std::string& p : info.info.m_qos.m_partition.getNames()) {
       if (const std::optional<AgentId> id = agent_named_by(p)) named.insert(*id);
+      pattern = pattern || is_partition_pattern(p);
+    }
     auto [it, fresh] = writers_.try_emplace(w);
     Binding& b = it->second;
     if (fresh) {
       b.known = true;
       b.named = named;
-      if (named.size() == 1) b.agent = *named.begin();
+      b.pattern = pattern;
+      if (named.size() == 1 && !pattern) b.agent = *named.begin();
       return;
+    }
+    if (pattern && !b.pattern) {  // refused from now on; the readers say so when they refuse
+      b.pattern = true;
+      b.agent.reset();
     }
     if (named != b.named && !b.changed) {
       b.changed = true;

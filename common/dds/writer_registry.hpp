@@ -26,6 +26,12 @@ namespace qswarm {
 // deliver. So a writer's binding is the one it was first discovered with, and a writer whose
 // partitions ever name another set of agents is bound to none, for good.
 //
+// A writer that publishes into a partition pattern ("qswarm-run-.../*") is bound to none, for
+// good. Fast DDS matches partitions with fnmatch both ways, so such a writer reaches every reader
+// of the topic, those listening to other agents by name included, and the permissions' rule for
+// partitions that name no agent ("[!a]*") admits the pattern itself. The agents' writers publish
+// into exact names only (patterns are for readers' cells).
+//
 // It is the participant's listener from its creation, so that it hears every writer before the
 // state reader can match it (discovery calls it before pairing).
 class WriterRegistry final : public eprosima::fastdds::dds::DomainParticipantListener {
@@ -35,6 +41,7 @@ class WriterRegistry final : public eprosima::fastdds::dds::DomainParticipantLis
     std::optional<AgentId> agent;  // bound to exactly this agent
     std::set<AgentId> named;       // the agents its partitions named when first discovered
     bool changed = false;          // its partitions named other agents since
+    bool pattern = false;          // it published into a partition pattern ("*")
   };
   Binding binding(const WriterId& writer) const;
   // Fast DDS's writer GUID as ours (SampleInfo's publication handle holds the same bytes).
@@ -62,5 +69,7 @@ class WriterRegistry final : public eprosima::fastdds::dds::DomainParticipantLis
 // The agent an agent partition of the state or record stream names ("qswarm-run-<16 hex>/a3"
 // -> 3); nothing for any other partition.
 std::optional<AgentId> agent_named_by(const std::string& partition);
+// Whether fnmatch would read a partition name as a pattern (it holds '*', '?', '[' or '\\').
+bool is_partition_pattern(const std::string& partition);
 
 }  // namespace qswarm

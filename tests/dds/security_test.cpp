@@ -249,6 +249,30 @@ TEST_F(Security, AWriterThatMovesIntoAnotherAgentsPartitionIsRefusedForGood) {
     }
 }
 
+// A member that publishes into the pattern "*" beside its own partition: its permissions admit the
+// pattern (it names no agent), and Fast DDS matches partitions with fnmatch both ways, so its
+// writer reaches agent 2's reader that listens to agent 1 alone. That reader refuses it.
+TEST_F(Security, AWriterInAPartitionPatternIsRefusedByAReaderItReaches) {
+  DdsBus intruder(options("agent-3", ours(), "agent-3", kIntruder, false, 3));
+  DdsBus agent1(options("agent-1", ours(), "agent-1", 0, false, 1));
+  DdsBus agent2(options("agent-2", ours(), "agent-2", 1, false, 2));
+  agent2.set_interest(Interest{{}, {"a1"}, {}});
+  intruder.set_interest(Interest{{"*"}, {}, {}});
+  std::uint64_t seq = 0;
+  ASSERT_TRUE(test::wait_for(
+      [&] {
+        ++seq;
+        agent1.publish(sample(1, seq));
+        intruder.publish(sample(3, seq));
+        return heard(agent2).count(1) == 1 && agent2.counters().dropped >= 20;
+      },
+      60.0))
+      << "agent 2 took " << agent2.counters().received << " and refused "
+      << agent2.counters().dropped;
+  EXPECT_EQ(heard(agent2), std::set<AgentId>{1});
+  EXPECT_EQ(agent2.suspects(), (std::map<AgentId, std::uint8_t>{{3, kBoundElsewhere}}));
+}
+
 TEST_F(Security, ABadKeystoreStopsTheRunBeforeAnythingFliesNamingTheFile) {
   const fs::path runs = test::fresh_dir(mine("security-runs-"));
   fs::create_directories(runs);
