@@ -39,9 +39,9 @@ struct LifecycleConfig {
   double waiting_period_s = 0.005;
   double tick_wall_s = 0.02;  // wall seconds per consensus tick
   // Ticks fall on multiples of tick_wall_s on the host's shared time line (Clock::shared_origin_s
-  // is where this clock's zero lies on it): every agent of a run ticks at the same instants, so a
-  // process woken by one neighbour's sample finds the others' there too, instead of waking once
-  // per sample.
+  // is where this clock's zero lies on it, less the agent's phase: AgentLoopOptions::tick_phase):
+  // the agents of a run that share a phase tick at the same instants, so a process woken by one
+  // neighbour's sample finds the others' there too, instead of waking once per sample.
   double tick_origin_s = 0.0;
   double max_wall_s = 150.0;      // wall: stop after running this long
   std::vector<double> kill_at_s;  // planned self-kills (simulated time), ascending

@@ -42,7 +42,9 @@ LifecycleConfig lifecycle_config(const RunConfig& rc, AgentId id, const AgentLoo
     c.waiting_period_s *= 10.0;
   }
   c.tick_wall_s = rc.agent.steps_per_tick() / (rc.agent.physics_hz * o.time_scale);
-  c.tick_origin_s = tick_origin_s;
+  // The lifecycle's grid lies at multiples of the period from tick_origin_s: a later phase moves
+  // that origin back.
+  c.tick_origin_s = tick_origin_s - o.tick_phase * c.tick_wall_s;
   c.max_wall_s =
       o.max_wall_s >= 0.0 ? o.max_wall_s : 2.0 * rc.judge.duration_s / o.time_scale + 30.0;
   c.kill_at_s = rc.faults.kills_of(id);
@@ -50,6 +52,10 @@ LifecycleConfig lifecycle_config(const RunConfig& rc, AgentId id, const AgentLoo
 }
 
 }  // namespace
+
+double tick_phase(std::size_t agents, AgentId id) {
+  return agents > kTickPhaseAbove && id % 2 == 1 ? 0.5 : 0.0;
+}
 
 namespace {
 

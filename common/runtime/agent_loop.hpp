@@ -24,7 +24,19 @@ struct AgentLoopOptions {
   bool restarted = false;        // recover the flows this agent owned from its neighbours
   bool wait_supervisor = false;  // the barrier also waits for the supervisor's reader
   std::int64_t incarnation = 0;  // this life's identity (the process uses its start time)
+  // Where in each tick period of the host's shared grid this agent ticks, as a fraction of the
+  // period (tick_phase; the in-process swarm ticks every agent at 0).
+  double tick_phase = 0.0;
 };
+
+// The phase at which an agent process of a swarm of `agents` ticks (AgentLoopOptions::tick_phase).
+// Ticks on one shared grid let a process woken by one neighbour's sample find the others' there
+// too, but where many agents share two cores every one of them wakes, sends and is heard in one
+// burst, and a sample waits for the burst to pass before its reader runs. Past kTickPhaseAbove
+// agents, odd ids tick half a period after even ones: two bursts of half the size, each process
+// still woken once per tick by its own (docs/benchmarks.md, "Two tick phases").
+constexpr std::size_t kTickPhaseAbove = 16;
+double tick_phase(std::size_t agents, AgentId id);
 
 // One agent as the product runs it: its lifecycle (join wait, barrier, paced ticks, planned kills)
 // over a transport, the fault-injecting decorator, and the AgentRuntime (dynamics, control, law).

@@ -1,8 +1,14 @@
 // The agent's lifecycle as a state machine: driven with numbers, no clock, no transport.
 #include <gtest/gtest.h>
 
+#include <cmath>
+
+#include "common/clock/clock.hpp"
 #include "common/runtime/agent_lifecycle.hpp"
+#include "common/runtime/agent_loop.hpp"
 #include "common/runtime/tick_pacer.hpp"
+#include "common/scenario/scenario.hpp"
+#include "common/transport/in_memory_bus.hpp"
 #include "common/transport/state_message.hpp"
 
 namespace qswarm {
@@ -125,6 +131,47 @@ TEST(Lifecycle, TicksFallOnTheHostsSharedGridSoAgentsTickTogether) {
   const LifecycleStep s = la.step(0.507, {}, 0, 0.0);
   EXPECT_EQ(s.ticks, 1);
   EXPECT_NEAR(s.wake_at_s + a.tick_origin_s, 100.54, 1e-9);
+}
+
+TEST(TickPhase, PastSixteenAgentsOddIdsTickHalfAPeriodLate) {
+  EXPECT_EQ(tick_phase(32, 3), 0.5);
+  EXPECT_EQ(tick_phase(32, 4), 0.0);
+  EXPECT_EQ(tick_phase(17, 1), 0.5);
+  EXPECT_EQ(tick_phase(16, 1), 0.0);  // a burst of a few agents passes at once
+  EXPECT_EQ(tick_phase(1, 1), 0.0);
+}
+
+TEST(TickPhase, AnAgentLoopTicksAtItsPhaseOfTheSharedGrid) {
+  // Given the two agents of a run on one clock, agent 2 told to tick at half a period
+  const RunConfig rc = resolve_scenario(parse_scenario_text(
+      "agents { id: 1 position { x: 0 y: 0 z: 10 } }\n"
+      "agents { id: 2 position { x: 2 y: 0 z: 10 } }\n"
+      "weight { policy: UNWEIGHTED } topology { policy: PROXIMITY threshold_m: 100 }\n",
+      "two"));
+  InMemoryNetwork net;
+  InMemoryBus bus1(net), bus2(net);
+  ManualClock clock;
+  AgentLoopOptions late;
+  late.tick_phase = 0.5;
+  AgentLoop a1(rc, 1, AgentLoopOptions{}, bus1, clock), a2(rc, 2, late, bus2, clock);
+  // When both pass the barrier and tick a while
+  double wake1 = 0.0, wake2 = 0.0;
+  for (int k = 0; k < 100000 && (a1.ticks() < 10 || a2.ticks() < 10); ++k) {
+    if (wake1 <= clock.now_s()) wake1 = a1.poll().wake_at_s;
+    if (wake2 <= clock.now_s()) wake2 = a2.poll().wake_at_s;
+    net.deliver();
+    clock.sleep_until(std::min(wake1, wake2));
+  }
+  // Then agent 1 ticks on multiples of the period (its clock's zero is the grid's), and agent 2
+  // half a period after them
+  ASSERT_GE(a2.ticks(), 10u);
+  const double period = rc.agent.steps_per_tick() / rc.agent.physics_hz;
+  const auto phase = [&](double t) { return std::remainder(t / period, 1.0); };
+  EXPECT_NEAR(phase(a1.running_since_s()), 0.0, 1e-9);
+  EXPECT_NEAR(std::abs(phase(a2.running_since_s())), 0.5, 1e-9);
+  EXPECT_NEAR(std::abs(phase(wake2)), 0.5, 1e-9);
+  a1.stop();
+  a2.stop();
 }
 
 TEST(Lifecycle, APlannedKillIsDueAtItsSimulatedTimeAndNotBefore) {
