@@ -25,7 +25,7 @@ std::optional<AgentId> agent_named_by(const std::string& partition) {
 }
 
 bool is_partition_pattern(const std::string& partition) {
-  return partition.find_first_of("*?[\\") != std::string::npos;
+  return partition.find_first_of("*?[") != std::string::npos;
 }
 
 WriterId WriterRegistry::id_of(const frtps::GUID_t& guid) {

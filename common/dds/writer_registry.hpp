@@ -69,7 +69,8 @@ class WriterRegistry final : public eprosima::fastdds::dds::DomainParticipantLis
 // The agent an agent partition of the state or record stream names ("qswarm-run-<16 hex>/a3"
 // -> 3); nothing for any other partition.
 std::optional<AgentId> agent_named_by(const std::string& partition);
-// Whether fnmatch would read a partition name as a pattern (it holds '*', '?', '[' or '\\').
+// Whether a partition name may be a pattern to Fast DDS's fnmatch (FNM_NOESCAPE): it holds '*',
+// '?' or '[' (a '[' that closes no set is literal, and refused all the same).
 bool is_partition_pattern(const std::string& partition);
 
 }  // namespace qswarm

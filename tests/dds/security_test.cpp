@@ -273,6 +273,36 @@ TEST_F(Security, AWriterInAPartitionPatternIsRefusedByAReaderItReaches) {
   EXPECT_EQ(agent2.suspects(), (std::map<AgentId, std::uint8_t>{{3, kBoundElsewhere}}));
 }
 
+// The same member, heard first by name as itself, then moving its writer into "*" as well: from
+// then on agent 2 refuses it, though it still names only agent 3.
+TEST_F(Security, AWriterThatMovesIntoAPartitionPatternIsRefusedForGood) {
+  DdsBus intruder(options("agent-3", ours(), "agent-3", kIntruder, false, 3));
+  DdsBus agent2(options("agent-2", ours(), "agent-2", 1, false, 2));
+  agent2.set_interest(Interest{{}, {"a3"}, {}});
+  std::uint64_t seq = 0;
+  ASSERT_TRUE(test::wait_for(
+      [&] {
+        intruder.publish(sample(3, ++seq));
+        return heard(agent2) == std::set<AgentId>{3};
+      },
+      60.0));
+  const std::uint64_t moved_at = seq;
+  intruder.set_interest(Interest{{"*"}, {}, {}});
+  ASSERT_TRUE(test::wait_for(
+      [&] {
+        intruder.publish(sample(3, ++seq));
+        return agent2.counters().dropped >= 20;
+      },
+      60.0))
+      << "agent 2 took " << agent2.counters().received << " and refused "
+      << agent2.counters().dropped;
+  for (const StateMessage& m : agent2.latest(0)) {
+    EXPECT_EQ(m.view.id, 3u);
+    EXPECT_LE(m.seq, moved_at + 5) << "agent 3's writer was heard in the pattern";
+  }
+  EXPECT_EQ(agent2.suspects(), (std::map<AgentId, std::uint8_t>{{3, kBoundElsewhere}}));
+}
+
 TEST_F(Security, ABadKeystoreStopsTheRunBeforeAnythingFliesNamingTheFile) {
   const fs::path runs = test::fresh_dir(mine("security-runs-"));
   fs::create_directories(runs);
