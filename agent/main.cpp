@@ -117,7 +117,7 @@ int main(int argc, char** argv) {
                 clock.now_s(), id);
     f.loop.time_scale = f.process.time_scale;
     f.loop.incarnation = clock.wall_ns();
-    f.loop.tick_phase = tick_phase(rc->agents.size(), id);
+    f.loop.tick_phase = tick_phase(rc->ids(), id);
     AgentLoop loop(*rc, id, f.loop, bus, clock);
     log->info("agent {} up: domain {}, {} law, time scale {}", id, rc->transport.domain_id,
               to_string(rc->agent.law.kind), f.process.time_scale);

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <iterator>
 
 namespace qswarm {
 namespace {
@@ -53,8 +54,10 @@ LifecycleConfig lifecycle_config(const RunConfig& rc, AgentId id, const AgentLoo
 
 }  // namespace
 
-double tick_phase(std::size_t agents, AgentId id) {
-  return agents > kTickPhaseAbove && id % 2 == 1 ? 0.5 : 0.0;
+double tick_phase(const std::set<AgentId>& ids, AgentId id) {
+  const auto it = ids.find(id);
+  if (ids.size() <= kTickPhaseAbove || it == ids.end()) return 0.0;
+  return std::distance(ids.begin(), it) % 2 == 1 ? 0.5 : 0.0;
 }
 
 namespace {

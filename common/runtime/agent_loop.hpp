@@ -2,6 +2,7 @@
 
 #include <cstdint>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -29,14 +30,15 @@ struct AgentLoopOptions {
   double tick_phase = 0.0;
 };
 
-// The phase at which an agent process of a swarm of `agents` ticks (AgentLoopOptions::tick_phase).
-// Ticks on one shared grid let a process woken by one neighbour's sample find the others' there
-// too, but where many agents share two cores every one of them wakes, sends and is heard in one
-// burst, and a sample waits for the burst to pass before its reader runs. Past kTickPhaseAbove
-// agents, odd ids tick half a period after even ones: two bursts of half the size, each process
-// still woken once per tick by its own (docs/benchmarks.md, "Two tick phases").
+// The phase at which agent `id` of a swarm of `ids` ticks (AgentLoopOptions::tick_phase). Ticks
+// on one shared grid let a process woken by one neighbour's sample find the others' there too,
+// but where many agents share two cores every one of them wakes, sends and is heard in one burst,
+// and a sample waits for the burst to pass before its reader runs. Past kTickPhaseAbove agents,
+// every second one in order of id ticks half a period after the others: two bursts of half the
+// size, each process still woken once per tick by its own (docs/benchmarks.md, "Two tick
+// phases"). 0 for an id not in `ids`.
 constexpr std::size_t kTickPhaseAbove = 16;
-double tick_phase(std::size_t agents, AgentId id);
+double tick_phase(const std::set<AgentId>& ids, AgentId id);
 
 // One agent as the product runs it: its lifecycle (join wait, barrier, paced ticks, planned kills)
 // over a transport, the fault-injecting decorator, and the AgentRuntime (dynamics, control, law).

@@ -85,6 +85,20 @@ class Security : public ::testing::Test {
         60.0);
   }
 
+  // Agent 1 and an intruder with agent 3's certificate publish as themselves, one sample each
+  // (`seq` counts them), until `cond` holds; whether it did within a minute.
+  static bool beside(DdsBus& agent1, DdsBus& intruder, std::uint64_t& seq,
+                     const std::function<bool()>& cond) {
+    return test::wait_for(
+        [&] {
+          ++seq;
+          agent1.publish(sample(1, seq));
+          intruder.publish(sample(3, seq));
+          return cond();
+        },
+        60.0);
+  }
+
   // Agents 1 and 2 and the supervisor of the run, every one with its own certificate.
   struct Members {
     DdsBus agent1{options("agent-1", ours(), "agent-1", 0, false, 1)};
@@ -221,14 +235,9 @@ TEST_F(Security, AWriterThatMovesIntoAnotherAgentsPartitionIsRefusedForGood) {
   // Agent 2 listens to agents 1, 3 and 5 by name, so that it still matches the moved writer.
   agent2.set_interest(Interest{{}, {"a1", "a3", "a5"}, {}});
   std::uint64_t seq = 0;
-  ASSERT_TRUE(test::wait_for(
-      [&] {
-        ++seq;
-        agent1.publish(sample(1, seq));
-        intruder.publish(sample(3, seq));
-        return heard(agent2) == std::set<AgentId>{1, 3};
-      },
-      60.0));
+  ASSERT_TRUE(beside(agent1, intruder, seq, [&] {
+    return heard(agent2) == std::set<AgentId>{1, 3};
+  }));
   const std::uint64_t moved_at = seq;
   intruder.set_interest(Interest{{"a5"}, {}, {}});
   const std::uint64_t received = agent2.counters().received;
@@ -259,14 +268,9 @@ TEST_F(Security, AWriterInAPartitionPatternIsRefusedByAReaderItReaches) {
   agent2.set_interest(Interest{{}, {"a1"}, {}});
   intruder.set_interest(Interest{{"*"}, {}, {}});
   std::uint64_t seq = 0;
-  ASSERT_TRUE(test::wait_for(
-      [&] {
-        ++seq;
-        agent1.publish(sample(1, seq));
-        intruder.publish(sample(3, seq));
-        return heard(agent2).count(1) == 1 && agent2.counters().dropped >= 20;
-      },
-      60.0))
+  ASSERT_TRUE(
+      beside(agent1, intruder, seq,
+             [&] { return heard(agent2).count(1) == 1 && agent2.counters().dropped >= 20; }))
       << "agent 2 took " << agent2.counters().received << " and refused "
       << agent2.counters().dropped;
   EXPECT_EQ(heard(agent2), std::set<AgentId>{1});

@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <set>
 
 #include "common/clock/clock.hpp"
 #include "common/runtime/agent_lifecycle.hpp"
@@ -133,12 +134,25 @@ TEST(Lifecycle, TicksFallOnTheHostsSharedGridSoAgentsTickTogether) {
   EXPECT_NEAR(s.wake_at_s + a.tick_origin_s, 100.54, 1e-9);
 }
 
-TEST(TickPhase, PastSixteenAgentsOddIdsTickHalfAPeriodLate) {
-  EXPECT_EQ(tick_phase(32, 3), 0.5);
-  EXPECT_EQ(tick_phase(32, 4), 0.0);
-  EXPECT_EQ(tick_phase(17, 1), 0.5);
-  EXPECT_EQ(tick_phase(16, 1), 0.0);  // a burst of a few agents passes at once
-  EXPECT_EQ(tick_phase(1, 1), 0.0);
+std::set<AgentId> ids_from(AgentId first, AgentId step, int n) {
+  std::set<AgentId> ids;
+  for (int k = 0; k < n; ++k) ids.insert(first + step * static_cast<AgentId>(k));
+  return ids;
+}
+
+TEST(TickPhase, PastSixteenAgentsEverySecondOneTicksHalfAPeriodLate) {
+  const std::set<AgentId> swarm = ids_from(1, 1, 32);  // 1 .. 32
+  EXPECT_EQ(tick_phase(swarm, 1), 0.0);
+  EXPECT_EQ(tick_phase(swarm, 2), 0.5);
+  EXPECT_EQ(tick_phase(swarm, 32), 0.5);
+  EXPECT_EQ(tick_phase(swarm, 33), 0.0);  // not in the swarm
+  EXPECT_EQ(tick_phase(ids_from(1, 1, 17), 2), 0.5);
+  EXPECT_EQ(tick_phase(ids_from(1, 1, 16), 2), 0.0);  // a burst of a few agents passes at once
+  // By order, not by id: a swarm of even ids still splits in half
+  const std::set<AgentId> even = ids_from(2, 2, 20);  // 2, 4 .. 40
+  int late = 0;
+  for (const AgentId id : even) late += tick_phase(even, id) > 0.0 ? 1 : 0;
+  EXPECT_EQ(late, 10);
 }
 
 TEST(TickPhase, AnAgentLoopTicksAtItsPhaseOfTheSharedGrid) {
