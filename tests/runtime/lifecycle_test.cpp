@@ -1,4 +1,5 @@
-// The agent's lifecycle as a state machine: driven with numbers, no clock, no transport.
+// The agent's lifecycle as a state machine: driven with numbers, no clock, no transport; and
+// the tick phase it is given, down to two AgentLoops on a manual clock and an in-memory network.
 #include <gtest/gtest.h>
 
 #include <cmath>
