@@ -127,8 +127,10 @@ int main(int argc, char** argv) {
       log->info("Fast DDS's threads started with the participant run at {}",
                 participant.threads_priority());
     int exit_code = 0;
+    std::optional<ProcessUsage> flight_start;  // taken once, when the barrier releases it
     while (!g_stop) {
       const AgentLoop::Poll p = loop.poll();
+      if (!flight_start && loop.running_since_s() >= 0.0) flight_start = process_usage();
       for (const auto& n : p.notes)
         log->log(n.warning ? spdlog::level::warn : spdlog::level::info, n.text);
       if (p.kill) {
@@ -151,8 +153,9 @@ int main(int argc, char** argv) {
     }
     loop.stop();
     log->info(final_report(loop, bus.counters()));
-    if (!dir.empty() && !write_stats(dir.agent_stats(id), loop, bus.counters(),
-                                     participant.writers().participants_known(), clock.now_s())) {
+    if (!dir.empty() &&
+        !write_stats(dir.agent_stats(id), loop, bus.counters(),
+                     participant.writers().participants_known(), clock.now_s(), flight_start)) {
       log->error("cannot write {}", dir.agent_stats(id).string());
       exit_code = 3;  // the record is incomplete: say so, as the supervisor does
     }

@@ -25,20 +25,35 @@ std::string final_report(const AgentLoop& loop, const BusCounters& c) {
   return buf;
 }
 
-bool write_stats(const std::filesystem::path& path, const AgentLoop& loop, const BusCounters& c,
-                 int participants_known, double wall_now_s) {
+ProcessUsage process_usage() {
   rusage ru{};
   getrusage(RUSAGE_SELF, &ru);
-  const double cpu_s = static_cast<double>(ru.ru_utime.tv_sec + ru.ru_stime.tv_sec) +
-                       static_cast<double>(ru.ru_utime.tv_usec + ru.ru_stime.tv_usec) * 1e-6;
+  ProcessUsage u;
+  u.cpu_s = static_cast<double>(ru.ru_utime.tv_sec + ru.ru_stime.tv_sec) +
+            static_cast<double>(ru.ru_utime.tv_usec + ru.ru_stime.tv_usec) * 1e-6;
+  u.voluntary_switches = ru.ru_nvcsw;
+  u.involuntary_switches = ru.ru_nivcsw;
+  u.max_rss_kb = ru.ru_maxrss;
+  return u;
+}
+
+bool write_stats(const std::filesystem::path& path, const AgentLoop& loop, const BusCounters& c,
+                 int participants_known, double wall_now_s,
+                 const std::optional<ProcessUsage>& flight_start) {
+  const ProcessUsage now = process_usage();
   const double since = loop.running_since_s();
   std::ofstream out(path);
-  out << "cpu_s " << cpu_s << "\nwall_s " << (since >= 0 ? wall_now_s - since : 0.0) << "\nsteps "
-      << loop.ticks() << "\nphysics_steps " << loop.physics_steps() << "\noverruns "
+  out << "cpu_s " << now.cpu_s << "\nwall_s " << (since >= 0 ? wall_now_s - since : 0.0)
+      << "\nsteps " << loop.ticks() << "\nphysics_steps " << loop.physics_steps() << "\noverruns "
       << loop.overruns() << "\ndiscovery_s " << loop.lifecycle().discovery_s() << "\nmax_rss_kb "
-      << ru.ru_maxrss << "\nreceived " << c.received << "\ndropped " << c.dropped
+      << now.max_rss_kb << "\nreceived " << c.received << "\ndropped " << c.dropped
       << "\ninterest_changes " << loop.interest_changes() << "\nparticipants " << participants_known
       << "\narrival_age_early " << c.ages.early << "\n";
+  if (flight_start)
+    out << "flight_cpu_s " << now.cpu_s - flight_start->cpu_s << "\nflight_voluntary_switches "
+        << now.voluntary_switches - flight_start->voluntary_switches
+        << "\nflight_involuntary_switches "
+        << now.involuntary_switches - flight_start->involuntary_switches << "\n";
   if (c.ages.total() > 0)
     out << "arrival_age_p50_ms " << c.ages.quantile_ms(0.5) << "\narrival_age_p99_ms "
         << c.ages.quantile_ms(0.99) << "\n";

@@ -16,7 +16,9 @@
 #   torus  the same agents on a fixed graph of degree 4 that mixes fast enough to agree: each
 #          linked to the next id and to the id sqrt(N) on (a 16 x 16 torus at 256), until the
 #          states are within 1 cm (it ends when they agree, or at its duration).
-# Reports per run: CPU per agent, late ticks, record age p50/p99 at the supervisor (its 10 Hz
+# Reports per run: CPU per agent (over its running time, start-up and discovery included), the
+# same over its flight alone (barrier release to end) with its threads' wake-ups a second, late
+# ticks, record age p50/p99 at the supervisor (its 10 Hz
 # record stream, from each record's handing to its writer to the supervisor's receive thread), the
 # age of the neighbours' state samples where the agents' transports accepted them (the median of
 # the agents' p50s, the median and the largest of their p99s; bins 19 % wide), samples the
@@ -70,8 +72,8 @@ circulant() {
       i, i % n + 1, i, (i + s - 1) % n + 1
     print " }" }'
 }
-printf "| agents | scenario | consensus [Hz] | time scale | CPU per agent [%% of a core] | late ticks [%%] | record age p50 / p99 [ms] | neighbour sample age p50 / p99 (max) [ms] | accepted samples [1/s] | CPU per accepted sample [us] | discovery max [s] | participants known [max] | RSS per agent [MB] | supervisor CPU [%% of a core] | supervisor socket drops | host UDP receive-buffer errors | end |\n"
-printf "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n"
+printf "| agents | scenario | consensus [Hz] | time scale | CPU per agent [%% of a core] | in flight [%% of a core] | wake-ups per agent in flight [1/s] | late ticks [%%] | record age p50 / p99 [ms] | neighbour sample age p50 / p99 (max) [ms] | accepted samples [1/s] | CPU per accepted sample [us] | discovery max [s] | participants known [max] | RSS per agent [MB] | supervisor CPU [%% of a core] | supervisor socket drops | host UDP receive-buffer errors | end |\n"
+printf "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n"
 domain=${DOMAIN:-12}  # one run at a time: each reuses the domain the last one left
 for kind in "${KINDS[@]}"; do
   for n in "${SIZES[@]}"; do
@@ -138,7 +140,8 @@ for kind in "${KINDS[@]}"; do
     host_errors=$(($(rcvbuf_errors) - errors_before))
     sup_cpu=$(awk -v t="$sup_ticks" -v hz="$(getconf CLK_TCK)" -v s="$started" -v e="$(date +%s.%N)" \
       'BEGIN { printf "%.1f", 100 * t / hz / (e - s) }')
-    if ! row=$(report "$dir" cpu_per_agent_pct late_ticks_pct messages.age_p50_ms \
+    if ! row=$(report "$dir" cpu_per_agent_pct flight_cpu_per_agent_pct flight_wakeups_per_s \
+      late_ticks_pct messages.age_p50_ms \
       messages.age_p99_ms stats.arrival_age_p50_ms.median stats.arrival_age_p99_ms.median \
       stats.arrival_age_p99_ms.max delivered_per_s cpu_us_per_delivered stats.discovery_s.max \
       stats.participants.max stats.max_rss_kb.median end_reason 2>/dev/null); then
@@ -146,15 +149,16 @@ for kind in "${KINDS[@]}"; do
         "$(tail -1 "$dir.log")"
       continue
     fi
-    IFS=$'\t' read -r cpu late p50 p99 np50 np99 np99max per_s cpu_per disc known rss end <<<"$row"
+    IFS=$'\t' read -r cpu fcpu wakes late p50 p99 np50 np99 np99max per_s cpu_per disc known rss end <<<"$row"
     [[ ${SECURE:-0} == 1 ]] && kind_shown="$kind, secure" || kind_shown=$kind
     [[ -n ${DISCOVERY:-} ]] && kind_shown="$kind_shown, ${DISCOVERY,,}"
-    awk -v n="$n" -v k="$kind_shown" -v hz="$RATE_HZ" -v ts="$TIME_SCALE" -v cpu="$cpu" -v late="$late" \
+    awk -v n="$n" -v k="$kind_shown" -v hz="$RATE_HZ" -v ts="$TIME_SCALE" -v cpu="$cpu" -v fcpu="$fcpu" -v wakes="$wakes" -v late="$late" \
       -v p50="$p50" -v p99="$p99" -v np50="$np50" -v np99="$np99" -v np99max="$np99max" -v s="$per_s" -v cs="$cpu_per" -v d="$disc" -v kn="$known" -v rss="$rss" \
       -v sup="$sup_cpu" -v sd="$sup_drops" -v he="$host_errors" -v end="$end" '
       function ms(x) { return x == "-" ? "-" : sprintf("%.2f", x) }  # no agent heard a sample
+      function f(fmt, x) { return x == "-" ? "-" : sprintf(fmt, x) }  # an older agent build
       BEGIN {
-        printf "| %d | %s | %s | %s | %.2f | %.2f | %.1f / %.1f | %s / %s (%s) | %.0f | %.1f | %.2f | %s | %.1f | %s | %s | %s | %s |\n",
-          n, k, hz, ts, cpu, late, p50, p99, ms(np50), ms(np99), ms(np99max), s, cs, d, kn, rss / 1024, sup, sd, he, end }'
+        printf "| %d | %s | %s | %s | %.2f | %s | %s | %.2f | %.1f / %.1f | %s / %s (%s) | %.0f | %.1f | %.2f | %s | %.1f | %s | %s | %s | %s |\n",
+          n, k, hz, ts, cpu, f("%.2f", fcpu), f("%.0f", wakes), late, p50, p99, ms(np50), ms(np99), ms(np99max), s, cs, d, kn, rss / 1024, sup, sd, he, end }'
   done
 done

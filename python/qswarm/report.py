@@ -15,6 +15,10 @@ prints each field's value, tab-separated, on one line (a missing value prints "-
   files.missing             the run's files that are absent or empty, comma-separated ("-": none)
   pids                      role:id:pid of every process the launcher started, comma-separated
   cpu_per_agent_pct         100 x total agent CPU / total agent running wall time
+  flight_cpu_per_agent_pct  the same without start-up and discovery: CPU from each agent's
+                            barrier release to its end
+  flight_wakeups_per_s      times an agent's threads blocked and woke again, per agent and
+                            second of running (voluntary context switches, all threads)
   late_ticks_pct            100 x late ticks / ticks
   delivered_per_s           samples the agents accepted, per second of running (all agents)
   cpu_us_per_delivered      agent CPU per accepted sample [us]
@@ -75,6 +79,15 @@ def field(run_dir, summary, stats, name):
     total = {k: sum(v) for k, v in stats.items()}
     if name == "cpu_per_agent_pct":
         return ratio(total.get("cpu_s", 0.0), total.get("wall_s", 0.0), 100.0)
+    if name == "flight_cpu_per_agent_pct":
+        # An agent that never ran has no flight entries and a running wall time of 0.
+        if "flight_cpu_s" not in total:
+            return None  # an agent build that does not count its flight apart
+        return ratio(total["flight_cpu_s"], total.get("wall_s", 0.0), 100.0)
+    if name == "flight_wakeups_per_s":
+        if "flight_voluntary_switches" not in total:
+            return None
+        return ratio(total["flight_voluntary_switches"], total.get("wall_s", 0.0))
     if name == "late_ticks_pct":
         return ratio(total.get("overruns", 0.0), total.get("steps", 0.0), 100.0)
     if name == "delivered_per_s":
