@@ -29,13 +29,16 @@ struct LifecycleConfig {
   bool wait_recorder = false;
   // Late join or restart: wait silently until the swarm's clock reaches this simulated time.
   std::optional<double> join_at_s;
-  double time_scale = 1.0;           // simulated seconds per wall second
-  double start_timeout_s = 30.0;     // wall: start anyway after this long at the barrier
-  double join_timeout_s = 40.0;      // wall: join anyway after this long in kJoinWait
-  double announce_period_s = 0.005;  // wall: ready announcements (start skew ~ this)
-  // wall: waiting announcements, before every start peer is heard: a beacon that others are here.
-  // Slower than ready for large swarms: N agents waiting for the last replicas to come (compose
-  // at 32 on two cores) would otherwise flood the network they need to discover each other on.
+  double time_scale = 1.0;        // simulated seconds per wall second
+  double start_timeout_s = 30.0;  // wall: start anyway after this long at the barrier
+  double join_timeout_s = 40.0;   // wall: join anyway after this long in kJoinWait
+  // wall: how often a ready agent looks whether its peers are ready too (start skew ~ this), and
+  // the spacing of its first kReadyAnnouncements ready announcements.
+  double announce_period_s = 0.005;
+  // wall: announcements otherwise, waiting or ready: a beacon that others are here. Slower than
+  // the ready burst for large swarms: N agents waiting for the last replicas to come (compose at 32
+  // on two cores), or for the last of 256 to be discovered, would otherwise flood the network and
+  // take the CPU they need to discover each other with.
   double waiting_period_s = 0.005;
   double tick_wall_s = 0.02;  // wall seconds per consensus tick
   // Ticks fall on multiples of tick_wall_s on the host's shared time line (Clock::shared_origin_s
@@ -83,6 +86,9 @@ class AgentLifecycle {
   LifePhase phase() const { return phase_; }
   // How often an agent waiting at the start barrier says what it still waits for [wall s].
   static constexpr double kProgressPeriodS = 10.0;
+  // Ready announcements at announce_period_s once the agent turns ready, before the slower beacon:
+  // a peer learns at once, and one lost datagram costs no more than a period.
+  static constexpr int kReadyAnnouncements = 3;
   // Wall seconds from construction to Phase::kRunning (discovery and barrier), -1 before.
   double discovery_s() const { return discovery_s_; }
   const std::optional<TickPacer>& pacer() const { return pacer_; }
@@ -99,6 +105,10 @@ class AgentLifecycle {
   LifePhase phase_;
   double discovery_s_ = -1.0;
   double next_progress_s_ = 0.0;
+  // At the barrier: when the next announcement is due (the first one at once), and how many of
+  // the fast ready ones are left.
+  double next_announce_s_ = -1e300;
+  int ready_burst_left_ = 0;
   std::optional<TickPacer> pacer_;
   std::size_t next_kill_ = 0;
 };

@@ -121,15 +121,20 @@ AgentLoop::Poll AgentLoop::poll() {
     // The barrier and the join wait read the raw transport: faults apply to the run, which
     // starts once everyone is up.
     // Only the run's own agents count: a stranger's stamp must not start a late joiner early.
-    for (const StateMessage& m : transport_.latest(id_))
+    // Read in place: a large swarm's barrier polls often and copies nothing.
+    transport_.for_each_latest(id_, [&](const StateMessage& m) {
       if (is_agent_(m.view.id)) peers.push_back({m.view.id, m.phase, m.stamp_s});
+    });
   }
-  const LifecycleStep s = life_.step(now, peers, transport_.matched_readers(), runtime_.time_s(),
-                                     transport_.recorder_confirmed());
+  const bool recorder_confirmed = transport_.recorder_confirmed();
+  const LifecycleStep s =
+      life_.step(now, peers, transport_.matched_readers(), runtime_.time_s(), recorder_confirmed);
   if (!s.warning.empty()) r.notes.push_back({true, s.warning});
   if (!s.progress.empty()) r.notes.push_back({false, s.progress});
   if (s.swarm_time_s >= 0.0) faulty_.set_time(s.swarm_time_s);
-  if (s.announce) runtime_.publish(*s.announce);
+  // Until the recorder confirms it heard us, each announcement goes to it too: confirming needs a
+  // record written since its reader matched, and the barrier's announcements are few.
+  if (s.announce) runtime_.publish(*s.announce, !recorder_confirmed);
   if (s.start) {
     runtime_.set_start_time(s.start_time_s);
     char buf[160];

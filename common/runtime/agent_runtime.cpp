@@ -39,7 +39,7 @@ Vec3 AgentRuntime::position() const {
                                                   : Vec3(law_->state() + p_.spec.offset_W);
 }
 
-void AgentRuntime::publish(Phase phase) {
+void AgentRuntime::publish(Phase phase, bool record) {
   StateMessage m;
   m.view = law_->message();
   m.seq = ++seq_;
@@ -67,7 +67,7 @@ void AgentRuntime::publish(Phase phase) {
   bus_.publish(m);
   // The recorder gets every k-th sample, and the goodbye (a departure it sees at once), with the
   // links and the initial links.
-  if (m.seq % p_.start.record_every == 0 || phase == Phase::kStopping) {
+  if (record || m.seq % p_.start.record_every == 0 || phase == Phase::kStopping) {
     if (!p_.start.links_to_neighbours) add_links();
     m.initial_links = initial_links_;
     m.wall_ns = wall_now_ns();  // handed over after the state sample

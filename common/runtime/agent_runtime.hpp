@@ -68,8 +68,10 @@ class AgentRuntime {
   // (read neighbours, update the law, publish). Returns events for logging.
   std::vector<AgentEvent> step();
   // Publish the current state (the process calls this while waiting for peers, with
-  // Phase::kWaiting).
-  void publish(Phase phase);
+  // Phase::kWaiting). The recorder gets every record_every-th sample, the goodbye, and any sample
+  // published with `record` (the barrier's announcements while the recorder has not confirmed
+  // hearing this agent: they are rare, and its start waits for that confirmation).
+  void publish(Phase phase, bool record = false);
 
   // A late or restarted agent starts on the swarm's clock: set before the first step.
   void set_start_time(double t_s);

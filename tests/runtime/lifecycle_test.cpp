@@ -79,6 +79,35 @@ TEST(Lifecycle, WaitingForMissingPeersIsABeaconAndReadyIsFast) {
   EXPECT_DOUBLE_EQ(s.wake_at_s, 0.22);
 }
 
+TEST(Lifecycle, AnAgentPolledOftenAtTheBarrierAnnouncesOnlyWhenDue) {
+  // The process polls every 10 ms (it must see a stop request); the periods are a large swarm's.
+  LifecycleConfig c = barrier_config();
+  c.waiting_period_s = 0.2;
+  c.announce_period_s = 0.02;
+  AgentLifecycle life(c, 0.0);
+  const auto announcements = [&](int from, int to, const std::vector<PeerStatus>& peers) {
+    int n = 0;
+    for (int i = from; i < to; ++i) {
+      const LifecycleStep s = life.step(0.01 * i, peers, 0, 0.0);
+      EXPECT_FALSE(s.start);
+      if (s.announce) ++n;
+    }
+    return n;
+  };
+  // Waiting for peer 3 for a second: a beacon every 0.2 s, not one per poll
+  EXPECT_EQ(announcements(0, 100, {{2, Phase::kWaiting, 0.0}}), 5);
+  EXPECT_EQ(life.phase(), LifePhase::kWaiting);
+  // Ready (and still waiting for them to be) for a second: at once, twice more 20 ms apart, then
+  // the beacon again
+  EXPECT_EQ(announcements(100, 200, {{2, Phase::kWaiting, 0.0}, {3, Phase::kWaiting, 0.0}}), 7);
+  EXPECT_EQ(life.phase(), LifePhase::kReady);
+  // Its poll stays fast: it starts within one announce period of its peers being ready
+  const LifecycleStep s =
+      life.step(2.0, {{2, Phase::kReady, 0.0}, {3, Phase::kWaiting, 0.0}}, 0, 0.0);
+  EXPECT_NEAR(s.wake_at_s, 2.02, 1e-9);
+  EXPECT_TRUE(life.step(2.02, {{2, Phase::kReady, 0.0}, {3, Phase::kReady, 0.0}}, 0, 0.0).start);
+}
+
 TEST(Lifecycle, TheBarrierWaitsForItsPeersReadersAndTheSupervisorsRecordReader) {
   LifecycleConfig c = barrier_config();
   c.min_matched_readers = 2;  // peers 2 and 3
