@@ -37,7 +37,12 @@ DiscoveryServer::DiscoveryServer(std::uint32_t domain_id, const std::string& lis
   dds::DomainParticipantQos pqos;
   pqos.name("swarm-discovery");
   pqos.transport().use_builtin_transports = false;
-  pqos.transport().user_transports.push_back(std::make_shared<rtps::UDPv4TransportDescriptor>());
+  auto udp = std::make_shared<rtps::UDPv4TransportDescriptor>();
+  // Only the interface it listens on: without this Fast DDS binds its sockets to every address
+  // (a stranger on another network could reach the server) and opens an output socket on each
+  // interface. An agent's participant is confined the same way (participant.cpp).
+  if (address_ != "0.0.0.0") udp->interfaceWhiteList.push_back(address_);
+  pqos.transport().user_transports.push_back(udp);
   // The project's port plan, as every participant of the swarm uses it.
   pqos.wire_protocol().port.portBase = PortPlan::kBase;
   pqos.wire_protocol().port.domainIDGain = PortPlan::kDomainGain;

@@ -1,13 +1,18 @@
 // Through a Discovery Server, an agent whose interest names are topics (topic_per_name) discovers
 // only the participants it shares a name with, and meets a new one when its interest grows; with
 // names as partitions of one topic (the control) every participant discovers every other.
+#include <arpa/inet.h>
 #include <gtest/gtest.h>
+#include <netinet/in.h>
 
 #include <algorithm>
+#include <filesystem>
+#include <fstream>
 #include <map>
 #include <memory>
 #include <mutex>
 #include <set>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -97,6 +102,51 @@ TEST(NeighbourTopics, TheDiscoveryServerNeverAnnouncesOnATimerAndItsClientsStill
   EXPECT_GE(own.period_s, 30.0 * 24 * 3600);
   ASSERT_TRUE(s.pairs_meet());
   for (AgentId a = 1; a <= 4; ++a) EXPECT_EQ(s.known(a), 2) << "agent " << a;
+}
+
+// The local addresses of this process's UDP sockets, by socket inode (/proc/self/net/udp).
+std::map<std::string, std::string> own_udp_sockets() {
+  std::set<std::string> inodes;
+  for (const auto& fd : std::filesystem::directory_iterator("/proc/self/fd")) {
+    std::error_code ec;
+    const std::string target = std::filesystem::read_symlink(fd.path(), ec).string();
+    if (!ec && target.rfind("socket:[", 0) == 0) inodes.insert(target.substr(8, target.size() - 9));
+  }
+  std::map<std::string, std::string> out;
+  std::ifstream udp("/proc/self/net/udp");
+  std::string line;
+  std::getline(udp, line);  // the header
+  while (std::getline(udp, line)) {
+    std::istringstream in(line);
+    std::string slot, local, remote, state, queues, timer, retr, uid, timeout, inode;
+    in >> slot >> local >> remote >> state >> queues >> timer >> retr >> uid >> timeout >> inode;
+    if (!inodes.count(inode)) continue;
+    // The kernel prints the address as the hex of its network-order word read in host order.
+    in_addr a{};
+    a.s_addr = static_cast<std::uint32_t>(std::stoul(local.substr(0, 8), nullptr, 16));
+    char text[INET_ADDRSTRLEN] = {};
+    ::inet_ntop(AF_INET, &a, text, sizeof text);
+    out[inode] = text;
+  }
+  return out;
+}
+
+TEST(NeighbourTopics, ADiscoveryServerOnLoopbackHasNoSocketOnAnyOtherAddress) {
+  // Given a server listening on 127.0.0.1
+  const std::map<std::string, std::string> before = own_udp_sockets();
+  const auto domain = static_cast<std::uint32_t>(test::test_domain().domain());
+  const std::optional<int> id = free_participant_block(domain, 1, "127.0.0.1");
+  ASSERT_TRUE(id);
+  DiscoveryServer server(domain, "127.0.0.1",
+                         static_cast<std::uint16_t>(PortPlan::discovery_port(domain, *id)), *id);
+  // Then each socket it opened is bound to loopback: none to 0.0.0.0, none to another interface
+  int opened = 0;
+  for (const auto& [inode, address] : own_udp_sockets()) {
+    if (before.count(inode)) continue;
+    ++opened;
+    EXPECT_EQ(address, "127.0.0.1") << "socket " << inode;
+  }
+  EXPECT_GE(opened, 2);  // its discovery socket and its default unicast one, at least
 }
 
 TEST(NeighbourTopics, ThroughADiscoveryServerAnAgentDiscoversOnlyThoseItSharesANameWith) {
