@@ -31,6 +31,7 @@ Presence::Change Presence::on_sample(const StateMessage& m, double now_s) {
   }
   if (m.phase == Phase::kStopping && a.present) change = Change::kDepart;
   a.present = m.phase != Phase::kStopping;
+  a.ran = a.ran || m.phase == Phase::kRunning;
   a.last = m;
   a.last_heard_s = now_s;
   ++a.samples;

@@ -20,6 +20,7 @@ class Presence {
     StateMessage first, last;
     bool seen = false;
     bool present = false;
+    bool ran = false;           // a sample of it running came: it left its start barrier
     double last_heard_s = 0.0;  // swarm time when its newest sample arrived
     std::uint64_t samples = 0, gaps = 0;
   };

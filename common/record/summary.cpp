@@ -97,6 +97,7 @@ records::Summary build_summary(const RunConfig& rc, const Presence& presence,
     const AgentSpec* spec = rc.spec(id);
     put_vec3(as->mutable_initial_position(), spec ? spec->position_W : a.first.view.q0);
     if (!a.seen) continue;
+    if (!a.ran) s.add_never_ran_agents(id);
     put_vec3(as->mutable_final_position(), a.last.p_W);
     put_vec3(as->mutable_final_consensus(), a.last.view.q);
     as->set_samples(count32(a.samples));
@@ -293,6 +294,15 @@ std::string summary_text(const records::Summary& s, const RunConfig& rc, const s
       h << ", (" << r.f() + 1 << ", " << r.f() + 1 << ")-robust "
         << (r.robust_always() ? "throughout" : "NOT for " + fmt("%.2f", r.not_robust_s()) + " s");
     h << ", neighbour values trimmed " << r.trimmed() << "\n";
+  }
+  if (s.never_ran_agents_size() > 0) {
+    h << "NEVER RAN: " << s.never_ran_agents_size()
+      << " agent(s) were heard only at their start barrier:";
+    constexpr int kShown = 20;
+    for (int i = 0; i < std::min(kShown, s.never_ran_agents_size()); ++i)
+      h << " " << s.never_ran_agents(i);
+    if (s.never_ran_agents_size() > kShown) h << " ...";
+    h << "\n";
   }
   if (s.missing_agents_size() > 0) {
     h << "MISSING: the others agreed without agent(s)";

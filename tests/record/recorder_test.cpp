@@ -334,6 +334,45 @@ TEST(Recorder, FedWithMessagesWritesTheRunRecordAndASummary) {
   std::filesystem::remove_all(dir);
 }
 
+TEST(Recorder, AnAgentHeardOnlyAtItsStartBarrierIsNamedAsNeverRan) {
+  // Given a run whose duration runs out while agent 2 still waits at its start barrier
+  const RunConfig rc = resolve_scenario(parse_scenario_text(
+      "name: \"barrier\"\nagents { id: 1 position { x: 0 } }\nagents { id: 2 position { x: 2 } }\n"
+      "agents { id: 3 position { x: 4 } }\nweight { policy: UNWEIGHTED }\n",
+      "barrier"));
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("qswarm-never-ran-" + std::to_string(::getpid()));
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  std::string text;
+  records::Summary summary;
+  {
+    Recorder rec(rc, RunDir(dir), 1.0);
+    std::int64_t wall = 1'000'000'000;
+    for (int k = 0; k < 20; ++k) {
+      rec.on_sample(sample(1, k + 1, 0.02 * k, Vec3(0, 0, 0)), wall);
+      rec.on_sample(sample(2, k + 1, 0.0, Vec3(2, 0, 0), Phase::kReady), wall);
+      // Agent 3 waited at the barrier too, then ran
+      rec.on_sample(sample(3, k + 1, k < 10 ? 0.0 : 0.02 * (k - 10), Vec3(4, 0, 0),
+                           k < 10 ? Phase::kWaiting : Phase::kRunning),
+                    wall);
+      rec.tick(wall);
+      wall += 20'000'000;
+    }
+    rec.on_sample(sample(2, 21, 0.0, Vec3(2, 0, 0), Phase::kStopping), wall);
+    text = rec.finish("duration", 1.0);
+    summary = rec.summary();
+  }
+  std::filesystem::remove_all(dir);
+  // Then the record names it, and only it
+  EXPECT_FALSE(summary.converged());
+  ASSERT_EQ(summary.never_ran_agents_size(), 1);
+  EXPECT_EQ(summary.never_ran_agents(0), 2u);
+  EXPECT_NE(text.find("NEVER RAN: 1 agent(s) were heard only at their start barrier: 2\n"),
+            std::string::npos)
+      << text;
+}
+
 // Two agents that agree while agent 1 reports that agent 2's samples come from two writers at
 // once (a plain run with an impersonator), and the supervisor's own transport refused a sample of
 // agent 1 from the future: both are named once, and the run that agreed has not converged.
