@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <string>
 
 #include "common/record/convergence.hpp"
 #include "common/record/graph_metrics.hpp"
@@ -30,6 +31,15 @@ StateMessage sample(AgentId id, std::uint64_t seq, double t, const Vec3& q,
   m.phase = phase;
   m.incarnation = 1;
   return m;
+}
+
+// An empty directory of this name (and process) under the system's temporary one.
+std::filesystem::path fresh_dir(const std::string& name) {
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / (name + "-" + std::to_string(::getpid()));
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  return dir;
 }
 
 TEST(Presence, JoinsDepartsInSwarmTimeAndRejoins) {
@@ -291,10 +301,7 @@ TEST(Recorder, FedWithMessagesWritesTheRunRecordAndASummary) {
       "weight { policy: UNWEIGHTED }\nconvergence { tolerance_m: 0.1 hold_s: 0.2 }\n"
       "faults { cut { a: 1 b: 2 start_s: 0.1 end_s: 0.2 } }\n",
       "rec"));
-  const std::filesystem::path dir =
-      std::filesystem::temp_directory_path() / ("qswarm-recorder-" + std::to_string(::getpid()));
-  std::filesystem::remove_all(dir);
-  std::filesystem::create_directories(dir);
+  const std::filesystem::path dir = fresh_dir("qswarm-recorder");
   std::string text;
   {
     Recorder rec(rc, RunDir(dir), 1.0);
@@ -340,10 +347,7 @@ TEST(Recorder, AnAgentHeardOnlyAtItsStartBarrierIsNamedAsNeverRan) {
       "name: \"barrier\"\nagents { id: 1 position { x: 0 } }\nagents { id: 2 position { x: 2 } }\n"
       "agents { id: 3 position { x: 4 } }\nweight { policy: UNWEIGHTED }\n",
       "barrier"));
-  const std::filesystem::path dir =
-      std::filesystem::temp_directory_path() / ("qswarm-never-ran-" + std::to_string(::getpid()));
-  std::filesystem::remove_all(dir);
-  std::filesystem::create_directories(dir);
+  const std::filesystem::path dir = fresh_dir("qswarm-never-ran");
   std::string text;
   records::Summary summary;
   {
@@ -387,10 +391,7 @@ ForgedRun fly_with_suspects(std::uint8_t reported_by_agent_1) {
       "name: \"forged\"\nagents { id: 1 position { x: 0 } }\nagents { id: 2 position { x: 2 } }\n"
       "weight { policy: UNWEIGHTED }\nconvergence { tolerance_m: 0.1 hold_s: 0.2 }\n",
       "forged"));
-  const std::filesystem::path dir =
-      std::filesystem::temp_directory_path() / ("qswarm-forged-" + std::to_string(::getpid()));
-  std::filesystem::remove_all(dir);
-  std::filesystem::create_directories(dir);
+  const std::filesystem::path dir = fresh_dir("qswarm-forged");
   ForgedRun out;
   {
     Recorder rec(rc, RunDir(dir), 1.0);
