@@ -1,7 +1,6 @@
 #pragma once
 
 #include <arpa/inet.h>
-#include <ifaddrs.h>
 #include <netinet/in.h>
 #include <CLI/CLI.hpp>
 
@@ -9,6 +8,8 @@
 #include <set>
 #include <sstream>
 #include <string>
+
+#include "common/transport/port_plan.hpp"
 
 namespace qswarm {
 
@@ -42,20 +43,11 @@ inline std::string interface_problem(const std::string& address) {
   in_addr want{};
   if (inet_pton(AF_INET, address.c_str(), &want) != 1)
     return "expected \"any\" or an IPv4 address such as 127.0.0.1, got \"" + address + "\"";
-  ifaddrs* list = nullptr;
-  if (getifaddrs(&list) != 0) return "";  // cannot tell: let DDS try
-  std::set<std::string> here;
-  bool found = false;
-  for (const ifaddrs* i = list; i != nullptr; i = i->ifa_next) {
-    if (i->ifa_addr == nullptr || i->ifa_addr->sa_family != AF_INET) continue;
-    const in_addr a = reinterpret_cast<const sockaddr_in*>(i->ifa_addr)->sin_addr;
-    char text[INET_ADDRSTRLEN] = {};
-    inet_ntop(AF_INET, &a, text, sizeof text);
-    here.insert(text);
-    found |= a.s_addr == want.s_addr;
-  }
-  freeifaddrs(list);
-  if (found) return "";
+  const std::set<std::string> here = local_ipv4_addresses();
+  if (here.empty()) return "";  // cannot tell: let DDS try
+  char canonical[INET_ADDRSTRLEN] = {};
+  inet_ntop(AF_INET, &want, canonical, sizeof canonical);
+  if (here.count(canonical)) return "";
   std::string names;
   for (const std::string& h : here) names += (names.empty() ? "" : ", ") + h;
   return "expected \"any\" or an IPv4 address of this machine (" + names + "), got \"" + address +

@@ -40,8 +40,10 @@ DiscoveryServer::DiscoveryServer(std::uint32_t domain_id, const std::string& lis
   auto udp = std::make_shared<rtps::UDPv4TransportDescriptor>();
   // Only the interface it listens on: without this Fast DDS binds its sockets to every address
   // (a stranger on another network could reach the server) and opens an output socket on each
-  // interface. An agent's participant is confined the same way (participant.cpp).
-  if (address_ != "0.0.0.0") udp->interfaceWhiteList.push_back(address_);
+  // interface. An agent's participant is confined the same way (participant.cpp). An address no
+  // interface holds (a host name that resolves to 127.0.1.1, as Debian's /etc/hosts has it) would
+  // leave Fast DDS no interface at all: the server then listens everywhere, as it did before.
+  if (local_ipv4_addresses().count(address_)) udp->interfaceWhiteList.push_back(address_);
   pqos.transport().user_transports.push_back(udp);
   // The project's port plan, as every participant of the swarm uses it.
   pqos.wire_protocol().port.portBase = PortPlan::kBase;

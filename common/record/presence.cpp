@@ -31,7 +31,9 @@ Presence::Change Presence::on_sample(const StateMessage& m, double now_s) {
   }
   if (m.phase == Phase::kStopping && a.present) change = Change::kDepart;
   a.present = m.phase != Phase::kStopping;
-  a.ran = a.ran || m.phase == Phase::kRunning;
+  // A goodbye that counts law ticks ran too: with one record in k ticks, an agent stopped within
+  // its first k ticks is heard only at the barrier and saying goodbye.
+  a.ran = a.ran || m.phase == Phase::kRunning || m.view.seq >= 1;
   a.last = m;
   a.last_heard_s = now_s;
   ++a.samples;

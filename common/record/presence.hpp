@@ -20,7 +20,7 @@ class Presence {
     StateMessage first, last;
     bool seen = false;
     bool present = false;
-    bool ran = false;           // a sample of it running came: it left its start barrier
+    bool ran = false;  // it left its start barrier: a sample of it running or of its law ticking
     double last_heard_s = 0.0;  // swarm time when its newest sample arrived
     std::uint64_t samples = 0, gaps = 0;
   };

@@ -25,10 +25,7 @@ Recorder::Recorder(RunConfig rc, RunDir dir, double time_scale)
       dir_(std::move(dir)),
       time_scale_(time_scale),
       sinks_(dir_, SceneSettings::of(rc_)),
-      // Three record periods at least: a record rate lowered for a large swarm (2.5 Hz at 512
-      // agents) must not make two lost records a departure.
-      presence_(ids_of(rc_), std::max(rc_.agent.neighbor_timeout_s, 3.0 / rc_.judge.record_hz),
-                rc_.record_every()),
+      presence_(ids_of(rc_), rc_.presence_timeout_s(), rc_.record_every()),
       judge_(rc_.judge.tolerance_m, rc_.judge.hold_s, rc_.agent.neighbor_timeout_s,
              rc_.agent.law.kind == LawKind::kEdgeFlow ? rc_.judge.tolerance_m : -1.0, rc_.faults,
              rc_.agent.law.kind == LawKind::kWmsr ? rc_.agent.law.wmsr_f : 0),

@@ -42,6 +42,11 @@ LifecycleConfig lifecycle_config(const RunConfig& rc, AgentId id, const AgentLoo
     c.announce_period_s *= 10.0;
     c.waiting_period_s *= 10.0;
   }
+  // The supervisor hears an agent at the barrier only through these announcements: one at least
+  // every half of its presence timeout, or it would count the agent departed between two.
+  c.waiting_period_s =
+      std::min(c.waiting_period_s, 0.5 * rc.presence_timeout_s() / std::max(o.time_scale, 1e-9));
+  c.announce_period_s = std::min(c.announce_period_s, c.waiting_period_s);
   c.tick_wall_s = rc.agent.steps_per_tick() / (rc.agent.physics_hz * o.time_scale);
   // The lifecycle's grid lies at multiples of the period from tick_origin_s: a later phase moves
   // that origin back.
@@ -89,7 +94,10 @@ AgentLoop::AgentLoop(const RunConfig& rc, AgentId id, const AgentLoopOptions& op
       faulty_(transport, LinkFaults(rc.faults, id, rc.seed), id),
       runtime_(params_for(rc, id, opts), faulty_),
       life_(lifecycle_config(rc, id, opts, clock.shared_origin_s()), clock.now_s()),
-      neighbourhood_(rc, id) {
+      neighbourhood_(rc, id),
+      record_period_wall_s_(rc.record_every() * rc.agent.steps_per_tick() /
+                            (rc.agent.physics_hz * std::max(opts.time_scale, 1e-9))),
+      last_announce_record_s_(clock.now_s()) {
   runtime_.set_wall_clock(&clock_);
   update_interest();
 }
@@ -126,15 +134,17 @@ AgentLoop::Poll AgentLoop::poll() {
       if (is_agent_(m.view.id)) peers.push_back({m.view.id, m.phase, m.stamp_s});
     });
   }
-  const bool recorder_confirmed = transport_.recorder_confirmed();
-  const LifecycleStep s =
-      life_.step(now, peers, transport_.matched_readers(), runtime_.time_s(), recorder_confirmed);
+  const LifecycleStep s = life_.step(now, peers, transport_.matched_readers(), runtime_.time_s(),
+                                     transport_.recorder_confirmed());
   if (!s.warning.empty()) r.notes.push_back({true, s.warning});
   if (!s.progress.empty()) r.notes.push_back({false, s.progress});
   if (s.swarm_time_s >= 0.0) faulty_.set_time(s.swarm_time_s);
-  // Until the recorder confirms it heard us, each announcement goes to it too: confirming needs a
-  // record written since its reader matched, and the barrier's announcements are few.
-  if (s.announce) runtime_.publish(*s.announce, !recorder_confirmed);
+  // The barrier's announcements come slower than ticks: one goes to the recorder too whenever the
+  // last record is a record period old, so that the supervisor keeps hearing a waiting agent and
+  // can confirm hearing it (the start waits for that), as every k-th tick does in flight.
+  if (s.announce &&
+      runtime_.publish(*s.announce, now - last_announce_record_s_ >= record_period_wall_s_))
+    last_announce_record_s_ = now;
   if (s.start) {
     runtime_.set_start_time(s.start_time_s);
     char buf[160];

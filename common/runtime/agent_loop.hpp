@@ -93,6 +93,9 @@ class AgentLoop {
   bool interest_told_ = false;
   std::uint64_t interest_changes_ = 0;
   std::uint64_t physics_steps_ = 0;
+  // Wall seconds between two records in flight, and when an announcement last went to the recorder.
+  double record_period_wall_s_ = 0.0;
+  double last_announce_record_s_ = 0.0;
 };
 
 }  // namespace qswarm

@@ -39,7 +39,7 @@ Vec3 AgentRuntime::position() const {
                                                   : Vec3(law_->state() + p_.spec.offset_W);
 }
 
-void AgentRuntime::publish(Phase phase, bool record) {
+bool AgentRuntime::publish(Phase phase, bool record) {
   StateMessage m;
   m.view = law_->message();
   m.seq = ++seq_;
@@ -72,7 +72,9 @@ void AgentRuntime::publish(Phase phase, bool record) {
     m.initial_links = initial_links_;
     m.wall_ns = wall_now_ns();  // handed over after the state sample
     bus_.record(m);
+    return true;
   }
+  return false;
 }
 
 void AgentRuntime::set_strangers(const std::set<AgentId>& ids) {

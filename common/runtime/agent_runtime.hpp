@@ -69,9 +69,9 @@ class AgentRuntime {
   std::vector<AgentEvent> step();
   // Publish the current state (the process calls this while waiting for peers, with
   // Phase::kWaiting). The recorder gets every record_every-th sample, the goodbye, and any sample
-  // published with `record` (the barrier's announcements while the recorder has not confirmed
-  // hearing this agent: they are rare, and its start waits for that confirmation).
-  void publish(Phase phase, bool record = false);
+  // published with `record` (a barrier announcement when the last record is a record period old:
+  // announcements there are slower than ticks). Returns whether the recorder got this one.
+  bool publish(Phase phase, bool record = false);
 
   // A late or restarted agent starts on the swarm's clock: set before the first step.
   void set_start_time(double t_s);

@@ -103,6 +103,10 @@ struct RunConfig {
   // Every how many of its samples an agent sends one to the supervisor: the consensus rate over
   // the record rate, rounded, at least 1.
   std::uint32_t record_every() const;
+  // How long an agent the supervisor hears nothing of stays present (swarm seconds): three record
+  // periods at least, so that a record rate lowered for a large swarm (2.5 Hz at 512 agents) does
+  // not make two lost records a departure.
+  double presence_timeout_s() const;
 };
 
 // The slots of a generated formation for n agents (scenario Formation.Shape as an int), centred on

@@ -2,6 +2,7 @@
 
 #include <arpa/inet.h>
 #include <fcntl.h>
+#include <ifaddrs.h>
 #include <netinet/in.h>
 #include <signal.h>
 #include <sys/file.h>
@@ -221,6 +222,21 @@ PortReservation::~PortReservation() {
   if (file_.empty()) return;
   std::error_code ec;
   std::filesystem::remove(file_, ec);
+}
+
+std::set<std::string> local_ipv4_addresses() {
+  std::set<std::string> here;
+  ifaddrs* list = nullptr;
+  if (getifaddrs(&list) != 0) return here;
+  for (const ifaddrs* i = list; i != nullptr; i = i->ifa_next) {
+    if (i->ifa_addr == nullptr || i->ifa_addr->sa_family != AF_INET) continue;
+    const in_addr a = reinterpret_cast<const sockaddr_in*>(i->ifa_addr)->sin_addr;
+    char text[INET_ADDRSTRLEN] = {};
+    inet_ntop(AF_INET, &a, text, sizeof text);
+    here.insert(text);
+  }
+  freeifaddrs(list);
+  return here;
 }
 
 }  // namespace qswarm

@@ -2,6 +2,7 @@
 
 #include <cstdint>
 #include <optional>
+#include <set>
 #include <string>
 #include <utility>
 
@@ -99,5 +100,8 @@ class PortReservation {
   int base_;
   std::string file_;
 };
+
+// The IPv4 addresses this machine's interfaces hold ("127.0.0.1", ...); none when it cannot tell.
+std::set<std::string> local_ipv4_addresses();
 
 }  // namespace qswarm

@@ -345,8 +345,15 @@ TEST(Recorder, AnAgentHeardOnlyAtItsStartBarrierIsNamedAsNeverRan) {
   // Given a run whose duration runs out while agent 2 still waits at its start barrier
   const RunConfig rc = resolve_scenario(parse_scenario_text(
       "name: \"barrier\"\nagents { id: 1 position { x: 0 } }\nagents { id: 2 position { x: 2 } }\n"
-      "agents { id: 3 position { x: 4 } }\nweight { policy: UNWEIGHTED }\n",
+      "agents { id: 3 position { x: 4 } }\nagents { id: 4 position { x: 6 } }\n"
+      "weight { policy: UNWEIGHTED }\n",
       "barrier"));
+  // An announcement at the barrier: its law has not ticked
+  const auto waiting = [](AgentId id, std::uint64_t seq, Phase phase) {
+    StateMessage m = sample(id, seq, 0.0, Vec3(2.0 * (id - 1), 0, 0), phase);
+    m.view.seq = 0;
+    return m;
+  };
   const std::filesystem::path dir = fresh_dir("qswarm-never-ran");
   std::string text;
   records::Summary summary;
@@ -354,21 +361,27 @@ TEST(Recorder, AnAgentHeardOnlyAtItsStartBarrierIsNamedAsNeverRan) {
     Recorder rec(rc, RunDir(dir), 1.0);
     std::int64_t wall = 1'000'000'000;
     for (int k = 0; k < 20; ++k) {
-      rec.on_sample(sample(1, k + 1, 0.02 * k, Vec3(0, 0, 0)), wall);
-      rec.on_sample(sample(2, k + 1, 0.0, Vec3(2, 0, 0), Phase::kReady), wall);
+      const auto seq = static_cast<std::uint64_t>(k + 1);
+      rec.on_sample(sample(1, seq, 0.02 * k, Vec3(0, 0, 0)), wall);
+      rec.on_sample(waiting(2, seq, Phase::kReady), wall);
       // Agent 3 waited at the barrier too, then ran
-      rec.on_sample(sample(3, k + 1, k < 10 ? 0.0 : 0.02 * (k - 10), Vec3(4, 0, 0),
-                           k < 10 ? Phase::kWaiting : Phase::kRunning),
+      rec.on_sample(k < 10 ? waiting(3, seq, Phase::kWaiting)
+                           : sample(3, seq, 0.02 * (k - 10), Vec3(4, 0, 0)),
                     wall);
+      rec.on_sample(waiting(4, seq, Phase::kReady), wall);
       rec.tick(wall);
       wall += 20'000'000;
     }
-    rec.on_sample(sample(2, 21, 0.0, Vec3(2, 0, 0), Phase::kStopping), wall);
+    rec.on_sample(waiting(2, 21, Phase::kStopping), wall);
+    // Agent 4 ran three ticks, none of them a record's, and was stopped: its goodbye says so
+    StateMessage bye = waiting(4, 24, Phase::kStopping);
+    bye.view.seq = 3;
+    rec.on_sample(bye, wall);
     text = rec.finish("duration", 1.0);
     summary = rec.summary();
   }
   std::filesystem::remove_all(dir);
-  // Then the record names it, and only it
+  // Then the record names agent 2, and only it
   EXPECT_FALSE(summary.converged());
   ASSERT_EQ(summary.never_ran_agents_size(), 1);
   EXPECT_EQ(summary.never_ran_agents(0), 2u);
