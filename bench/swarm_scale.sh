@@ -155,10 +155,10 @@ for kind in "${KINDS[@]}"; do
     awk -v n="$n" -v k="$kind_shown" -v hz="$RATE_HZ" -v ts="$TIME_SCALE" -v cpu="$cpu" -v fcpu="$fcpu" -v wakes="$wakes" -v late="$late" \
       -v p50="$p50" -v p99="$p99" -v np50="$np50" -v np99="$np99" -v np99max="$np99max" -v s="$per_s" -v cs="$cpu_per" -v d="$disc" -v kn="$known" -v rss="$rss" \
       -v sup="$sup_cpu" -v sd="$sup_drops" -v he="$host_errors" -v end="$end" '
-      function ms(x) { return x == "-" ? "-" : sprintf("%.2f", x) }  # no agent heard a sample
-      function f(fmt, x) { return x == "-" ? "-" : sprintf(fmt, x) }  # an older agent build
+      # "-": no agent heard a sample, or an agent build older than the flight columns
+      function f(fmt, x) { return x == "-" ? "-" : sprintf(fmt, x) }
       BEGIN {
         printf "| %d | %s | %s | %s | %.2f | %s | %s | %.2f | %.1f / %.1f | %s / %s (%s) | %.0f | %.1f | %.2f | %s | %.1f | %s | %s | %s | %s |\n",
-          n, k, hz, ts, cpu, f("%.2f", fcpu), f("%.0f", wakes), late, p50, p99, ms(np50), ms(np99), ms(np99max), s, cs, d, kn, rss / 1024, sup, sd, he, end }'
+          n, k, hz, ts, cpu, f("%.2f", fcpu), f("%.0f", wakes), late, p50, p99, f("%.2f", np50), f("%.2f", np99), f("%.2f", np99max), s, cs, d, kn, rss / 1024, sup, sd, he, end }'
   done
 done

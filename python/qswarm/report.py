@@ -79,15 +79,12 @@ def field(run_dir, summary, stats, name):
     total = {k: sum(v) for k, v in stats.items()}
     if name == "cpu_per_agent_pct":
         return ratio(total.get("cpu_s", 0.0), total.get("wall_s", 0.0), 100.0)
-    if name == "flight_cpu_per_agent_pct":
-        # An agent that never ran has no flight entries and a running wall time of 0.
-        if "flight_cpu_s" not in total:
-            return None  # an agent build that does not count its flight apart
-        return ratio(total["flight_cpu_s"], total.get("wall_s", 0.0), 100.0)
-    if name == "flight_wakeups_per_s":
-        if "flight_voluntary_switches" not in total:
-            return None
-        return ratio(total["flight_voluntary_switches"], total.get("wall_s", 0.0))
+    if name in ("flight_cpu_per_agent_pct", "flight_wakeups_per_s"):
+        key, scale = (("flight_cpu_s", 100.0) if name == "flight_cpu_per_agent_pct"
+                      else ("flight_voluntary_switches", 1.0))
+        # An agent that never ran has no flight entries and a running wall time of 0; a build
+        # older than these entries has none at all.
+        return ratio(total[key], total.get("wall_s", 0.0), scale) if key in total else None
     if name == "late_ticks_pct":
         return ratio(total.get("overruns", 0.0), total.get("steps", 0.0), 100.0)
     if name == "delivered_per_s":
