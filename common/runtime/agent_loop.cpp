@@ -15,6 +15,11 @@ std::optional<double> join_time(const RunConfig& rc, AgentId id, const AgentLoop
   return rc.faults.late_join_at(id);
 }
 
+// Wall seconds per consensus tick.
+double tick_wall_s(const RunConfig& rc, const AgentLoopOptions& o) {
+  return rc.agent.steps_per_tick() / (rc.agent.physics_hz * o.time_scale);
+}
+
 LifecycleConfig lifecycle_config(const RunConfig& rc, AgentId id, const AgentLoopOptions& o,
                                  double tick_origin_s) {
   LifecycleConfig c;
@@ -44,10 +49,9 @@ LifecycleConfig lifecycle_config(const RunConfig& rc, AgentId id, const AgentLoo
   }
   // The supervisor hears an agent at the barrier only through these announcements: one at least
   // every half of its presence timeout, or it would count the agent departed between two.
-  c.waiting_period_s =
-      std::min(c.waiting_period_s, 0.5 * rc.presence_timeout_s() / std::max(o.time_scale, 1e-9));
+  c.waiting_period_s = std::min(c.waiting_period_s, 0.5 * rc.presence_timeout_s() / o.time_scale);
   c.announce_period_s = std::min(c.announce_period_s, c.waiting_period_s);
-  c.tick_wall_s = rc.agent.steps_per_tick() / (rc.agent.physics_hz * o.time_scale);
+  c.tick_wall_s = tick_wall_s(rc, o);
   // The lifecycle's grid lies at multiples of the period from tick_origin_s: a later phase moves
   // that origin back.
   c.tick_origin_s = tick_origin_s - o.tick_phase * c.tick_wall_s;
@@ -95,8 +99,7 @@ AgentLoop::AgentLoop(const RunConfig& rc, AgentId id, const AgentLoopOptions& op
       runtime_(params_for(rc, id, opts), faulty_),
       life_(lifecycle_config(rc, id, opts, clock.shared_origin_s()), clock.now_s()),
       neighbourhood_(rc, id),
-      record_period_wall_s_(rc.record_every() * rc.agent.steps_per_tick() /
-                            (rc.agent.physics_hz * std::max(opts.time_scale, 1e-9))),
+      record_period_wall_s_(rc.record_every() * tick_wall_s(rc, opts)),
       last_announce_record_s_(clock.now_s()) {
   runtime_.set_wall_clock(&clock_);
   update_interest();
