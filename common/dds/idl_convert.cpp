@@ -91,6 +91,12 @@ void to_idl(const StateMessage& m, qswarm_msgs::AgentState& s) {
     s.copies().push_back(e);
   }
   s.asking(m.view.asking);
+  if (m.barrier_known.size() > kMaxBarrierBytes || m.barrier_ready.size() > kMaxBarrierBytes)
+    throw std::length_error("a start barrier bitset is at most " +
+                            std::to_string(kMaxBarrierBytes) + " bytes");
+  s.barrier_known(m.barrier_known);
+  s.barrier_ready(m.barrier_ready);
+  s.barrier_ready_at_s(m.barrier_ready_at_s);
 }
 
 StateMessage from_idl(const qswarm_msgs::AgentState& s) {
@@ -137,6 +143,9 @@ void from_idl(const qswarm_msgs::AgentState& s, StateMessage& m) {
   for (const auto& e : s.flows())
     m.view.flows.push_back({e.peer(), vec(e.flow()), e.weight(), e.active()});
   m.view.asking.assign(s.asking().begin(), s.asking().end());
+  m.barrier_known.assign(s.barrier_known().begin(), s.barrier_known().end());
+  m.barrier_ready.assign(s.barrier_ready().begin(), s.barrier_ready().end());
+  m.barrier_ready_at_s = s.barrier_ready_at_s();
   m.view.link_distance_m = NeighborView{}.link_distance_m;  // not on the wire
   m.view.current = NeighborView{}.current;
 }

@@ -31,6 +31,62 @@ AgentLifecycle::AgentLifecycle(LifecycleConfig cfg, double now_wall_s)
       phase_(cfg_.join_at_s ? LifePhase::kJoinWait : LifePhase::kWaiting),
       next_progress_s_(now_wall_s + kProgressPeriodS) {
   std::sort(cfg_.kill_at_s.begin(), cfg_.kill_at_s.end());
+  std::sort(cfg_.roster.begin(), cfg_.roster.end());
+  if (!cfg_.roster.empty() && !cfg_.join_at_s) {
+    known_.assign((cfg_.roster.size() + 7) / 8, 0);
+    ready_.assign(known_.size(), 0);
+    set_bit(known_, cfg_.self);
+    for (const AgentId p : cfg_.barrier_peers) set_bit(known_, p);
+  }
+}
+
+void AgentLifecycle::set_bit(std::vector<std::uint8_t>& bits, AgentId id) const {
+  const auto it = std::lower_bound(cfg_.roster.begin(), cfg_.roster.end(), id);
+  if (it == cfg_.roster.end() || *it != id) return;
+  const auto k = static_cast<std::size_t>(it - cfg_.roster.begin());
+  bits[k / 8] = static_cast<std::uint8_t>(bits[k / 8] | (1u << (k % 8)));
+}
+
+bool AgentLifecycle::merge(const PeerStatus& p, double now) {
+  if (known_.empty()) return false;
+  const std::vector<std::uint8_t> known_was = known_, ready_was = ready_;
+  const double ready_at_was = ready_at_;
+  set_bit(known_, p.id);
+  if (p.phase == Phase::kReady || p.phase == Phase::kRunning) set_bit(ready_, p.id);
+  // Bitsets of another length (another roster: a sender the run id did not keep out) are
+  // ignored; bits past the roster's end are cleared.
+  if (p.known.size() == known_.size() && p.ready.size() == ready_.size()) {
+    const std::size_t n = cfg_.roster.size();
+    const auto tail = static_cast<std::uint8_t>(n % 8 == 0 ? 0xffu : (1u << (n % 8)) - 1u);
+    for (std::size_t k = 0; k < known_.size(); ++k) {
+      known_[k] = static_cast<std::uint8_t>(known_[k] | p.known[k]);
+      ready_[k] = static_cast<std::uint8_t>(ready_[k] | p.ready[k]);
+    }
+    known_.back() &= tail;
+    ready_.back() &= tail;
+    // Every process reads the same time line, so no agent turned ready after now: a later
+    // instant is a lie that would hold the start back.
+    if (std::isfinite(p.ready_at_s))
+      ready_at_ = std::max(ready_at_, std::min(p.ready_at_s, now + cfg_.shared_origin_s));
+  }
+  return known_ != known_was || ready_ != ready_was || ready_at_ != ready_at_was;
+}
+
+bool AgentLifecycle::all_known_ready() const {
+  for (std::size_t k = 0; k < known_.size(); ++k)
+    if ((known_[k] & ~ready_[k]) != 0) return false;
+  return true;
+}
+
+double AgentLifecycle::go_delay_s() const {
+  const auto hops = static_cast<double>(std::min<std::size_t>(cfg_.roster.size(), kGoHops));
+  return hops * cfg_.announce_period_s;
+}
+
+std::size_t AgentLifecycle::count(const std::vector<std::uint8_t>& bits) const {
+  std::size_t n = 0;
+  for (const std::uint8_t b : bits) n += static_cast<std::size_t>(__builtin_popcount(b));
+  return n;
 }
 
 LifecycleStep AgentLifecycle::step(double now, const std::vector<PeerStatus>& peers,
@@ -94,15 +150,30 @@ LifecycleStep AgentLifecycle::barrier(double now, const std::vector<PeerStatus>&
                                       int matched_readers, bool recorder_confirmed) {
   LifecycleStep s;
   std::size_t heard = 0, ready = 0;
+  bool peer_running = false, learnt = false;
   for (const PeerStatus& p : peers) {
+    learnt = merge(p, now) || learnt;
     if (!cfg_.barrier_peers.count(p.id)) continue;
     ++heard;
     ready += (p.phase == Phase::kReady || p.phase == Phase::kRunning) ? 1 : 0;
+    peer_running = peer_running || p.phase == Phase::kRunning;
   }
   const std::size_t expected = cfg_.barrier_peers.size();
   const bool all_heard = heard >= expected && matched_readers >= cfg_.min_matched_readers &&
                          (recorder_confirmed || !cfg_.wait_recorder);
-  if (all_heard && ready >= expected) {
+  if (all_heard && !known_.empty() && !own_ready_at_) {
+    own_ready_at_ = now + cfg_.shared_origin_s;
+    set_bit(ready_, cfg_.self);
+    ready_at_ = std::max(ready_at_, *own_ready_at_);
+    learnt = true;
+  }
+  // Every agent that finds its part of the swarm ready finds the same last ready instant, so all
+  // start at the same go, however many hops the news took to reach each. Fixed once found: a
+  // later claim cannot move it.
+  if (!go_ && !known_.empty() && all_known_ready())
+    go_ = ready_at_ - cfg_.shared_origin_s + go_delay_s();
+  // A peer that runs started at the go (or timed out): waiting longer would only add skew.
+  if (all_heard && ready >= expected && (known_.empty() || (go_ && now >= *go_) || peer_running)) {
     enter_running(now, s, 0.0);
     return s;
   }
@@ -116,14 +187,15 @@ LifecycleStep AgentLifecycle::barrier(double now, const std::vector<PeerStatus>&
   }
   if (now >= next_progress_s_) {
     // A large swarm can wait here for a long time: say what for, so a stuck start is never silent.
-    char buf[200];
+    char buf[260];
     std::snprintf(buf, sizeof buf,
                   "at the start barrier after %.0f s: %zu of %zu peers heard, %zu ready, %d of %d "
-                  "readers matched, recorder %s",
+                  "readers matched, recorder %s; %zu of %zu agents known to start are ready",
                   now - born_s_, heard, expected, ready, matched_readers, cfg_.min_matched_readers,
                   !cfg_.wait_recorder  ? "not awaited"
                   : recorder_confirmed ? "confirmed"
-                                       : "not confirmed");
+                                       : "not confirmed",
+                  count(ready_), count(known_));
     s.progress = buf;
     next_progress_s_ = now + kProgressPeriodS;
   }
@@ -132,6 +204,10 @@ LifecycleStep AgentLifecycle::barrier(double now, const std::vector<PeerStatus>&
   if (phase_ != was) {  // peers learn of a change at once
     next_announce_s_ = now;
     ready_burst_left_ = all_heard ? kReadyAnnouncements - 1 : 0;  // this one is the first
+  } else if (learnt && all_heard) {
+    // The flood moves a hop per poll: a ready agent passes on what it learnt at once (once: what
+    // it learns next, or its beacon, repeats it).
+    next_announce_s_ = now;
   }
   // Announcements are due on their own schedule, however often the caller polls: the process
   // polls at least every 50 ms to see a stop request, which at 256 agents made every agent at the
@@ -146,6 +222,7 @@ LifecycleStep AgentLifecycle::barrier(double now, const std::vector<PeerStatus>&
     next_announce_s_ = now + period;
   }
   s.wake_at_s = all_heard ? now + cfg_.announce_period_s : next_announce_s_;
+  if (all_heard && go_) s.wake_at_s = std::max(now, std::min(s.wake_at_s, *go_));
   return s;
 }
 

@@ -4,6 +4,7 @@
 #include <optional>
 #include <set>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "common/core/topology.hpp"
@@ -48,13 +49,31 @@ struct LifecycleConfig {
   double tick_origin_s = 0.0;
   double max_wall_s = 150.0;      // wall: stop after running this long
   std::vector<double> kill_at_s;  // planned self-kills (simulated time), ascending
+  // The run's agents, ascending: bit k of the barrier's bitsets is roster[k]. With a roster the
+  // start is swarm-wide (AgentLifecycle); empty, an agent runs once its own barrier peers are.
+  std::vector<AgentId> roster;
+  AgentId self = 0;
+  // Where this clock's zero lies on the host's shared time line (Clock::shared_origin_s): the
+  // barrier's instants travel on that line.
+  double shared_origin_s = 0.0;
 };
 
 // What one peer last said, as the lifecycle needs it.
 struct PeerStatus {
+  PeerStatus() = default;
+  PeerStatus(AgentId i, Phase ph, double stamp, std::vector<std::uint8_t> k = {},
+             std::vector<std::uint8_t> r = {}, double ready_at = 0.0)
+      : id(i),
+        phase(ph),
+        stamp_s(stamp),
+        known(std::move(k)),
+        ready(std::move(r)),
+        ready_at_s(ready_at) {}
   AgentId id = 0;
   Phase phase = Phase::kWaiting;
   double stamp_s = 0.0;
+  std::vector<std::uint8_t> known, ready;  // its barrier bitsets (StateMessage::barrier_*)
+  double ready_at_s = 0.0;                 // StateMessage::barrier_ready_at_s
 };
 
 // What to do now, decided by AgentLifecycle::step().
@@ -74,6 +93,19 @@ struct LifecycleStep {
 // The agent's phases as one state machine: it takes the wall time, the peers' latest states and the
 // agent's simulated time, and says what to publish, how many ticks to run and whether a planned
 // kill is due. No clock, no I/O: tests drive it with numbers.
+//
+// The start is swarm-wide. An agent's barrier peers are only those it hears at the start (its
+// neighbourhood, in a large swarm), and releasing each agent once its own peers were ready let a
+// large swarm start region by region, as each region finished discovering, each agent's swarm
+// clock starting at its own release.
+// So each announcement also floods two bitsets over the run's agents, those the sender knows start
+// with it (itself, its barrier peers, and what its peers know, transitively) and those it knows
+// are ready, with the latest instant (on the host's shared time line) at which one of the ready
+// ones turned ready. Every ready bit an agent takes arrives with its sender's known set, so a
+// known set that is all ready is closed: it is every agent this one can hear of. Each agent that
+// finds it so computes the same go, that last ready instant plus a delay of kGoHops announce
+// periods (at most) for the news to spread, and runs then; or at once when a barrier peer already
+// runs.
 class AgentLifecycle {
  public:
   AgentLifecycle(LifecycleConfig cfg, double now_wall_s);
@@ -89,9 +121,16 @@ class AgentLifecycle {
   // Ready announcements at announce_period_s once the agent turns ready, before the slower beacon:
   // a peer learns at once, and one lost datagram costs no more than a period.
   static constexpr int kReadyAnnouncements = 3;
+  // The go waits this many announce periods (fewer for a smaller swarm) after the last agent
+  // turned ready: the hops the news can take to reach every agent before it is due.
+  static constexpr std::size_t kGoHops = 32;
   // Wall seconds from construction to Phase::kRunning (discovery and barrier), -1 before.
   double discovery_s() const { return discovery_s_; }
   const std::optional<TickPacer>& pacer() const { return pacer_; }
+  // The barrier's bitsets as its announcements carry them (empty without a roster).
+  const std::vector<std::uint8_t>& known_bits() const { return known_; }
+  const std::vector<std::uint8_t>& ready_bits() const { return ready_; }
+  double ready_at_s() const { return ready_at_; }
 
  private:
   LifecycleStep join_wait(double now, const std::vector<PeerStatus>& peers);
@@ -111,6 +150,18 @@ class AgentLifecycle {
   int ready_burst_left_ = 0;
   std::optional<TickPacer> pacer_;
   std::size_t next_kill_ = 0;
+  // The swarm-wide start (see the class comment); sized for the roster.
+  std::vector<std::uint8_t> known_, ready_;
+  double ready_at_ = 0.0;               // shared time line (every instant on it is positive)
+  std::optional<double> own_ready_at_;  // shared time line
+  std::optional<double> go_;            // this clock
+  void set_bit(std::vector<std::uint8_t>& bits, AgentId id) const;
+  // Merges a peer's bitsets, ready instant and phase; true if anything new was learnt.
+  bool merge(const PeerStatus& p, double now);
+  double go_delay_s() const;
+  // Whether every agent known to start is known ready.
+  bool all_known_ready() const;
+  std::size_t count(const std::vector<std::uint8_t>& bits) const;
 };
 
 }  // namespace qswarm

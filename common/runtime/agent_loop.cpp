@@ -28,6 +28,10 @@ LifecycleConfig lifecycle_config(const RunConfig& rc, AgentId id, const AgentLoo
     c.barrier_peers = start_peers(rc, id);
     c.min_matched_readers = static_cast<int>(c.barrier_peers.size());
     c.wait_recorder = o.wait_supervisor;
+    const std::set<AgentId> ids = rc.ids();
+    c.roster.assign(ids.begin(), ids.end());
+    c.self = id;
+    c.shared_origin_s = tick_origin_s;
   }
   c.time_scale = o.time_scale;
   c.start_timeout_s = o.start_timeout_s >= 0.0 ? o.start_timeout_s : rc.start_timeout_s();
@@ -132,9 +136,11 @@ AgentLoop::Poll AgentLoop::poll() {
     // The barrier and the join wait read the raw transport: faults apply to the run, which
     // starts once everyone is up.
     // Only the run's own agents count: a stranger's stamp must not start a late joiner early.
-    // Read in place: a large swarm's barrier polls often and copies nothing.
+    // Read in place: a large swarm's barrier polls often and copies only what the barrier reads.
     transport_.for_each_latest(id_, [&](const StateMessage& m) {
-      if (is_agent_(m.view.id)) peers.push_back({m.view.id, m.phase, m.stamp_s});
+      if (is_agent_(m.view.id))
+        peers.push_back({m.view.id, m.phase, m.stamp_s, m.barrier_known, m.barrier_ready,
+                         m.barrier_ready_at_s});
     });
   }
   const LifecycleStep s = life_.step(now, peers, transport_.matched_readers(), runtime_.time_s(),
@@ -145,9 +151,11 @@ AgentLoop::Poll AgentLoop::poll() {
   // The barrier's announcements come slower than ticks: one goes to the recorder too whenever the
   // last record is a record period old, so that the supervisor keeps hearing a waiting agent and
   // can confirm hearing it (the start waits for that), as every k-th tick does in flight.
-  if (s.announce &&
-      runtime_.publish(*s.announce, now - last_announce_record_s_ >= record_period_wall_s_))
-    last_announce_record_s_ = now;
+  if (s.announce) {
+    runtime_.set_barrier(life_.known_bits(), life_.ready_bits(), life_.ready_at_s());
+    if (runtime_.publish(*s.announce, now - last_announce_record_s_ >= record_period_wall_s_))
+      last_announce_record_s_ = now;
+  }
   if (s.start) {
     runtime_.set_start_time(s.start_time_s);
     char buf[160];

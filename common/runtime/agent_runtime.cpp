@@ -42,6 +42,13 @@ Vec3 AgentRuntime::position() const {
 bool AgentRuntime::publish(Phase phase, bool record) {
   StateMessage m;
   m.view = law_->message();
+  const std::uint64_t k = p_.start.record_every;
+  if (phase == Phase::kRunning && !published_running_) {
+    // The first tick's number follows a multiple of k: agents that started together then record
+    // the same ticks, however many announcements each made at its start barrier.
+    published_running_ = true;
+    seq_ = (seq_ + k - 1) / k * k;
+  }
   m.seq = ++seq_;
   m.stamp_s = time_s();
   m.mode = p_.config.mode;
@@ -63,11 +70,16 @@ bool AgentRuntime::publish(Phase phase, bool record) {
   m.faults = faults_;
   m.strangers = strangers_;
   m.suspects = suspects_;
+  if (phase == Phase::kWaiting || phase == Phase::kReady) {
+    m.barrier_known = barrier_known_;
+    m.barrier_ready = barrier_ready_;
+    m.barrier_ready_at_s = barrier_ready_at_s_;
+  }
   m.wall_ns = wall_now_ns();
   bus_.publish(m);
   // The recorder gets every k-th sample, and the goodbye (a departure it sees at once), with the
   // links and the initial links.
-  if (record || m.seq % p_.start.record_every == 0 || phase == Phase::kStopping) {
+  if (record || m.seq % k == 0 || phase == Phase::kStopping) {
     if (!p_.start.links_to_neighbours) add_links();
     m.initial_links = initial_links_;
     m.wall_ns = wall_now_ns();  // handed over after the state sample

@@ -108,6 +108,13 @@ class AgentRuntime {
   void set_strangers(const std::set<AgentId>& ids);
   // Agents its transport found forged (reported in its samples, at most kMaxSuspects).
   void set_suspects(const std::map<AgentId, std::uint8_t>& suspects);
+  // The start barrier's bitsets its waiting and ready announcements carry (AgentLifecycle).
+  void set_barrier(const std::vector<std::uint8_t>& known, const std::vector<std::uint8_t>& ready,
+                   double ready_at_s) {
+    barrier_known_ = known;
+    barrier_ready_ = ready;
+    barrier_ready_at_s_ = ready_at_s;
+  }
 
  private:
   void consensus_tick(std::vector<AgentEvent>& events);
@@ -122,6 +129,7 @@ class AgentRuntime {
   int steps_per_tick_ = 10;
   std::uint64_t steps_ = 0;
   std::uint64_t seq_ = 0;
+  bool published_running_ = false;
   bool started_ = false;
   double law_start_s_ = -1.0;
   QuadState quad_;
@@ -151,6 +159,8 @@ class AgentRuntime {
   std::uint64_t received_ = 0, dropped_ = 0, overruns_ = 0;
   std::vector<AgentId> strangers_;
   std::vector<Suspect> suspects_;
+  std::vector<std::uint8_t> barrier_known_, barrier_ready_;
+  double barrier_ready_at_s_ = 0.0;
   FaultCounters faults_;
 };
 

@@ -25,6 +25,10 @@ std::string check_message(const StateMessage& m) {
   if (m.phase > Phase::kReady) return "unknown phase";
   if (m.strangers.size() > kMaxStrangers) return "too many strangers reported";
   if (m.suspects.size() > kMaxSuspects) return "too many suspects reported";
+  if (m.barrier_known.size() > kMaxBarrierBytes || m.barrier_ready.size() > kMaxBarrierBytes)
+    return "start barrier bitset too long";
+  if (!std::isfinite(m.barrier_ready_at_s) || std::abs(m.barrier_ready_at_s) > 1e12)
+    return "start barrier instant not finite or absurd";
   for (const Suspect& s : m.suspects)
     if (s.id == 0 || s.kinds == 0 || (s.kinds & ~kAllSuspectKinds) != 0) return "suspect invalid";
   for (const auto* links : {&m.links, &m.initial_links}) {

@@ -8,6 +8,7 @@
 
 #include <Eigen/Geometry>
 
+#include "common/core/agent.hpp"
 #include "common/core/dynamics.hpp"
 #include "common/core/update_law.hpp"
 
@@ -33,6 +34,10 @@ struct FaultCounters {
 // every expected peer, then kReady; it runs once every expected peer is kReady or kRunning, so a
 // swarm starts within one waiting-publish period.
 enum class Phase : std::uint8_t { kWaiting = 0, kRunning = 1, kStopping = 2, kReady = 3 };
+
+// The start barrier's swarm-wide flood: bit k of a bitset is the run's k-th agent (ids ascending),
+// so kMaxSwarmAgents agents need this many bytes (the wire's bound).
+inline constexpr std::size_t kMaxBarrierBytes = (kMaxSwarmAgents + 7) / 8;
 
 // How many stranger ids a sample reports (the wire's bound).
 inline constexpr std::size_t kMaxStrangers = 16;
@@ -87,6 +92,13 @@ struct StateMessage {
   std::vector<AgentId> strangers;
   // Agents whose samples the sender's transport found forged (the first kMaxSuspects).
   std::vector<Suspect> suspects;
+  // At the start barrier only (waiting or ready; empty otherwise), bitsets over the run's agents
+  // (kMaxBarrierBytes): the agents the sender knows start with it (its start peers and theirs,
+  // transitively), and those it knows are ready. AgentLifecycle says how the start uses them.
+  std::vector<std::uint8_t> barrier_known, barrier_ready;
+  // With them: the latest instant, on the host's shared time line, at which an agent in
+  // barrier_ready turned ready.
+  double barrier_ready_at_s = 0.0;
 };
 
 // Whether the sender of `m` is bonded with agent `id`: names it among its links, its edges'

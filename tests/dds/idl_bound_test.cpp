@@ -2,6 +2,8 @@
 // swarm a scenario allows, and refuses (never cuts) more.
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "common/dds/idl_convert.hpp"
 
 namespace qswarm {
@@ -42,6 +44,9 @@ TEST(WireBound, DecodingIntoAReusedMessageLeavesNothingOfTheOneBefore) {
   big.strangers = {900, 901};
   big.suspects = {{7, 3}};
   big.view.asking = {3, 4};
+  big.barrier_known = {1, 2, 3};
+  big.barrier_ready = {1};
+  big.barrier_ready_at_s = 12.5;
   big.view.link_distance_m = 2.5;  // set by a receiver, never on the wire
   big.view.current = false;
   StateMessage small = with_entries(2);
@@ -69,6 +74,31 @@ TEST(WireBound, DecodingIntoAReusedMessageLeavesNothingOfTheOneBefore) {
   EXPECT_EQ(reused.view.flows.size(), 2u);
   EXPECT_TRUE(reused.strangers.empty());
   EXPECT_TRUE(reused.suspects.empty());
+  EXPECT_TRUE(reused.barrier_known.empty());
+  EXPECT_EQ(reused.barrier_ready_at_s, 0.0);
+}
+
+TEST(WireBound, TheStartBarriersBitsetsCoverTheLargestSwarm) {
+  StateMessage m = with_entries(1);
+  m.barrier_known.assign(kMaxBarrierBytes, 0xff);
+  m.barrier_ready.assign(kMaxBarrierBytes, 0x0f);
+  m.barrier_ready_at_s = 4321.25;
+  qswarm_msgs::AgentState s;
+  to_idl(m, s);
+  const StateMessage back = from_idl(s);
+  EXPECT_EQ(back.barrier_known, m.barrier_known);
+  EXPECT_EQ(back.barrier_ready, m.barrier_ready);
+  EXPECT_EQ(back.barrier_ready_at_s, 4321.25);
+  EXPECT_EQ(check_message(back), "");
+  // One byte more is refused, never cut; a receiver refuses such a sample and an absurd instant
+  m.barrier_ready.push_back(0);
+  EXPECT_THROW(to_idl(m, s), std::length_error);
+  EXPECT_EQ(check_message(m), "start barrier bitset too long");
+  m.barrier_ready.pop_back();
+  for (const double bad : {std::nan(""), 1e300}) {
+    m.barrier_ready_at_s = bad;
+    EXPECT_EQ(check_message(m), "start barrier instant not finite or absurd");
+  }
 }
 
 TEST(WireBound, OneMoreThanTheWireCarriesIsRefusedNotCut) {

@@ -72,6 +72,17 @@ TEST(Presence, WithARecordRateOnlyMissingMultiplesOfItAreGaps) {
   EXPECT_EQ(p.track(1).gaps, 2u);  // a goodbye off the multiples is no gap either
 }
 
+TEST(Presence, AnAgentsFirstTickSkippingToAMultipleOfTheRateIsNoGap) {
+  // An agent's first tick numbers its sample one past a multiple of k (5): after barrier
+  // announcements up to 12, its first tick is 16, so 15 was never sent.
+  Presence p({1}, 1.0, 5);
+  p.on_sample(sample(1, 10, 0.0, Vec3::Zero(), Phase::kReady), 0.0);
+  p.on_sample(sample(1, 20, 0.1, Vec3::Zero()), 0.1);
+  EXPECT_EQ(p.track(1).gaps, 0u);
+  p.on_sample(sample(1, 30, 0.3, Vec3::Zero()), 0.3);
+  EXPECT_EQ(p.track(1).gaps, 1u);  // 25 was sent in flight
+}
+
 TEST(GraphMetrics, ThePapersWeightedNetworkHasItsSpectrum) {
   // Paper 2.7.1: graph 1 with initial-distance weights, lambda2 = 13.060.
   const std::vector<AgentId> ids = {1, 2, 3, 4};

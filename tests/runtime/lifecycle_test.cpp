@@ -120,6 +120,89 @@ TEST(Lifecycle, TheBarrierWaitsForItsPeersReadersAndTheSupervisorsRecordReader) 
   EXPECT_TRUE(life.step(0.01, ready, 2, 0.0, true).start);
 }
 
+// Agents 1..n in a line, each hearing only its neighbours at the start, stepped in rounds of one
+// announce period: each hears what its neighbours last announced. The last agent hears its
+// neighbour (is discovered) only from `discovered_s`. Returns each agent's start instant.
+std::vector<double> line_start(int n, bool swarm_wide, double discovered_s) {
+  std::vector<AgentLifecycle> lives;
+  std::vector<PeerStatus> said(n + 1);  // by id: the last announcement
+  for (int id = 1; id <= n; ++id) {
+    LifecycleConfig c = barrier_config();
+    c.barrier_peers.clear();
+    for (const int p : {id - 1, id + 1})
+      if (p >= 1 && p <= n) c.barrier_peers.insert(static_cast<AgentId>(p));
+    if (swarm_wide)
+      for (int a = 1; a <= n; ++a) c.roster.push_back(static_cast<AgentId>(a));
+    c.self = static_cast<AgentId>(id);
+    c.shared_origin_s = 100.0;  // the host's time line lies elsewhere than this clock's zero
+    lives.emplace_back(c, 0.0);
+    said[id] = PeerStatus(static_cast<AgentId>(id), Phase::kWaiting, 0.0);
+  }
+  std::vector<double> started(n, -1.0);
+  for (double t = 0.0; t < 5.0; t += 0.005) {
+    std::vector<PeerStatus> next = said;
+    for (int id = 1; id <= n; ++id) {
+      AgentLifecycle& life = lives[id - 1];
+      if (life.phase() == LifePhase::kRunning) continue;
+      std::vector<PeerStatus> heard;
+      for (const int p : {id - 1, id + 1}) {
+        const bool late_link = (id == n && p == n - 1) || (id == n - 1 && p == n);
+        if (p >= 1 && p <= n && (!late_link || t >= discovered_s)) heard.push_back(said[p]);
+      }
+      const LifecycleStep s = life.step(t, heard, 1, 0.0);
+      if (s.start) {
+        started[id - 1] = t;
+        next[id].phase = Phase::kRunning;
+      } else if (s.announce) {
+        next[id] = PeerStatus(static_cast<AgentId>(id), *s.announce, 0.0, life.known_bits(),
+                              life.ready_bits(), life.ready_at_s());
+      }
+    }
+    said = std::move(next);
+  }
+  return started;
+}
+
+TEST(Lifecycle, ASwarmStartsTogetherAtItsLastAgentsReadinessNotRegionByRegion) {
+  // Given six agents in a line whose last one is discovered only after 1 s
+  // When each starts once its own neighbours are ready (no roster: the old rule)
+  const std::vector<double> local = line_start(6, false, 1.0);
+  // Then the first three start at once, a second before the others
+  EXPECT_LT(local[0], 0.05);
+  EXPECT_GT(local[5], 1.0);
+  // When the barrier floods who is ready over the run's agents
+  const std::vector<double> wide = line_start(6, true, 1.0);
+  // Then all six start at the same instant: the last readiness (1.0 s, when the last pair
+  // heard each other) plus the go delay (6 agents' announce periods), whatever its hops
+  for (const double t : wide) {
+    EXPECT_NEAR(t, wide[0], 1e-9);
+    EXPECT_GE(t, 1.0 + 6 * 0.005 - 1e-9);
+    EXPECT_LT(t, 1.0 + 6 * 0.005 + 0.011);
+  }
+}
+
+TEST(Lifecycle, AClaimedReadinessInTheFutureCannotHoldTheStartBack) {
+  // Given an agent whose only peer claims everyone turned ready a thousand seconds from now
+  LifecycleConfig c = barrier_config();
+  c.barrier_peers = {2};
+  c.roster = {1, 2};
+  c.self = 1;
+  AgentLifecycle life(c, 0.0);
+  const std::vector<std::uint8_t> both = {0b11};
+  LifecycleStep s = life.step(0.0, {{2, Phase::kReady, 0.0, both, both, 1000.0}}, 1, 0.0);
+  EXPECT_FALSE(s.start);
+  // Then the claim counts as now: the start is the go delay later (two announce periods)
+  EXPECT_NEAR(life.ready_at_s(), 0.0, 1e-12);
+  s = life.step(0.010, {{2, Phase::kReady, 0.0, both, both, 1000.0}}, 1, 0.0);
+  EXPECT_TRUE(s.start);
+  // And bitsets of another length (another roster) are not read: agent 3 of a larger one is not
+  // awaited, and nothing there counts as ready
+  AgentLifecycle other(c, 0.0);
+  s = other.step(0.0, {{2, Phase::kWaiting, 0.0, {0xff, 0xff}, {0xff, 0xff}, 0.0}}, 1, 0.0);
+  EXPECT_EQ(other.known_bits(), std::vector<std::uint8_t>{0b11});
+  EXPECT_EQ(other.ready_bits(), std::vector<std::uint8_t>{0b01});  // itself only
+}
+
 TEST(Lifecycle, StartsAnywayAfterTheStartTimeoutAndSaysSo) {
   AgentLifecycle life(barrier_config(), 0.0);
   EXPECT_FALSE(life.step(29.9, {{2, Phase::kReady, 0.0}}, 0, 0.0).start);

@@ -249,7 +249,10 @@ TEST(FormationSwarm, SixtyFourAgentsThatHearOnlyTheirReachKeepTheExactCentre) {
       rc.transport.delivery = Delivery::kReach;
       InProcessSwarm swarm(rc);
       ASSERT_TRUE(swarm.run_until(
-          [&] { return swarm.wall_s() > 1.0 && swarm.disagreement_running() < 1e-7; }, 90.0))
+          [&] {
+            return swarm.running_states().size() == 64u && swarm.disagreement_running() < 1e-7;
+          },
+          90.0))
           << faults << " seed " << seed;
       ASSERT_EQ(swarm.running_states().size(), 64u);
       EXPECT_LT((average(swarm.running_states()) - rc.initial_average()).norm() /
