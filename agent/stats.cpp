@@ -2,8 +2,10 @@
 
 #include <sys/resource.h>
 
+#include <chrono>
 #include <cstdio>
 #include <fstream>
+#include <iomanip>
 
 namespace qswarm {
 
@@ -34,6 +36,8 @@ ProcessUsage process_usage() {
   u.voluntary_switches = ru.ru_nvcsw;
   u.involuntary_switches = ru.ru_nivcsw;
   u.max_rss_kb = ru.ru_maxrss;
+  u.epoch_s =
+      std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
   return u;
 }
 
@@ -53,7 +57,8 @@ bool write_stats(const std::filesystem::path& path, const AgentLoop& loop, const
     out << "flight_cpu_s " << now.cpu_s - flight_start->cpu_s << "\nflight_voluntary_switches "
         << now.voluntary_switches - flight_start->voluntary_switches
         << "\nflight_involuntary_switches "
-        << now.involuntary_switches - flight_start->involuntary_switches << "\n";
+        << now.involuntary_switches - flight_start->involuntary_switches << "\nstarted_epoch_s "
+        << std::fixed << std::setprecision(6) << flight_start->epoch_s << std::defaultfloat << "\n";
   if (c.ages.total() > 0)
     out << "arrival_age_p50_ms " << c.ages.quantile_ms(0.5) << "\narrival_age_p99_ms "
         << c.ages.quantile_ms(0.99) << "\n";

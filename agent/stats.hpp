@@ -15,6 +15,7 @@ struct ProcessUsage {
   long voluntary_switches = 0;    // a thread blocked: a sleep, a wait, an empty socket
   long involuntary_switches = 0;  // a thread was preempted
   long max_rss_kb = 0;
+  double epoch_s = 0.0;  // when it was taken: the system clock, seconds since the Unix epoch
 };
 ProcessUsage process_usage();
 
@@ -27,7 +28,8 @@ std::string final_report(const AgentLoop& loop, const BusCounters& c);
 // written completely. `flight_start`: the usage when the agent started running, after discovery
 // (none: it never ran); the stats then also hold what the flight alone used (flight_cpu_s,
 // flight_voluntary_switches, flight_involuntary_switches, over the same wall_s), without the
-// process's start-up and discovery, which a short run's cpu_s is dominated by at small sizes.
+// process's start-up and discovery, which a short run's cpu_s is dominated by at small sizes, and
+// when it started (started_epoch_s: how far apart a swarm's agents started).
 bool write_stats(const std::filesystem::path& path, const AgentLoop& loop, const BusCounters& c,
                  int participants_known, double wall_now_s,
                  const std::optional<ProcessUsage>& flight_start);

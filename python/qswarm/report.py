@@ -19,6 +19,8 @@ prints each field's value, tab-separated, on one line (a missing value prints "-
                             barrier release to its end
   flight_wakeups_per_s      times an agent's threads blocked and woke again, per agent and
                             second of running (voluntary context switches, all threads)
+  start_spread_s            how far apart the agents left their start barriers: the last
+                            agent's start less the first's (system clock)
   late_ticks_pct            100 x late ticks / ticks
   delivered_per_s           samples the agents accepted, per second of running (all agents)
   cpu_us_per_delivered      agent CPU per accepted sample [us]
@@ -85,6 +87,9 @@ def field(run_dir, summary, stats, name):
         # An agent that never ran has no flight entries and a running wall time of 0; a build
         # older than these entries has none at all.
         return ratio(total[key], total.get("wall_s", 0.0), scale) if key in total else None
+    if name == "start_spread_s":
+        starts = stats.get("started_epoch_s", [])
+        return max(starts) - min(starts) if starts else None
     if name == "late_ticks_pct":
         return ratio(total.get("overruns", 0.0), total.get("steps", 0.0), 100.0)
     if name == "delivered_per_s":
