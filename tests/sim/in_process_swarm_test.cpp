@@ -8,6 +8,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "common/runtime/neighbourhood.hpp"
 #include "common/scenario/scenario.hpp"
 #include "common/sim/in_process_swarm.hpp"
 #include "common/transport/in_memory_bus.hpp"
@@ -45,6 +46,41 @@ TEST(InProcessSwarm, BarrierStartsEveryoneTogetherOnTheWholeInitialGraphAndTheyM
   }
   ASSERT_TRUE(swarm.run_until([&] { return swarm.disagreement_running() < 1e-8; }, 20.0));
   EXPECT_LT(relative_error_of_mean(swarm), 1e-12);
+}
+
+TEST(InProcessSwarm, AnAgentThatNeverComesHoldsTheWholeSwarmUntilTheStartTimeout) {
+  // Given twelve agents in a line 3 m apart over 3.5 m radio links, each hearing only the agents
+  // near it, and agent 12 dead before it announced anything
+  std::string text =
+      "name: \"line\" mode: PARTICLE law: EDGE_FLOW weight { policy: UNWEIGHTED }\n"
+      "topology { policy: RANGE threshold_m: 3.5 } duration_s: 120 seed: 1\n"
+      "transport { delivery: NEIGHBOURS }\n";
+  for (int id = 1; id <= 12; ++id)
+    text += "agents { id: " + std::to_string(id) + " position { x: " + std::to_string(3 * id) +
+            " y: 0 z: 0 } }\n";
+  const RunConfig rc = resolve_scenario(parse_scenario_text(text, "line"));
+  ASSERT_EQ(start_peers(rc, 1).count(12), 0u);  // agent 1 does not hear it
+  InProcessSwarm swarm(rc);
+  swarm.crash(12);
+  // When the others wait for it
+  ASSERT_TRUE(swarm.run_until(
+      [&] {
+        for (AgentId id = 1; id <= 11; ++id)
+          if (swarm.agent(id)->phase() != LifePhase::kRunning) return false;
+        return true;
+      },
+      rc.start_timeout_s() + 5.0));
+  // Then nobody ran before the start timeout, not even the far end of the line, and then all
+  // started together (each at its first poll past the timeout: a beacon period at most, 75 ms
+  // for agent 11, which never heard all its peers), each saying why
+  for (AgentId id = 1; id <= 11; ++id) {
+    EXPECT_GE(swarm.agent(id)->running_since_s(), rc.start_timeout_s()) << id;
+    EXPECT_LT(swarm.agent(id)->running_since_s(), rc.start_timeout_s() + 0.1) << id;
+  }
+  EXPECT_EQ(std::count_if(
+                swarm.log().begin(), swarm.log().end(),
+                [](const std::string& l) { return l.find("start timeout") != std::string::npos; }),
+            11);
 }
 
 TEST(InProcessSwarm, ALateJoinerDoesNotStallTheOthersAndBringsItsStartIntoTheAverage) {
