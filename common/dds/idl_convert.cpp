@@ -11,6 +11,8 @@ std::array<double, 3> arr(const Vec3& v) { return {v.x(), v.y(), v.z()}; }
 
 }  // namespace
 
+static_assert(kMaxBarrierBytes == 64, "idl/swarm_state.idl bounds the barrier bitsets at 64");
+
 void to_idl(const StateMessage& m, qswarm_msgs::AgentState& s) {
   // The wire carries every entry or the sample is not sent: a silently cut flow list would break
   // edge-flow's conservation. The scenario refuses swarms larger than kMaxSwarmAgents.

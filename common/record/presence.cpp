@@ -25,10 +25,9 @@ Presence::Change Presence::on_sample(const StateMessage& m, double now_s) {
   }
   // Agents send every k-th sample (seq a multiple of k) and their goodbye: a gap is a multiple of k
   // that never came. Not across the start: an agent's first tick skips to a multiple of k.
-  const bool running = m.phase == Phase::kRunning;
+  const bool started = m.phase == Phase::kRunning && a.last.phase != Phase::kRunning;
   if (a.samples > 0 && m.incarnation == a.last.incarnation && m.seq % every_ == 0 &&
-      a.last.seq % every_ == 0 && m.seq > a.last.seq + every_ &&
-      running == (a.last.phase == Phase::kRunning)) {
+      a.last.seq % every_ == 0 && m.seq > a.last.seq + every_ && !started) {
     a.gaps += (m.seq - a.last.seq) / every_ - 1;
   }
   if (m.phase == Phase::kStopping && a.present) change = Change::kDepart;

@@ -153,10 +153,12 @@ LifecycleStep AgentLifecycle::barrier(double now, const std::vector<PeerStatus>&
   bool peer_running = false, learnt = false;
   for (const PeerStatus& p : peers) {
     learnt = merge(p, now) || learnt;
+    // Any agent of the run that runs: a running agent sends no bitsets, so one that started the
+    // moment its go came due passes on no more news.
+    peer_running = peer_running || p.phase == Phase::kRunning;
     if (!cfg_.barrier_peers.count(p.id)) continue;
     ++heard;
     ready += (p.phase == Phase::kReady || p.phase == Phase::kRunning) ? 1 : 0;
-    peer_running = peer_running || p.phase == Phase::kRunning;
   }
   const std::size_t expected = cfg_.barrier_peers.size();
   const bool all_heard = heard >= expected && matched_readers >= cfg_.min_matched_readers &&
@@ -172,15 +174,17 @@ LifecycleStep AgentLifecycle::barrier(double now, const std::vector<PeerStatus>&
   // later claim cannot move it.
   if (!go_ && !known_.empty() && all_known_ready())
     go_ = ready_at_ - cfg_.shared_origin_s + go_delay_s();
-  // A peer that runs started at the go (or timed out): waiting longer would only add skew.
+  // An agent that runs started at the go (or timed out): waiting longer would only add skew.
   if (all_heard && ready >= expected && (known_.empty() || (go_ && now >= *go_) || peer_running)) {
     enter_running(now, s, 0.0);
     return s;
   }
   if (now - born_s_ > cfg_.start_timeout_s) {
-    char buf[120];
-    std::snprintf(buf, sizeof buf, "start timeout: %zu of %zu peers ready, starting anyway", ready,
-                  expected);
+    char buf[160];
+    std::snprintf(buf, sizeof buf,
+                  "start timeout: %zu of %zu peers ready, %zu of %zu agents known to start ready, "
+                  "starting anyway",
+                  ready, expected, count(ready_), count(known_));
     s.warning = buf;
     enter_running(now, s, 0.0);
     return s;
@@ -205,9 +209,11 @@ LifecycleStep AgentLifecycle::barrier(double now, const std::vector<PeerStatus>&
     next_announce_s_ = now;
     ready_burst_left_ = all_heard ? kReadyAnnouncements - 1 : 0;  // this one is the first
   } else if (learnt && all_heard) {
-    // The flood moves a hop per poll: a ready agent passes on what it learnt at once (once: what
-    // it learns next, or its beacon, repeats it).
-    next_announce_s_ = now;
+    // The flood moves about a hop per announce period: a ready agent passes on what it learnt at
+    // once, but no sooner than an announce period after its last announcement (the process polls
+    // more often than that); what it learns next, or its beacon, repeats it.
+    next_announce_s_ =
+        std::min(next_announce_s_, std::max(now, last_announce_s_ + cfg_.announce_period_s));
   }
   // Announcements are due on their own schedule, however often the caller polls: the process
   // polls at least every 50 ms to see a stop request, which at 256 agents made every agent at the
@@ -220,6 +226,7 @@ LifecycleStep AgentLifecycle::barrier(double now, const std::vector<PeerStatus>&
       period = cfg_.announce_period_s;
     }
     next_announce_s_ = now + period;
+    last_announce_s_ = now;
   }
   s.wake_at_s = all_heard ? now + cfg_.announce_period_s : next_announce_s_;
   if (all_heard && go_) s.wake_at_s = std::max(now, std::min(s.wake_at_s, *go_));

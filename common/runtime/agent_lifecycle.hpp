@@ -147,6 +147,7 @@ class AgentLifecycle {
   // At the barrier: when the next announcement is due (the first one at once), and how many of
   // the fast ready ones are left.
   double next_announce_s_ = -1e300;
+  double last_announce_s_ = -1e300;
   int ready_burst_left_ = 0;
   std::optional<TickPacer> pacer_;
   std::size_t next_kill_ = 0;

@@ -28,8 +28,10 @@ LifecycleConfig lifecycle_config(const RunConfig& rc, AgentId id, const AgentLoo
     c.barrier_peers = start_peers(rc, id);
     c.min_matched_readers = static_cast<int>(c.barrier_peers.size());
     c.wait_recorder = o.wait_supervisor;
-    const std::set<AgentId> ids = rc.ids();
-    c.roster.assign(ids.begin(), ids.end());
+    // Late joiners never reach a barrier: their bits could never turn ready.
+    const std::set<AgentId> late = rc.faults.late_joiners();
+    for (const AgentId a : rc.ids())
+      if (!late.count(a)) c.roster.push_back(a);
     c.self = id;
     c.shared_origin_s = tick_origin_s;
   }

@@ -81,6 +81,8 @@ TEST(Presence, AnAgentsFirstTickSkippingToAMultipleOfTheRateIsNoGap) {
   EXPECT_EQ(p.track(1).gaps, 0u);
   p.on_sample(sample(1, 30, 0.3, Vec3::Zero()), 0.3);
   EXPECT_EQ(p.track(1).gaps, 1u);  // 25 was sent in flight
+  p.on_sample(sample(1, 40, 0.5, Vec3::Zero(), Phase::kStopping), 0.5);
+  EXPECT_EQ(p.track(1).gaps, 2u);  // and 35 before the goodbye
 }
 
 TEST(GraphMetrics, ThePapersWeightedNetworkHasItsSpectrum) {

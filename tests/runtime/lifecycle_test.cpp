@@ -181,6 +181,21 @@ TEST(Lifecycle, ASwarmStartsTogetherAtItsLastAgentsReadinessNotRegionByRegion) {
   }
 }
 
+TEST(Lifecycle, AnyRunningAgentOfTheRunReleasesAnAgentWhosePeersAreReady) {
+  // Given agent 1, whose start peer 2 is ready, and agent 3 it heard but still thinks waiting
+  LifecycleConfig c = barrier_config();
+  c.barrier_peers = {2};
+  c.roster = {1, 2, 3};
+  c.self = 1;
+  AgentLifecycle life(c, 0.0);
+  LifecycleStep s = life.step(0.0, {{2, Phase::kReady, 0.0}, {3, Phase::kWaiting, 0.0}}, 1, 0.0);
+  EXPECT_FALSE(s.start);
+  // When agent 3 runs (it started at its go; running, it sends no bitsets)
+  s = life.step(0.005, {{2, Phase::kReady, 0.0}, {3, Phase::kRunning, 0.0}}, 1, 0.0);
+  // Then agent 1 runs too, without waiting for its timeout
+  EXPECT_TRUE(s.start);
+}
+
 TEST(Lifecycle, AClaimedReadinessInTheFutureCannotHoldTheStartBack) {
   // Given an agent whose only peer claims everyone turned ready a thousand seconds from now
   LifecycleConfig c = barrier_config();
