@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include <algorithm>
+#include <bit>
 #include <cstdio>
 
 #include "common/transport/state_message.hpp"
@@ -40,36 +41,39 @@ AgentLifecycle::AgentLifecycle(LifecycleConfig cfg, double now_wall_s)
   }
 }
 
-void AgentLifecycle::set_bit(std::vector<std::uint8_t>& bits, AgentId id) const {
+bool AgentLifecycle::set_bit(std::vector<std::uint8_t>& bits, AgentId id) const {
   const auto it = std::lower_bound(cfg_.roster.begin(), cfg_.roster.end(), id);
-  if (it == cfg_.roster.end() || *it != id) return;
+  if (it == cfg_.roster.end() || *it != id) return false;
   const auto k = static_cast<std::size_t>(it - cfg_.roster.begin());
-  bits[k / 8] = static_cast<std::uint8_t>(bits[k / 8] | (1u << (k % 8)));
+  const auto was = bits[k / 8];
+  bits[k / 8] = static_cast<std::uint8_t>(was | (1u << (k % 8)));
+  return bits[k / 8] != was;
 }
 
 bool AgentLifecycle::merge(const PeerStatus& p, double now) {
   if (known_.empty()) return false;
-  const std::vector<std::uint8_t> known_was = known_, ready_was = ready_;
   const double ready_at_was = ready_at_;
-  set_bit(known_, p.id);
-  if (p.phase == Phase::kReady || p.phase == Phase::kRunning) set_bit(ready_, p.id);
+  bool grew = set_bit(known_, p.id);
+  if (p.phase == Phase::kReady || p.phase == Phase::kRunning) grew = set_bit(ready_, p.id) || grew;
   // Bitsets of another length (another roster: a sender the run id did not keep out) are
   // ignored; bits past the roster's end are cleared.
   if (p.known.size() == known_.size() && p.ready.size() == ready_.size()) {
     const std::size_t n = cfg_.roster.size();
     const auto tail = static_cast<std::uint8_t>(n % 8 == 0 ? 0xffu : (1u << (n % 8)) - 1u);
     for (std::size_t k = 0; k < known_.size(); ++k) {
-      known_[k] = static_cast<std::uint8_t>(known_[k] | p.known[k]);
-      ready_[k] = static_cast<std::uint8_t>(ready_[k] | p.ready[k]);
+      const std::uint8_t mask = k + 1 == known_.size() ? tail : 0xff;
+      const auto known = static_cast<std::uint8_t>((known_[k] | p.known[k]) & mask);
+      const auto ready = static_cast<std::uint8_t>((ready_[k] | p.ready[k]) & mask);
+      grew = grew || known != known_[k] || ready != ready_[k];
+      known_[k] = known;
+      ready_[k] = ready;
     }
-    known_.back() &= tail;
-    ready_.back() &= tail;
     // Every process reads the same time line, so no agent turned ready after now: a later
     // instant is a lie that would hold the start back.
     if (std::isfinite(p.ready_at_s))
       ready_at_ = std::max(ready_at_, std::min(p.ready_at_s, now + cfg_.shared_origin_s));
   }
-  return known_ != known_was || ready_ != ready_was || ready_at_ != ready_at_was;
+  return grew || ready_at_ != ready_at_was;
 }
 
 bool AgentLifecycle::all_known_ready() const {
@@ -85,7 +89,7 @@ double AgentLifecycle::go_delay_s() const {
 
 std::size_t AgentLifecycle::count(const std::vector<std::uint8_t>& bits) const {
   std::size_t n = 0;
-  for (const std::uint8_t b : bits) n += static_cast<std::size_t>(__builtin_popcount(b));
+  for (const std::uint8_t b : bits) n += static_cast<std::size_t>(std::popcount(b));
   return n;
 }
 

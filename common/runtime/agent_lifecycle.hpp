@@ -156,7 +156,8 @@ class AgentLifecycle {
   double ready_at_ = 0.0;               // shared time line (every instant on it is positive)
   std::optional<double> own_ready_at_;  // shared time line
   std::optional<double> go_;            // this clock
-  void set_bit(std::vector<std::uint8_t>& bits, AgentId id) const;
+  // Sets the roster bit of `id` (nothing if it is not in the roster); true if it was clear.
+  bool set_bit(std::vector<std::uint8_t>& bits, AgentId id) const;
   // Merges a peer's bitsets, ready instant and phase; true if anything new was learnt.
   bool merge(const PeerStatus& p, double now);
   double go_delay_s() const;
