@@ -4,7 +4,7 @@
 // screenshot is kept (QSWARM_VIEW_SCREENSHOT names where; default the run directory).
 import fs from 'node:fs';
 import path from 'node:path';
-import { check, finish, freshDir, npm, skip, startRun, until } from './harness.mjs';
+import { check, finish, freshDir, getJson, npm, skip, startRun, until } from './harness.mjs';
 
 const chromium = process.env.QSWARM_CHROMIUM || '/usr/bin/chromium';
 if (!fs.existsSync(chromium)) skip(`no browser at ${chromium} (apt-get install chromium)`);
@@ -51,11 +51,21 @@ try {
   check(s2.metricPoints > s1.metricPoints, `lambda_2 chart grew from ${s1.metricPoints} to ${s2.metricPoints} points`);
   const chartPoints = await page.evaluate(() => document.querySelectorAll('#chart-lambda2 canvas').length);
   check(chartPoints === 1, 'the lambda_2 chart is drawn');
-  const t0 = Date.now(), f0 = s2.frames;
-  await new Promise((r) => setTimeout(r, 4000));
-  const s3 = await stats();
-  const rate = (s3.frames - f0) / ((Date.now() - t0) / 1000);
-  check(rate >= 10, `at least 10 updates a second (${rate.toFixed(1)})`);
+  // The page keeps up: it is sent a frame whenever records arrived (8 agents record at 10 Hz each,
+  // on one tick grid), so about 10 frames per second of swarm time, fewer only where the server
+  // found two records' batches in one 50 ms frame period. Counted in swarm time, not in the
+  // page's wall time, which a loaded machine stretches; and no frame was dropped for the page.
+  const t0 = Date.now(), f0 = s2.frames, swarm0 = s2.t;
+  const s3 = await until(async () => {
+    const s = await stats();
+    return s.frames >= f0 + 40 ? s : null;
+  }, 60000, '40 more frames on the page');
+  const served = await getJson(`${run.url}stats`);
+  const perSwarmSecond = (s3.frames - f0) / (s3.t - swarm0);
+  check(perSwarmSecond >= 5, `updates per second of swarm time: ${perSwarmSecond.toFixed(1)} ` +
+    `(${s3.frames - f0} frames over ${(s3.t - swarm0).toFixed(2)} s of swarm time, ` +
+    `${((Date.now() - t0) / 1000).toFixed(2)} s of wall time)`);
+  check(served.frames_dropped === 0, `no frame dropped for the page (${served.frames_dropped})`);
   const lat = s3.latencyMs.slice().sort((a, b) => a - b);
   const med = lat[Math.floor(lat.length / 2)];
   check(lat.length > 10 && med < 1000, `publication to page latency measured: median ${med} ms, p90 ` +

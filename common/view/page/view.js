@@ -14,6 +14,7 @@ const PRESENCE = new Set(['join', 'rejoin', 'depart', 'kill', 'restart', 'late_j
 const stats = {
   connected: false, frames: 0, snapshots: 0, agentsDrawn: 0, linksDrawn: 0, metricPoints: 0,
   events: 0, latencyMs: [], lastLatencyMs: null, renders: 0, ended: null, subprotocol: null,
+  t: null,  // the swarm time of the newest frame or snapshot [s]
 };
 window.qswarm = stats;
 
@@ -390,6 +391,7 @@ function onFrame(m) {
 }
 
 function onTime(t) {
+  stats.t = t;
   $('clock').textContent = `t = ${t.toFixed(2)} s`;
   const present = [...agents.values()].filter((a) => a.present).length;
   const expected = run ? run.agents.length : 0;
