@@ -85,6 +85,7 @@ AgentParams params_for(const RunConfig& rc, AgentId id, const AgentLoopOptions& 
   p.start.run_id = rc.transport.run_id;
   p.start.expected_peers = start_peers(rc, id).size();
   p.start.record_every = rc.record_every();
+  p.start.spread_records = rc.agents.size() > kSpreadRecordsAbove;
   p.start.links_to_neighbours = rc.transport.delivery == Delivery::kReach;
   if (join_time(rc, id, o)) {
     p.start.expected_peers = 0;  // joins a running swarm: no first-tick wait

@@ -43,11 +43,15 @@ bool AgentRuntime::publish(Phase phase, bool record) {
   StateMessage m;
   m.view = law_->message();
   const std::uint64_t k = p_.start.record_every;
-  if (phase == Phase::kRunning && !published_running_) {
-    // The first tick's number follows a multiple of k: agents that started together then record
-    // the same ticks, however many announcements each made at its start barrier.
+  // The first tick's sample is sent before the law linked anyone: with records sparser than
+  // ticks, it goes to the neighbours only.
+  const bool first_tick = phase == Phase::kRunning && !published_running_;
+  if (first_tick) {
+    // Which of its ticks an agent records does not depend on how many announcements it made at
+    // its start barrier: the k-th (all agents the same) or one set by its id (spread_records).
     published_running_ = true;
-    seq_ = (seq_ + k - 1) / k * k;
+    const std::uint64_t first_record_tick = p_.start.spread_records ? 1 + p_.spec.id % k : k;
+    seq_ += (k - (seq_ + first_record_tick) % k) % k;
   }
   m.seq = ++seq_;
   m.stamp_s = time_s();
@@ -79,7 +83,7 @@ bool AgentRuntime::publish(Phase phase, bool record) {
   bus_.publish(m);
   // The recorder gets every k-th sample, and the goodbye (a departure it sees at once), with the
   // links and the initial links.
-  if (record || m.seq % k == 0 || phase == Phase::kStopping) {
+  if (record || (m.seq % k == 0 && !(first_tick && k > 1)) || phase == Phase::kStopping) {
     if (!p_.start.links_to_neighbours) add_links();
     m.initial_links = initial_links_;
     m.wall_ns = wall_now_ns();  // handed over after the state sample

@@ -34,6 +34,9 @@ struct AgentStart {
   bool recover_flows = false;
   // Every how many samples one also goes to the recorder (RunConfig::record_every).
   std::uint32_t record_every = 1;
+  // Which one of every record_every ticks it records: the same for every agent, or by its id
+  // (kSpreadRecordsAbove).
+  bool spread_records = false;
   // Whether the samples its neighbours hear carry its links. Only a place filter reads them
   // (delivery REACH: a bond lets a sample through); the recorder's samples always carry its
   // links and initial links (graph.csv), and no neighbour reads the initial ones. Without them a

@@ -73,8 +73,8 @@ TEST(Presence, WithARecordRateOnlyMissingMultiplesOfItAreGaps) {
 }
 
 TEST(Presence, AnAgentsFirstTickSkippingToAMultipleOfTheRateIsNoGap) {
-  // An agent's first tick numbers its sample one past a multiple of k (5): after barrier
-  // announcements up to 12, its first tick is 16, so 15 was never sent.
+  // Which ticks an agent records is set by its id: after barrier announcements up to 12, an
+  // agent's first tick can be 17 (its first record the fourth tick's), so 15 was never sent.
   Presence p({1}, 1.0, 5);
   p.on_sample(sample(1, 10, 0.0, Vec3::Zero(), Phase::kReady), 0.0);
   p.on_sample(sample(1, 20, 0.1, Vec3::Zero()), 0.1);

@@ -74,5 +74,53 @@ TEST(AgentRuntime, WithoutAWallClockASampleCarriesNone) {
   EXPECT_EQ(bus.published.front().carried, 0);
 }
 
+// A transport that keeps which of the agent's ticks went to the recorder.
+class RecordedTicksBus final : public NeighborBus {
+ public:
+  std::vector<int> recorded_ticks;
+  void publish(const StateMessage& m) override { ticks += m.phase == Phase::kRunning ? 1 : 0; }
+  void record(const StateMessage& m) override {
+    if (m.phase == Phase::kRunning) recorded_ticks.push_back(ticks);
+  }
+  void for_each_latest(AgentId, const std::function<void(const StateMessage&)>&) override {}
+  void set_listener(Listener) override {}
+  BusCounters counters() const override { return {}; }
+
+ private:
+  int ticks = 0;
+};
+
+// The ticks (counted from 1) that agent `id` records in its first 16, after `announcements` at its
+// start barrier, with one record every 5 ticks.
+std::vector<int> recorded_ticks(AgentId id, int announcements, bool spread) {
+  AgentParams p = lone_agent();
+  p.spec.id = id;
+  p.start.record_every = 5;
+  p.start.spread_records = spread;
+  RecordedTicksBus bus;
+  AgentRuntime a(p, bus);
+  for (int i = 0; i < announcements; ++i) (void)a.publish(Phase::kReady);
+  for (int i = 0; i < 16 * 10; ++i) (void)a.step();
+  return bus.recorded_ticks;
+}
+
+TEST(AgentRuntime, AgentsRecordTheSameTicksHoweverManyAnnouncementsTheyMade) {
+  for (const AgentId id : {1u, 2u, 7u})
+    for (const int announcements : {0, 1, 3, 4, 12})
+      EXPECT_EQ(recorded_ticks(id, announcements, false), (std::vector<int>{5, 10, 15}))
+          << "agent " << id << " after " << announcements << " announcements";
+}
+
+TEST(AgentRuntime, SpreadRecordsFallOnATickSetByTheIdNeverTheFirst) {
+  // Ids 1..5 take the five ticks of every five; the first tick, sent before the law linked
+  // anyone, is never a record (id 5 records its sixth instead).
+  const std::vector<std::vector<int>> want = {
+      {2, 7, 12}, {3, 8, 13}, {4, 9, 14}, {5, 10, 15}, {6, 11, 16}};
+  for (AgentId id = 1; id <= 5; ++id)
+    for (const int announcements : {0, 1, 3, 4, 12})
+      EXPECT_EQ(recorded_ticks(id, announcements, true), want[id - 1])
+          << "agent " << id << " after " << announcements << " announcements";
+}
+
 }  // namespace
 }  // namespace qswarm
