@@ -24,7 +24,8 @@ Presence::Change Presence::on_sample(const StateMessage& m, double now_s) {
     change = Change::kRejoin;
   }
   // Agents send every k-th sample (seq a multiple of k) and their goodbye: a gap is a multiple of k
-  // that never came. Not across the start: an agent's first tick skips to a multiple of k.
+  // that never came. Not across the start: which ticks an agent records is set at its first tick,
+  // whose number skips past the ones its barrier used.
   const bool started = m.phase == Phase::kRunning && a.last.phase != Phase::kRunning;
   if (a.samples > 0 && m.incarnation == a.last.incarnation && m.seq % every_ == 0 &&
       a.last.seq % every_ == 0 && m.seq > a.last.seq + every_ && !started) {

@@ -42,8 +42,8 @@ double tick_phase(const std::set<AgentId>& ids, AgentId id);
 
 // Up to this many agents every agent records the same ticks (one in k), so that each graph.csv
 // row is the swarm at one instant whatever the delivery. Past it their records are spread over
-// the k ticks by id: at 256 agents a record from every agent on one tick lost the recorder about
-// a fifth of them, and it counted agents departed that were flying (docs/benchmarks.md, "Records
+// the k ticks by id: at 256 agents a record from every agent on one tick lost the recorder a fifth
+// to a third of them, and it counted agents departed that were flying (docs/benchmarks.md, "Records
 // spread over the ticks").
 constexpr std::size_t kSpreadRecordsAbove = 64;
 

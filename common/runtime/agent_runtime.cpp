@@ -43,8 +43,8 @@ bool AgentRuntime::publish(Phase phase, bool record) {
   StateMessage m;
   m.view = law_->message();
   const std::uint64_t k = p_.start.record_every;
-  // The first tick's sample is sent before the law linked anyone: with records sparser than
-  // ticks, it goes to the neighbours only.
+  // The first tick's sample of an agent started at the barrier is sent before its law linked
+  // anyone: with records sparser than ticks, it goes to the neighbours only.
   const bool first_tick = phase == Phase::kRunning && !published_running_;
   if (first_tick) {
     // Which of its ticks an agent records does not depend on how many announcements it made at

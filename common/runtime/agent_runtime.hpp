@@ -73,7 +73,8 @@ class AgentRuntime {
   // Publish the current state (the process calls this while waiting for peers, with
   // Phase::kWaiting). The recorder gets every record_every-th sample, the goodbye, and any sample
   // published with `record` (a barrier announcement when the last record is a record period old:
-  // announcements there are slower than ticks). Returns whether the recorder got this one.
+  // announcements there are slower than ticks). With record_every above 1 the first running
+  // sample is not recorded. Returns whether the recorder got this one.
   bool publish(Phase phase, bool record = false);
 
   // A late or restarted agent starts on the swarm's clock: set before the first step.

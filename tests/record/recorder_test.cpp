@@ -72,9 +72,9 @@ TEST(Presence, WithARecordRateOnlyMissingMultiplesOfItAreGaps) {
   EXPECT_EQ(p.track(1).gaps, 2u);  // a goodbye off the multiples is no gap either
 }
 
-TEST(Presence, AnAgentsFirstTickSkippingToAMultipleOfTheRateIsNoGap) {
-  // Which ticks an agent records is set by its id: after barrier announcements up to 12, an
-  // agent's first tick can be 17 (its first record the fourth tick's), so 15 was never sent.
+TEST(Presence, TheTicksAnAgentSkipsAtItsFirstTickAreNoGap) {
+  // Which ticks an agent records is set at its first tick: after barrier announcements up to 12,
+  // its first tick can be 16 or 17 (first record 20), so 15 was never sent.
   Presence p({1}, 1.0, 5);
   p.on_sample(sample(1, 10, 0.0, Vec3::Zero(), Phase::kReady), 0.0);
   p.on_sample(sample(1, 20, 0.1, Vec3::Zero()), 0.1);

@@ -150,28 +150,23 @@ TEST(Faults, LossBelowTheApplicationThroughFastDdsTestTransport) {
   EXPECT_EQ(s.faults().dropped(), 0u);
   EXPECT_EQ(s.faults().transport_drop_percent(), 30u);
   // The supervisor's reader sees the gaps the transport made, counted from each agent's first
-  // sample it received (samples published before its reader matched are neither received nor
-  // gaps). Fast DDS's test transport drops by an accumulator, not at random: every 10/3-th DATA
-  // message a participant sends, whoever it goes to. Each sample goes to five peers and the
-  // supervisor in turn, so one reader loses 1 or 2 of every 5 samples of a sender (20 or 40 %)
-  // depending on its place in that sender's order, and 30 % only on average over all readers. A
-  // few gaps at the ends of a short record are not counted, hence the margins below 20 % and
-  // above 40 %: still far from no loss at all and from losing everything.
-  std::size_t received = 0;
-  std::size_t gaps = 0;
+  // record it received (records published before its reader matched are neither received nor
+  // gaps). Fast DDS's test transport drops by an accumulator, not at random: the 4th, 7th and 10th
+  // of every 10 DATA messages a participant sends, whoever they go to. An agent sends 26 in a
+  // record period (5 ticks to 5 peers, and the record), so its records take the even places of
+  // that cycle, or the odd ones, depending on where its sends began: the supervisor loses 1 or 2
+  // of every 5 records of a sender (20 or 40 %), 30 % only on average. A few gaps at the ends of a
+  // short record are not counted, hence the margins below 20 % and above 40 %: still far from no
+  // loss at all and from losing everything.
   for (const auto& a : s.agents()) {
     const double seen = static_cast<double>(a.samples() + a.seq_gaps());
     ASSERT_GT(seen, 20.0) << "agent " << a.id();
     const double share = static_cast<double>(a.seq_gaps()) / seen;
-    std::printf("transport loss 30 %%: the supervisor missed %.1f %% of agent %u's samples\n",
+    std::printf("transport loss 30 %%: the supervisor missed %.1f %% of agent %u's records\n",
                 100.0 * share, a.id());
     EXPECT_GT(share, 0.1) << "agent " << a.id();
     EXPECT_LT(share, 0.5) << "agent " << a.id();
-    received += a.samples();
-    gaps += a.seq_gaps();
   }
-  EXPECT_EQ(received, s.messages().received());
-  EXPECT_EQ(gaps, s.messages().seq_gaps());
 }
 
 // --- Multi-host: agents in separate network namespaces, links cut with iptables -------------

@@ -56,10 +56,13 @@ try {
   // found two records' batches in one 50 ms frame period. Counted in swarm time, not in the
   // page's wall time, which a loaded machine stretches; and no frame was dropped for the page.
   const t0 = Date.now(), f0 = s2.frames, swarm0 = s2.t;
+  // A stalled feed still sends a heartbeat frame each second, at the same swarm time: the frames
+  // must span at least 2 s of it.
   const s3 = await until(async () => {
     const s = await stats();
     return s.frames >= f0 + 40 ? s : null;
   }, 60000, '40 more frames on the page');
+  check(s3.t - swarm0 >= 2, `the frames span ${(s3.t - swarm0).toFixed(2)} s of swarm time`);
   const served = await getJson(`${run.url}stats`);
   const perSwarmSecond = (s3.frames - f0) / (s3.t - swarm0);
   check(perSwarmSecond >= 5, `updates per second of swarm time: ${perSwarmSecond.toFixed(1)} ` +
