@@ -1,5 +1,7 @@
 #include "common/record/scene.hpp"
 
+#include "common/record/json_writer.hpp"
+
 #include <algorithm>
 #include <array>
 #include <charconv>
@@ -25,79 +27,34 @@ constexpr Rgba kHeavy{1.0, 0.2, 0.2, 0.9};   // the heaviest
 constexpr double kAgentDiameterM = 0.5;  // a quadcopter spans about 0.5 m (the paper's 0.25 m arms)
 constexpr double kLinkThicknessM = 0.06;
 
-// The JSON of one message, written by hand: the scene goes out ten times a simulated second with
-// up to hundreds of agents, and a DOM would cost more than the numbers.
-class Json {
- public:
-  Json& raw(std::string_view s) {
-    out_ += s;
-    return *this;
-  }
-  // A number with at most `digits` decimals (positions to 0.1 mm, colours to 1/1000), trailing
-  // zeros dropped; a non-finite number (never from the recorder: its gate drops them) as 0.
-  Json& num(double v, int digits = 4) {
-    if (!std::isfinite(v)) return raw("0");
-    char buf[64];
-    const auto fmt = std::abs(v) < 1e12 ? std::chars_format::fixed : std::chars_format::scientific;
-    const auto [end, ec] = std::to_chars(buf, buf + sizeof buf, v, fmt, digits);
-    std::string_view s(buf, ec == std::errc() ? static_cast<std::size_t>(end - buf) : 0);
-    if (fmt == std::chars_format::fixed && s.find('.') != std::string_view::npos) {
-      while (s.back() == '0') s.remove_suffix(1);
-      if (s.back() == '.') s.remove_suffix(1);
-    }
-    if (s.empty() || s == "-0") return raw("0");
-    return raw(s);
-  }
-  Json& integer(std::uint64_t v) { return raw(std::to_string(v)); }
-  Json& str(std::string_view s) {
-    out_ += '"';
-    for (const char c : s) {
-      if (c == '"' || c == '\\') {
-        out_ += '\\';
-        out_ += c;
-      } else if (static_cast<unsigned char>(c) < 0x20) {
-        char esc[8];
-        std::snprintf(esc, sizeof esc, "\\u%04x", static_cast<unsigned>(c));
-        out_ += esc;
-      } else {
-        out_ += c;
-      }
-    }
-    out_ += '"';
-    return *this;
-  }
-  Json& vec3(const Vec3& v) {
-    raw("{\"x\":").num(v.x()).raw(",\"y\":").num(v.y()).raw(",\"z\":").num(v.z());
-    return raw("}");
-  }
-  // orientation as w, x, y, z (the record's order); Foxglove's quaternion is x, y, z, w.
-  Json& pose(const Vec3& p, const Eigen::Quaterniond& o = Eigen::Quaterniond::Identity()) {
-    raw("{\"position\":").vec3(p).raw(",\"orientation\":{\"x\":").num(o.x(), 6);
-    return raw(",\"y\":")
-        .num(o.y(), 6)
-        .raw(",\"z\":")
-        .num(o.z(), 6)
-        .raw(",\"w\":")
-        .num(o.w(), 6)
-        .raw("}}");
-  }
-  Json& color(const Rgba& c) {
-    raw("{\"r\":").num(c.r, 3).raw(",\"g\":").num(c.g, 3).raw(",\"b\":").num(c.b, 3);
-    return raw(",\"a\":").num(c.a, 3).raw("}");
-  }
-  Json& time(double t_s) {
-    const double t = std::isfinite(t_s) ? std::max(0.0, t_s) : 0.0;
-    const auto sec = static_cast<std::uint64_t>(t);
-    const auto nsec = std::min<std::uint64_t>(
-        999'999'999,
-        static_cast<std::uint64_t>(std::llround((t - static_cast<double>(sec)) * 1e9)));
-    return raw("{\"sec\":").integer(sec).raw(",\"nsec\":").integer(nsec).raw("}");
-  }
-  std::string take() { return std::move(out_); }
+// The scene's JSON, written by hand (JsonWriter): it goes out ten times a simulated second with
+// up to hundreds of agents, and a DOM would cost more than the numbers. Positions to 0.1 mm,
+// orientations to 1e-6, colours to 1/1000.
+void vec3(JsonWriter& j, const Vec3& v) {
+  j.raw("{\"x\":").num(v.x()).raw(",\"y\":").num(v.y()).raw(",\"z\":").num(v.z()).raw("}");
+}
 
- private:
-  std::string out_;
-};
+// orientation as w, x, y, z (the record's order); Foxglove's quaternion is x, y, z, w.
+void pose(JsonWriter& j, const Vec3& p,
+          const Eigen::Quaterniond& o = Eigen::Quaterniond::Identity()) {
+  j.raw("{\"position\":");
+  vec3(j, p);
+  j.raw(",\"orientation\":{\"x\":").num(o.x(), 6).raw(",\"y\":").num(o.y(), 6);
+  j.raw(",\"z\":").num(o.z(), 6).raw(",\"w\":").num(o.w(), 6).raw("}}");
+}
+
+void color(JsonWriter& j, const Rgba& c) {
+  j.raw("{\"r\":").num(c.r, 3).raw(",\"g\":").num(c.g, 3).raw(",\"b\":").num(c.b, 3);
+  j.raw(",\"a\":").num(c.a, 3).raw("}");
+}
+
+void stamp(JsonWriter& j, double t_s) {
+  const double t = std::isfinite(t_s) ? std::max(0.0, t_s) : 0.0;
+  const auto sec = static_cast<std::int64_t>(t);
+  const auto nsec =
+      std::min<std::int64_t>(999'999'999, std::llround((t - static_cast<double>(sec)) * 1e9));
+  j.raw("{\"sec\":").integer(sec).raw(",\"nsec\":").integer(nsec).raw("}");
+}
 
 Vec3 vec3_of(const google::protobuf::RepeatedField<double>& f) {
   return f.size() >= 3 ? Vec3(f[0], f[1], f[2]) : Vec3(NAN, NAN, NAN);
@@ -121,21 +78,35 @@ struct Entity {
 };
 
 std::string sphere(const Vec3& p, double diameter_m, const Rgba& c) {
-  Json j;
-  j.raw("{\"pose\":").pose(p).raw(",\"size\":").vec3(Vec3::Constant(diameter_m));
-  return j.raw(",\"color\":").color(c).raw("}").take();
+  std::string out;
+  JsonWriter j(out);
+  j.raw("{\"pose\":");
+  pose(j, p);
+  j.raw(",\"size\":");
+  vec3(j, Vec3::Constant(diameter_m));
+  j.raw(",\"color\":");
+  color(j, c);
+  j.raw("}");
+  return out;
 }
 
 std::string cube(const Vec3& p, double side_m, const Rgba& c) { return sphere(p, side_m, c); }
 
 std::string text(const Vec3& p, const std::string& s, const Rgba& c) {
-  Json j;
-  j.raw("{\"pose\":").pose(p).raw(",\"billboard\":true,\"font_size\":14,\"scale_invariant\":true,");
-  return j.raw("\"color\":").color(c).raw(",\"text\":").str(s).raw("}").take();
+  std::string out;
+  JsonWriter j(out);
+  j.raw("{\"pose\":");
+  pose(j, p);
+  j.raw(",\"billboard\":true,\"font_size\":14,\"scale_invariant\":true,\"color\":");
+  color(j, c);
+  j.raw(",\"text\":").str(s).raw("}");
+  return out;
 }
 
-void write_entity(Json& j, const Entity& e, double t_s, const std::string& frame_id) {
-  j.raw("{\"timestamp\":").time(t_s).raw(",\"frame_id\":").str(frame_id).raw(",\"id\":").str(e.id);
+void write_entity(JsonWriter& j, const Entity& e, double t_s, const std::string& frame_id) {
+  j.raw("{\"timestamp\":");
+  stamp(j, t_s);
+  j.raw(",\"frame_id\":").str(frame_id).raw(",\"id\":").str(e.id);
   j.raw(",\"lifetime\":{\"sec\":0,\"nsec\":0},\"frame_locked\":false,\"metadata\":[");
   for (std::size_t i = 0; i < e.metadata.size(); ++i) {
     j.raw(i ? "," : "").raw("{\"key\":").str(e.metadata[i].first);
@@ -146,7 +117,11 @@ void write_entity(Json& j, const Entity& e, double t_s, const std::string& frame
   j.raw("],\"triangles\":[],\"texts\":[").raw(e.texts).raw("],\"models\":[]}");
 }
 
-std::string number_text(double v, int digits) { return Json().num(v, digits).take(); }
+std::string number_text(double v, int digits) {
+  std::string out;
+  JsonWriter(out).num(v, digits);
+  return out;
+}
 
 // Links are drawn in kWeightBins classes of weight, each one line list over the agents' positions
 // with indices into them: a complete graph of N agents then costs N positions per class and two
@@ -195,10 +170,13 @@ std::string scene_update_json(const std::vector<records::AgentSample>& agents,
     e.metadata = {{"id", std::to_string(s.id())}, {"seq", std::to_string(s.seq())}};
     e.spheres = sphere(p, kAgentDiameterM, kAgent);
     if (s.mode() == static_cast<std::uint32_t>(AgentMode::kQuadcopter)) {
-      Json a;
-      a.raw("{\"pose\":").pose(p, orientation_of(s)).raw(",\"shaft_length\":0.45,");
-      a.raw("\"shaft_diameter\":0.06,\"head_length\":0.2,\"head_diameter\":0.16,\"color\":");
-      e.arrows = a.color(kHeading).raw("}").take();
+      JsonWriter a(e.arrows);
+      a.raw("{\"pose\":");
+      pose(a, p, orientation_of(s));
+      a.raw(",\"shaft_length\":0.45,\"shaft_diameter\":0.06,\"head_length\":0.2,");
+      a.raw("\"head_diameter\":0.16,\"color\":");
+      color(a, kHeading);
+      a.raw("}");
     }
     e.texts = text(p + Vec3(0, 0, 0.6), std::to_string(s.id()), kLabel);
     entities.push_back(std::move(e));
@@ -232,16 +210,19 @@ std::string scene_update_json(const std::vector<records::AgentSample>& agents,
     if (pairs[bin].empty()) continue;
     std::vector<const Vec3*> points(used[bin].size());
     for (const auto& [id, index] : used[bin]) points[index] = &where.at(id);
-    Json l;
-    l.raw(links.lines.empty() ? "" : ",");
-    l.raw("{\"type\":2,\"pose\":").pose(Vec3::Zero()).raw(",\"thickness\":").num(kLinkThicknessM);
-    l.raw(",\"scale_invariant\":false,\"points\":[");
-    for (std::size_t i = 0; i < points.size(); ++i) l.raw(i ? "," : "").vec3(*points[i]);
-    l.raw("],\"color\":")
-        .color(bin_colour(static_cast<int>(bin)))
-        .raw(",\"colors\":[],\"indices\":[");
+    JsonWriter l(links.lines);
+    l.raw(links.lines.empty() ? "{\"type\":2,\"pose\":" : ",{\"type\":2,\"pose\":");
+    pose(l, Vec3::Zero());
+    l.raw(",\"thickness\":").num(kLinkThicknessM).raw(",\"scale_invariant\":false,\"points\":[");
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      l.raw(i ? "," : "");
+      vec3(l, *points[i]);
+    }
+    l.raw("],\"color\":");
+    color(l, bin_colour(static_cast<int>(bin)));
+    l.raw(",\"colors\":[],\"indices\":[");
     for (std::size_t i = 0; i < pairs[bin].size(); ++i) l.raw(i ? "," : "").integer(pairs[bin][i]);
-    links.lines += l.raw("]}").take();
+    l.raw("]}");
   }
   if (std::isfinite(lo)) {
     links.metadata.emplace_back("weight_min", number_text(lo, 6));
@@ -268,16 +249,18 @@ std::string scene_update_json(const std::vector<records::AgentSample>& agents,
   ideal.spheres = sphere(settings.initial_average, 0.6, kInitialAverage);
   entities.push_back(std::move(ideal));
 
-  Json j;
+  std::string out;
+  JsonWriter j(out);
   // Delete everything older than this message first: the message is the whole scene.
-  j.raw("{\"deletions\":[{\"timestamp\":")
-      .time(t_s)
-      .raw(",\"type\":1,\"id\":\"\"}],\"entities\":[");
+  j.raw("{\"deletions\":[{\"timestamp\":");
+  stamp(j, t_s);
+  j.raw(",\"type\":1,\"id\":\"\"}],\"entities\":[");
   for (std::size_t i = 0; i < entities.size(); ++i) {
     j.raw(i ? "," : "");
     write_entity(j, entities[i], t_s, settings.frame_id);
   }
-  return j.raw("]}").take();
+  j.raw("]}");
+  return out;
 }
 
 void SceneBuilder::on_event(const records::Event& e) {

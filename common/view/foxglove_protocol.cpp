@@ -4,7 +4,7 @@
 
 #include <algorithm>
 
-#include "common/view/json_writer.hpp"
+#include "common/record/json_writer.hpp"
 
 namespace qswarm {
 namespace {

@@ -12,8 +12,9 @@
 #include <limits>
 #include <sstream>
 
+#include "common/record/json_writer.hpp"
+#include "common/record/run_dir.hpp"
 #include "common/scenario/scenario.hpp"
-#include "common/view/json_writer.hpp"
 #include "common/view/view_model.hpp"
 
 namespace qswarm {
@@ -30,7 +31,8 @@ ReplayRun load_replay(const std::filesystem::path& dir) {
   std::error_code ec;
   if (!fs::is_directory(dir, ec)) throw ReplayError(dir.string() + ": no such run directory");
   ReplayRun run;
-  const fs::path scenario = dir / "scenario.txtpb";
+  const RunDir run_dir(dir);
+  const fs::path scenario = run_dir.scenario();
   if (!fs::exists(scenario, ec))
     throw ReplayError(scenario.string() + ": missing (not a run directory?)");
   try {
@@ -40,7 +42,7 @@ ReplayRun load_replay(const std::filesystem::path& dir) {
   } catch (const std::exception& e) {
     throw ReplayError(scenario.string() + ": " + e.what());
   }
-  const fs::path records = dir / "records.pb";
+  const fs::path records = run_dir.records();
   const int fd = ::open(records.c_str(), O_RDONLY | O_CLOEXEC);
   if (fd < 0) throw ReplayError(records.string() + ": missing or unreadable");
   {
@@ -54,7 +56,7 @@ ReplayRun load_replay(const std::filesystem::path& dir) {
       const auto limit = in.PushLimit(static_cast<int>(size));
       records::Record r;
       if (!r.ParseFromCodedStream(&in) || in.BytesUntilLimit() != 0) {
-        run.note = "records.pb ends in a partial record after " +
+        run.note = records.filename().string() + " ends in a partial record after " +
                    std::to_string(run.records.size()) + " records";
         break;
       }
@@ -62,14 +64,14 @@ ReplayRun load_replay(const std::filesystem::path& dir) {
       run.records.push_back(std::move(r));
       // A run's record is a file of its own: nothing else bounds it, so stop at 8 GiB of memory.
       if (run.records.size() >= 40'000'000) {
-        run.note = "records.pb is cut at 40 million records";
+        run.note = records.filename().string() + " is cut at 40 million records";
         break;
       }
     }
   }
   if (run.records.empty())
     throw ReplayError(records.string() + ": no records (the run recorded nothing)");
-  const fs::path summary = dir / "summary.json";
+  const fs::path summary = run_dir.summary();
   std::ifstream s(summary);
   if (s) {
     std::stringstream text;
@@ -80,10 +82,10 @@ ReplayRun load_replay(const std::filesystem::path& dir) {
     if (google::protobuf::util::JsonStringToMessage(text.str(), &sum, opt).ok()) {
       run.summary = std::move(sum);
     } else if (run.note.empty()) {
-      run.note = "summary.json cannot be read";
+      run.note = summary.filename().string() + " cannot be read";
     }
   } else if (run.note.empty()) {
-    run.note = "the run has no summary.json (it was cut short)";
+    run.note = "the run has no " + summary.filename().string() + " (it was cut short)";
   }
   return run;
 }

@@ -3,8 +3,8 @@
 #include <algorithm>
 
 #include "common/core/update_law.hpp"
+#include "common/record/json_writer.hpp"
 #include "common/scenario/proto_util.hpp"
-#include "common/view/json_writer.hpp"
 
 namespace qswarm {
 namespace {

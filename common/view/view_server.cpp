@@ -22,7 +22,7 @@
 #include <thread>
 #include <variant>
 
-#include "common/view/json_writer.hpp"
+#include "common/record/json_writer.hpp"
 #include "common/view/view_channels.hpp"
 #include "common/view/view_model.hpp"
 
@@ -61,22 +61,10 @@ std::string probe_listen(const std::string& address, std::uint16_t port) {
 std::string ViewCounts::json() const {
   std::string out;
   JsonWriter w(out);
+#define QSWARM_VIEW_COUNT_PAIR(name) {#name, name},
   const std::pair<const char*, std::uint64_t> fields[] = {
-      {"connections", connections},
-      {"refused_connections", refused_connections},
-      {"http_requests", http_requests},
-      {"not_found", not_found},
-      {"sessions", sessions},
-      {"open_sessions", open_sessions},
-      {"refused_upgrades", refused_upgrades},
-      {"frames_sent", frames_sent},
-      {"frames_dropped", frames_dropped},
-      {"malformed", malformed},
-      {"oversized", oversized},
-      {"flooded", flooded},
-      {"refused_ops", refused_ops},
-      {"closed_for_abuse", closed_for_abuse},
-      {"refused_hosts", refused_hosts}};
+      QSWARM_VIEW_COUNTERS(QSWARM_VIEW_COUNT_PAIR)};
+#undef QSWARM_VIEW_COUNT_PAIR
   w.raw("{");
   bool first = true;
   for (const auto& [k, v] : fields) {
@@ -118,9 +106,9 @@ std::shared_ptr<const std::string> share(std::string s) {
 }
 
 struct Counters {
-  std::atomic<std::uint64_t> connections{0}, refused_connections{0}, http_requests{0}, not_found{0},
-      sessions{0}, open_sessions{0}, refused_upgrades{0}, frames_sent{0}, frames_dropped{0},
-      malformed{0}, oversized{0}, flooded{0}, refused_ops{0}, closed_for_abuse{0}, refused_hosts{0};
+#define QSWARM_VIEW_COUNT_ATOMIC(name) std::atomic<std::uint64_t> name{0};
+  QSWARM_VIEW_COUNTERS(QSWARM_VIEW_COUNT_ATOMIC)
+#undef QSWARM_VIEW_COUNT_ATOMIC
 };
 
 }  // namespace
@@ -833,21 +821,9 @@ ViewCounts ViewServer::counts() const { return impl_->counts(); }
 ViewCounts ViewServer::Impl::counts() const {
   const Counters& k = counts_;
   ViewCounts c;
-  c.connections = k.connections;
-  c.refused_connections = k.refused_connections;
-  c.http_requests = k.http_requests;
-  c.not_found = k.not_found;
-  c.sessions = k.sessions;
-  c.open_sessions = k.open_sessions;
-  c.refused_upgrades = k.refused_upgrades;
-  c.frames_sent = k.frames_sent;
-  c.frames_dropped = k.frames_dropped;
-  c.malformed = k.malformed;
-  c.oversized = k.oversized;
-  c.flooded = k.flooded;
-  c.refused_ops = k.refused_ops;
-  c.closed_for_abuse = k.closed_for_abuse;
-  c.refused_hosts = k.refused_hosts;
+#define QSWARM_VIEW_COUNT_COPY(name) c.name = k.name;
+  QSWARM_VIEW_COUNTERS(QSWARM_VIEW_COUNT_COPY)
+#undef QSWARM_VIEW_COUNT_COPY
   return c;
 }
 

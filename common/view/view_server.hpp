@@ -40,22 +40,29 @@ struct ViewServerOptions {
 };
 
 // What the server served and refused, since it started.
+// Every counter of the view, named once: the struct below, its JSON, and the server's atomics
+// are all made from this list.
+#define QSWARM_VIEW_COUNTERS(X)                                                 \
+  X(connections)         /* TCP connections accepted */                         \
+  X(refused_connections) /* over max_connections */                             \
+  X(http_requests)                                                              \
+  X(not_found)                                                                  \
+  X(sessions)         /* WebSocket sessions opened */                           \
+  X(open_sessions)    /* now */                                                 \
+  X(refused_upgrades) /* no sub-protocol of ours, or a bad handshake */         \
+  X(frames_sent)                                                                \
+  X(frames_dropped) /* for a client whose queue was full */                     \
+  X(malformed)      /* client frames that were not a JSON op we parse */        \
+  X(oversized)      /* client frames above max_message_bytes */                 \
+  X(flooded)        /* client frames beyond the rate */                         \
+  X(refused_ops)    /* ops we do not serve, bad subscriptions, binary frames */ \
+  X(closed_for_abuse)                                                           \
+  X(refused_hosts) /* a Host header that names another site (DNS rebinding) */
+
 struct ViewCounts {
-  std::uint64_t connections = 0;          // TCP connections accepted
-  std::uint64_t refused_connections = 0;  // over max_connections
-  std::uint64_t http_requests = 0;
-  std::uint64_t not_found = 0;
-  std::uint64_t sessions = 0;          // WebSocket sessions opened
-  std::uint64_t open_sessions = 0;     // now
-  std::uint64_t refused_upgrades = 0;  // no sub-protocol of ours, or a bad handshake
-  std::uint64_t frames_sent = 0;
-  std::uint64_t frames_dropped = 0;  // for a client whose queue was full
-  std::uint64_t malformed = 0;       // client frames that were not a JSON op we parse
-  std::uint64_t oversized = 0;       // client frames above max_message_bytes
-  std::uint64_t flooded = 0;         // client frames beyond the rate
-  std::uint64_t refused_ops = 0;     // ops we do not serve, bad subscriptions, binary frames
-  std::uint64_t closed_for_abuse = 0;
-  std::uint64_t refused_hosts = 0;  // a Host header that names another site (DNS rebinding)
+#define QSWARM_VIEW_COUNT_FIELD(name) std::uint64_t name = 0;
+  QSWARM_VIEW_COUNTERS(QSWARM_VIEW_COUNT_FIELD)
+#undef QSWARM_VIEW_COUNT_FIELD
   std::string json() const;
 };
 

@@ -26,10 +26,10 @@
 #include <set>
 #include <thread>
 
+#include "common/record/json_writer.hpp"
 #include "common/record/record_sinks.hpp"
 #include "common/record/run_dir.hpp"
 #include "common/view/foxglove_protocol.hpp"
-#include "common/view/json_writer.hpp"
 #include "common/view/replay.hpp"
 #include "common/view/view_channels.hpp"
 #include "common/view/view_feed.hpp"

@@ -1,4 +1,4 @@
-#include "common/view/json_writer.hpp"
+#include "common/record/json_writer.hpp"
 
 #include <cmath>
 #include <cstdio>

@@ -6,9 +6,11 @@
 
 namespace qswarm {
 
-// Appends JSON to a string: the view's frames are built many times a second for up to 512 agents,
-// so numbers are written with a fixed, short precision and nothing is parsed back. Strings are
-// escaped (event details carry text from people and the network); non-finite numbers become null.
+// Appends JSON to a string: the project's one hand-written JSON (the live view's frames, the MCAP
+// scene), built many times a second for up to 512 agents, so numbers are written with a fixed,
+// short precision and nothing is parsed back. Strings are escaped (event details carry text from
+// people and the network); non-finite numbers become null. Messages with a schema of their own
+// (summary.json, `swarm inspect --json`) are protobuf's JSON instead (proto_util.hpp's to_json).
 class JsonWriter {
  public:
   explicit JsonWriter(std::string& out) : out_(out) {}
