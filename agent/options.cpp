@@ -24,12 +24,11 @@ void add_agent_options(CLI::App& app, AgentFlags& f) {
                "announce the id on the DDS claim topic and refuse one another replica holds "
                "(implied by --id auto)");
   app.add_option("--claim-timeout", f.claim_timeout_s,
-                 "--id auto: wall seconds to wait for every replica (default 60 + 4 per agent: "
-                 "podman-compose starts one container a second)")
+                 "--id auto: wall seconds to wait for every replica (default: the run plan's)")
       ->check(finite_range(1.0, 3600.0));
   app.add_option("--run-dir", f.run_dir, "directory for this agent's log");
   app.add_option("--start-timeout", f.loop.start_timeout_s,
-                 "wall seconds to wait for all peers (default 30 + 0.5 per agent)")
+                 "wall seconds to wait for all peers (default: the run plan's)")
       ->check(finite_range(0.0, 3600.0));
   app.add_option("--max-wall", f.loop.max_wall_s, "stop after this many wall seconds running")
       ->check(finite_range(0.0, 1e6));

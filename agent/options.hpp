@@ -2,7 +2,7 @@
 
 #include <string>
 
-#include "common/app/process_setup.hpp"
+#include "common/app/process_options.hpp"
 #include "common/runtime/agent_loop.hpp"
 
 namespace CLI {
@@ -18,7 +18,7 @@ struct AgentFlags {
   std::string run_dir;            // for agent-ID.log and agent-ID.stats
   std::string id;                 // --id / QSWARM_AGENT_ID: a listed agent id, or "auto"
   bool claim = false;             // announce the id on the claim topic, refuse duplicates
-  double claim_timeout_s = -1.0;  // --id auto: wait this long for every replica (-1: 60 + 4 N)
+  double claim_timeout_s = -1.0;  // --id auto: wait this long for every replica (-1: the plan's)
   bool ignore_sigterm = false;    // (tests) exercise the launcher's SIGKILL escalation
 };
 void add_agent_options(CLI::App& app, AgentFlags& f);

@@ -1,7 +1,7 @@
-// What the receive path spends per sample on the checks against forgers (docs/security.md,
-// "What binding costs"): the sample gate with writers known (owner, interleaving window, jump
-// check) against writers unknown (one writer per agent, as before), and a writer's binding looked
-// up in the WriterRegistry (one lock, one hash lookup), at 8 and 512 writers.
+// What the receive path spends per sample on the checks against forgers (docs/benchmarks.md,
+// "Receive path and recorder"): the sample gate with writers known (owner, interleaving window,
+// jump check) against writers unknown (one writer per agent, as before), and a writer's binding
+// looked up in the WriterRegistry (one lock, one hash lookup), at 8 and 512 writers.
 #include <benchmark/benchmark.h>
 
 #include <cstring>

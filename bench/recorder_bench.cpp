@@ -1,5 +1,5 @@
-// What the supervisor's recorder spends per sample it records (docs/benchmarks.md, "The
-// supervisor at 256 agents"): N agents on a degree-4 torus send their 10 Hz records, each round
+// What the supervisor's recorder spends per sample it records (docs/benchmarks.md, "Receive
+// path and recorder"): N agents on a degree-4 torus send their 10 Hz records, each round
 // one sample per agent, 0.1 s of swarm time apart, with the recorder's periodic work (departures,
 // a graph snapshot every 0.1 s) after each round, into a real run directory (telemetry.csv,
 // records.pb, run.mcap). Time per item is per sample recorded, the snapshots included.

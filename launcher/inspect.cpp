@@ -50,6 +50,7 @@ std::string as_json(const RunConfig& rc, const InitialGraph& g, double tau) {
   ins.set_safe_distance_m(rc.agent.avoidance.safe_distance_m);
   for (const AgentId id : rc.held_agents()) ins.add_held_agents(id);
   *ins.mutable_resolved() = rc.resolved;
+  *ins.mutable_plan() = to_proto(rc.plan);
   if (rc.agent.law.kind == LawKind::kWmsr) {
     const ResilienceCheck c = resilience_of(rc, g);
     records::Resilience* r = ins.mutable_resilience();
@@ -108,6 +109,7 @@ std::string as_text(const RunConfig& rc, const InitialGraph& g, double tau) {
          "approaches closer than "
       << rc.agent.avoidance.safe_distance_m << " m)\n";
   }
+  o << describe_plan(rc.plan);
   if (rc.has_formation()) {
     o << "formation: the agents agree on the centre above and fly to centre + slot\n";
     o << "  agent        slot about the centre         where it ends\n";
@@ -128,6 +130,26 @@ std::string as_text(const RunConfig& rc, const InitialGraph& g, double tau) {
 }
 
 }  // namespace
+
+std::string describe_plan(const RunPlan& p) {
+  std::ostringstream o;
+  o.precision(4);
+  o << "run plan (swarm run on this host, docs/run-plan.md):\n"
+    << "  who hears whom: " << to_string(p.delivery) << ", routed as " << to_string(p.routing)
+    << (p.multicast_group.empty() ? ", unicast" : ", multicast group " + p.multicast_group) << "\n"
+    << "  discovery: " << to_string(p.discovery)
+    << (p.own_server ? " (the run's own Discovery Server)" : "") << ", " << p.participants
+    << " participants, announced every " << p.participant_announce_period_s << " s\n"
+    << "  ticks: " << p.tick_phases << " phase" << (p.tick_phases > 1 ? "s" : "")
+    << "; record: " << p.record_hz << " Hz (every " << p.record_every << " ticks"
+    << (p.spread_records ? ", spread over them by id" : "") << "), present for "
+    << p.presence_timeout_s << " s unheard\n"
+    << "  start: barrier beacon " << p.barrier_waiting_period_s << " s, ready "
+    << p.barrier_announce_period_s << " s, timeout " << p.start_timeout_s << " s (join "
+    << p.join_timeout_s << " s); wall limits: agent " << p.agent_wall_limit_s << " s, swarm run "
+    << p.launcher_wall_limit_s << " s\n";
+  return o.str();
+}
 
 ResilienceCheck resilience_of(const RunConfig& rc, const InitialGraph& g) {
   return check_resilience(static_cast<int>(rc.agents.size()), g.edges, rc.agent.law.wmsr_f);

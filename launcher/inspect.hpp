@@ -21,6 +21,9 @@ InitialGraph initial_graph(const RunConfig& rc);
 ResilienceCheck resilience_of(const RunConfig& rc, const InitialGraph& g);
 std::string describe(const ResilienceCheck& c, const RunConfig& rc);
 
+// The run plan in a few lines, as `swarm inspect` prints it.
+std::string describe_plan(const RunPlan& p);
+
 // `swarm inspect`: the scenario's initial graph, Laplacian, spectrum and predicted agreement,
 // as text or (json) as the Inspection message in JSON. Exit code: 0, or 2 for a bad scenario.
 int inspect_scenario(const std::string& path, bool json);

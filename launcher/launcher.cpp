@@ -40,12 +40,7 @@ Launcher::Launcher(LaunchSpec spec, ChildProcesses& procs, Clock& clock,
       supervisor_ready_(std::move(supervisor_ready)),
       restarts_(spec_.rc.faults) {}
 
-double Launcher::wall_limit_s() const {
-  // The flight, and room for the start: never shorter than the agents' own start timeout (a large
-  // swarm's grows with it), so a slow start ends with the agents' verdict, not the launcher's.
-  return spec_.rc.judge.duration_s / spec_.time_scale +
-         std::max(120.0, spec_.rc.start_timeout_s() + 30.0);
-}
+double Launcher::wall_limit_s() const { return spec_.rc.plan.launcher_wall_limit_s; }
 
 std::vector<std::string> Launcher::supervisor_argv() const {
   std::vector<std::string> a = {spec_.bin_dir + "/swarm-supervisor",
@@ -54,7 +49,7 @@ std::vector<std::string> Launcher::supervisor_argv() const {
                                 "--run-dir",
                                 spec_.dir.str(),
                                 "--time-scale",
-                                num(spec_.time_scale)};
+                                num(spec_.rc.plan.hosts.time_scale)};
   if (spec_.progress) a.push_back("--progress");
   if (spec_.view_port >= 0) {
     a.insert(a.end(),
@@ -62,7 +57,7 @@ std::vector<std::string> Launcher::supervisor_argv() const {
   }
   if (spec_.participant_base >= 0) {
     a.push_back("--participant-id");
-    a.push_back(std::to_string(spec_.participant_base));
+    a.push_back(std::to_string(spec_.rc.plan.supervisor_participant(spec_.participant_base)));
   }
   if (spec_.discovery_id >= 0) {
     a.push_back("--discovery-server");
@@ -73,15 +68,11 @@ std::vector<std::string> Launcher::supervisor_argv() const {
 }
 
 void Launcher::add_unicast_peers(std::vector<std::string>& a) const {
-  // A secure run discovers by unicast within its block (ParticipantOptions::unicast_peers_*:
-  // Fast DDS 2.9.1 can leave a secure pair unpaired when multicast and unicast discovery are
-  // handled at once). The block: the supervisor, then every agent the run may start.
-  if (spec_.participant_base < 0 || spec_.rc.transport.keystore.empty() ||
-      spec_.rc.transport.interface == "any")
-    return;
+  // The block: the supervisor, then every agent the run may start.
+  if (spec_.participant_base < 0 || spec_.rc.plan.discovery != DiscoveryMode::kUnicastBlock) return;
   a.push_back("--unicast-peers");
   a.push_back(std::to_string(spec_.participant_base) + ":" +
-              std::to_string(spec_.rc.agents.size() + 1));
+              std::to_string(spec_.rc.plan.participants));
 }
 
 std::string Launcher::discovery_address() const {
@@ -120,7 +111,7 @@ std::vector<std::string> Launcher::agent_argv(AgentId id, double join_at_s, bool
                                 "--run-dir",
                                 spec_.dir.str(),
                                 "--time-scale",
-                                num(spec_.time_scale)};
+                                num(spec_.rc.plan.hosts.time_scale)};
   if (join_at_s >= 0) {
     a.push_back("--join-at");
     a.push_back(num(join_at_s));
@@ -137,7 +128,8 @@ std::vector<std::string> Launcher::agent_argv(AgentId id, double join_at_s, bool
     while (index < static_cast<int>(spec_.rc.agents.size()) && spec_.rc.agents[index].id != id)
       ++index;
     a.push_back("--participant-id");
-    a.push_back(std::to_string(spec_.participant_base + 1 + index));
+    a.push_back(std::to_string(
+        spec_.rc.plan.agent_participant(spec_.participant_base, static_cast<std::size_t>(index))));
   }
   add_unicast_peers(a);
   for (unsigned ign : spec_.ignore_sigterm)
@@ -262,8 +254,8 @@ int Launcher::stop() {
     if (c.killed_at_teardown && c.role == "discovery") {
       // An agent or supervisor killed so leaves its record incomplete, which conclude() says. A
       // server that ignores SIGTERM has hung: Fast DDS 2.9.1's server can spin with a writer's
-      // lock held, and from then on relays nothing (docs/architecture.md, "A hung Discovery
-      // Server"), so peers that should have met since never did. The record must say so.
+      // lock held, and from then on relays nothing (docs/fast-dds-workarounds.md, W5), so peers
+      // that should have met since never did. The record must say so.
       char grace[32];
       std::snprintf(grace, sizeof grace, "%g", spec_.grace_s);
       problems_.push_back(std::string("the Discovery Server hung: it did not stop within ") +

@@ -18,8 +18,7 @@ namespace qswarm {
 struct LaunchSpec {
   RunConfig rc;
   RunDir dir;           // absolute; the scenario as run is written there
-  std::string bin_dir;  // where swarm-agent and swarm-supervisor are
-  double time_scale = 1.0;
+  std::string bin_dir;  // where swarm-agent and swarm-supervisor are (the time scale: rc.plan's)
   double grace_s = 5.0;
   bool progress = true;  // the supervisor prints a live line (else its output goes to a file)
   bool stop_on_agent_exit = false;

@@ -1,11 +1,17 @@
 #include "launcher/view_command.hpp"
 
+#include "launcher/commands.hpp"
+
 #include <atomic>
 #include <chrono>
 #include <cmath>
 #include <csignal>
 #include <iostream>
 #include <thread>
+
+#include <CLI/CLI.hpp>
+
+#include <memory>
 
 #include "common/view/replay.hpp"
 #include "common/view/view_server.hpp"
@@ -56,6 +62,21 @@ int view_command(const ViewCommandOptions& o) {
   server.stop();
   std::cout << "swarm view: stopped; " << server.counts().json() << std::endl;
   return 0;
+}
+
+Command add_view_command(CLI::App& app) {
+  auto o = std::make_shared<ViewCommandOptions>();
+  CLI::App* cmd = app.add_subcommand(
+      "view", "replay a recorded run in the live view (browser page, Foxglove WebSocket)");
+  cmd->add_option("run_dir", o->run_dir, "run directory written by swarm run")->required();
+  cmd->add_option("--speed", o->speed, "simulated seconds per wall second (default 1)");
+  cmd->add_option("--port", o->port, "port (default 8765; 0: any free port)")
+      ->check(CLI::Range(0, 65535));
+  cmd->add_option("--listen", o->listen, "address (default 127.0.0.1: this host only)");
+  return [cmd, o]() -> std::optional<int> {
+    if (!*cmd) return std::nullopt;
+    return view_command(*o);
+  };
 }
 
 }  // namespace qswarm

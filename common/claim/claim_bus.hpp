@@ -48,10 +48,6 @@ class ClaimInbox {
   std::uint64_t evicted_ = 0;
 };
 
-// How many claims a replica of a swarm of n keeps: every replica twice over, and room for a few
-// strangers.
-inline std::size_t claim_capacity(std::size_t n) { return 2 * n + 16; }
-
 class InMemoryClaimBus;
 
 // Replicas in one process: what one posts reaches every other endpoint at deliver(), so a test

@@ -14,11 +14,10 @@ std::string hex(std::uint64_t v) {
 }
 }  // namespace
 
-IdClaimer::Config IdClaimer::Config::for_swarm(std::size_t n, double timeout_s) {
+IdClaimer::Config IdClaimer::Config::with_period(double period_s, double timeout_s) {
   Config c;
-  const double size = static_cast<double>(n);
-  c.timeout_s = timeout_s >= 0.0 ? timeout_s : 60.0 + 4.0 * size;
-  c.period_s = 0.1 * std::max(1.0, size / 6.0);
+  c.timeout_s = timeout_s;
+  c.period_s = period_s;
   // A replica is gone after 15 silent periods (8 s at 32): on saturated cores a live replica's
   // claims can go unheard for seconds, and each such gap changes every view and restarts the
   // settle wait, so a shorter expiry keeps a large swarm from ever settling (docs/architecture.md,

@@ -43,10 +43,10 @@ class IdClaimer {
     double confirm_s = 1.0;    // announce the id this long before flying it
     double timeout_s = 120.0;  // give up waiting for N replicas after this long
 
-    // For a swarm of n: every replica announces to every other, n^2 claims per period. Ten a
-    // second suits a few; for more the period grows (2 a second at 32) and so do the windows that
-    // depend on it. `timeout_s` < 0: 60 s + 4 s per replica (podman-compose starts one a second).
-    static Config for_swarm(std::size_t n, double timeout_s);
+    // Claims every `period_s` (the run plan's: every replica announces to every other, n^2 claims
+    // per period, so a larger swarm claims less often), the windows that depend on it widened to
+    // match, and a claim given up after `timeout_s`.
+    static Config with_period(double period_s, double timeout_s);
   };
   // `roster`: the run's agent ids (sorted); `fixed`: an id given by hand, 0 for none.
   IdClaimer(std::vector<AgentId> roster, std::uint64_t nonce, std::uint64_t run_id, AgentId fixed,

@@ -14,7 +14,7 @@
 
 #include "common/dds/idl_convert.hpp"
 #include "common/dds/qos.hpp"
-#include "common/dds/state_bus.hpp"
+#include "common/transport/dds_names.hpp"
 
 #include "swarm_statePubSubTypes.h"
 
@@ -54,14 +54,14 @@ DdsClaimBus::DdsClaimBus(DdsParticipant& participant, std::uint64_t run_id, std:
   Impl& d = *impl_;
   d.participant = participant.get();
   d.type.register_type(d.participant);
-  d.topic = d.participant->create_topic("qswarm/id_claim", d.type.get_type_name(),
+  d.topic = d.participant->create_topic(dds_names::kClaimTopic, d.type.get_type_name(),
                                         dds::TOPIC_QOS_DEFAULT);
   if (!d.topic) throw std::runtime_error("dds: cannot create the id-claim topic");
   // Claims carry the run id; the partition keeps another run's claims off the wire as well.
   dds::PublisherQos pub_qos = dds::PUBLISHER_QOS_DEFAULT;
-  pub_qos.partition().push_back(run_partition(run_id).c_str());
+  pub_qos.partition().push_back(dds_names::run_partition(run_id).c_str());
   dds::SubscriberQos sub_qos = dds::SUBSCRIBER_QOS_DEFAULT;
-  sub_qos.partition().push_back(run_partition(run_id).c_str());
+  sub_qos.partition().push_back(dds_names::run_partition(run_id).c_str());
   d.publisher = d.participant->create_publisher(pub_qos);
   d.subscriber = d.participant->create_subscriber(sub_qos);
   if (!d.publisher || !d.subscriber)

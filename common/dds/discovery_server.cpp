@@ -69,7 +69,7 @@ DiscoveryServer::DiscoveryServer(std::uint32_t domain_id, const std::string& lis
   // there before its locators have an output channel: the UDP transport's statistics then assert
   // (OutputTrafficManager.hpp:87) and the server aborts. Clients need no such refresh: the lease
   // is infinite, and a client gets the server's DATA(p) from the server's reliable PDP writer once
-  // matched (docs/architecture.md, "The Discovery Server never announces on a timer").
+  // matched (docs/fast-dds-workarounds.md, W3).
   disc.initial_announcements.count = 0;
   disc.leaseDuration_announcementperiod = eprosima::fastrtps::Duration_t(kNeverSeconds, 0);
   rtps::get_server_client_default_guidPrefix(0, pqos.wire_protocol().prefix);

@@ -1,5 +1,6 @@
 #include "common/dds/participant.hpp"
 
+#include "common/security/keystore.hpp"
 #include "common/transport/port_plan.hpp"
 
 #include <arpa/inet.h>
@@ -83,8 +84,8 @@ DdsParticipant::DdsParticipant(const ParticipantOptions& opts) : opts_(opts) {
   disable_writer_liveliness(pqos);
   // Participants announce an infinite lease, so no peer ever runs a lease check on them: Fast DDS
   // 2.9.1 races a peer's lease check (timer thread) against that peer's removal when it leaves
-  // (receive thread), and the check then asserts on a cleared proxy (docs/architecture.md, "No
-  // participant lease is checked"). The agents judge liveness themselves (the neighbour timeout);
+  // (receive thread), and the check then asserts on a cleared proxy (docs/fast-dds-workarounds.md,
+  // W1). The agents judge liveness themselves (the neighbour timeout);
   // a participant that leaves is still removed at once by its DISPOSE. Announcements every second
   // (not Fast DDS's 3 s: one lost while many processes start is repeated a second later), or less
   // often in a large swarm, where every participant hears every announcement.
@@ -97,21 +98,9 @@ DdsParticipant::DdsParticipant(const ParticipantOptions& opts) : opts_(opts) {
       throw std::invalid_argument(
           "dds: a secure participant cannot use a Discovery Server (Fast DDS 2.9 has no secure "
           "one)");
-    const std::string ks = "file://" + opts.keystore + "/";  // Fast DDS wants file://PATH
-    const std::string me = ks + opts.identity + "/";
     auto& props = pqos.properties().properties();
-    const auto set = [&](const char* name, const std::string& value) {
+    for (const auto& [name, value] : Keystore(opts.keystore).participant_properties(opts.identity))
       props.emplace_back(name, value);
-    };
-    set("dds.sec.auth.plugin", "builtin.PKI-DH");
-    set("dds.sec.auth.builtin.PKI-DH.identity_ca", ks + "ca.cert.pem");
-    set("dds.sec.auth.builtin.PKI-DH.identity_certificate", me + "cert.pem");
-    set("dds.sec.auth.builtin.PKI-DH.private_key", me + "key.pem");
-    set("dds.sec.access.plugin", "builtin.Access-Permissions");
-    set("dds.sec.access.builtin.Access-Permissions.permissions_ca", ks + "ca.cert.pem");
-    set("dds.sec.access.builtin.Access-Permissions.governance", ks + "governance.p7s");
-    set("dds.sec.access.builtin.Access-Permissions.permissions", me + "permissions.p7s");
-    set("dds.sec.crypto.plugin", "builtin.AES-GCM-GMAC");
   }
   if (opts.unicast_peers_count > 0) {
     if ((opts.interface.empty() && opts.unicast_peer_hosts.empty()) ||

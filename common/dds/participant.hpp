@@ -41,8 +41,8 @@ struct ParticipantOptions {
   // Secure runs need it: Fast DDS 2.9.1 matches a newly authenticated peer's built-in secure
   // endpoints through shared temporary records (SecurityManager's temp_*_proxy_data_, fixed in
   // 2.9.2), and with multicast beside unicast two receive threads can fill them for two peers at
-  // once; the pair whose records got mixed never exchanges keys (docs/security.md, "A secure pair
-  // that never hears each other"). With one metatraffic socket they are filled one at a time.
+  // once; the pair whose records got mixed never exchanges keys (docs/fast-dds-workarounds.md, W2).
+  // With one metatraffic socket they are filled one at a time.
   // count 0: multicast discovery (simple), as Fast DDS does by default.
   int unicast_peers_first = 0;
   int unicast_peers_count = 0;

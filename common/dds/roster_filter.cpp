@@ -113,44 +113,18 @@ std::vector<AgentId> mentioned_ids(const unsigned char* d, std::size_t length) {
   return out;
 }
 
-// What the last sample judged on this thread mentions: a writer judges each sample once per
-// reader, one after the other, and the sample is parsed once. A reader's sample identities are
-// not reliable (Fast DDS leaves them unset, or as a writer's related identity said): `cache`
-// only on the writer's side.
-bool mentioned(const dds::IContentFilter::SerializedPayload& payload,
-               const dds::IContentFilter::FilterSampleInfo& info, AgentId id, bool cache) {
-  if (!cache) {
-    const std::vector<AgentId> ids = mentioned_ids(payload.data, payload.length);
-    return std::find(ids.begin(), ids.end(), id) != ids.end();
-  }
-  struct Last {
-    eprosima::fastrtps::rtps::SampleIdentity sample;
-    const unsigned char* data = nullptr;
-    std::uint32_t length = 0;
-    std::vector<AgentId> ids;
-  };
-  thread_local Last last;
-  const auto& sample = info.sample_identity;
-  // An unknown identity (a reader's, when the writer sent none) is never taken for another.
-  const bool known =
-      sample.sequence_number() != eprosima::fastrtps::rtps::SequenceNumber_t::unknown();
-  if (!known || !(last.sample == sample) || last.data != payload.data ||
-      last.length != payload.length) {
-    last.ids = mentioned_ids(payload.data, payload.length);
-    last.sample = known ? sample : eprosima::fastrtps::rtps::SampleIdentity{};
-    last.data = known ? payload.data : nullptr;
-    last.length = payload.length;
-  }
-  return std::find(last.ids.begin(), last.ids.end(), id) != last.ids.end();
+// Whether the sample names agent `id` among its links, the flows and copies it carries, or the
+// peers it asks.
+bool mentioned(const dds::IContentFilter::SerializedPayload& payload, AgentId id) {
+  const std::vector<AgentId> ids = mentioned_ids(payload.data, payload.length);
+  return std::find(ids.begin(), ids.end(), id) != ids.end();
 }
 
 class RosterFilter final : public dds::IContentFilter {
  public:
-  RosterFilter(RosterExpression expr, PlaceFilter place, RosterFilterFactory& factory)
-      : expr_(std::move(expr)), factory_(factory) {
-    own_.place = std::move(place);
-  }
-  bool evaluate(const SerializedPayload& payload, const FilterSampleInfo& info,
+  RosterFilter(RosterExpression expr, RosterFilterFactory& factory)
+      : expr_(std::move(expr)), factory_(factory) {}
+  bool evaluate(const SerializedPayload& payload, const FilterSampleInfo&,
                 const GUID_t& reader) const override {
     if (payload.data == nullptr || payload.length < kRosterIdOffset + 4) return false;
     const unsigned char* d = payload.data;
@@ -166,13 +140,11 @@ class RosterFilter final : public dds::IContentFilter {
       return false;
     }
     if (id == expr_.self) return false;
-    const bool ours =
-        std::memcmp(reader.guidPrefix.value, factory_.local.data(), factory_.local.size()) == 0;
-    const PlaceSlot& slot = ours && factory_.place_is_local() ? factory_.local_place() : own_;
+    const PlaceSlot& slot = factory_.local_place();
     std::lock_guard<std::mutex> lock(slot.mu);
     const PlaceFilter& place = slot.place;
     if (place.near.empty()) return true;
-    if (ours) factory_.judged_on_arrival.fetch_add(1, std::memory_order_relaxed);
+    factory_.judged_on_arrival.fetch_add(1, std::memory_order_relaxed);
     if (in_ranges(place.names, id)) return true;
     if (payload.length < kPositionOffset + 24) return false;
     const Vec3 q = read_vec3(d, kConsensusOffset, little),
@@ -180,58 +152,39 @@ class RosterFilter final : public dds::IContentFilter {
     if (std::any_of(place.near.begin(), place.near.end(),
                     [&](const Reach& r) { return r.contains(r.space == 'q' ? q : p); }))
       return true;
-    // A bond, whatever the place: the same verdict on the writer's side and on the reader's.
-    return expr_.self != 0 && mentioned(payload, info, expr_.self, /*cache=*/!ours);
+    // A bond, whatever the place.
+    return expr_.self != 0 && mentioned(payload, expr_.self);
   }
   const RosterExpression& expression() const { return expr_; }
-  void set_place(PlaceFilter place) {
-    std::lock_guard<std::mutex> lock(own_.mu);
-    own_.place = std::move(place);
-  }
 
  private:
   const RosterExpression expr_;
-  PlaceSlot own_;                 // its parameters' place: changed while DDS threads evaluate
-  RosterFilterFactory& factory_;  // its tally and counts (evaluate is const to Fast DDS only)
+  RosterFilterFactory& factory_;  // its tally and place (evaluate is const to Fast DDS only)
 };
-
-std::vector<std::string> parameters(const dds::IContentFilterFactory::ParameterSeq& params) {
-  std::vector<std::string> out;
-  out.reserve(params.length());
-  for (dds::IContentFilterFactory::ParameterSeq::size_type i = 0; i < params.length(); ++i)
-    out.emplace_back(params[i] ? params[i] : "");
-  return out;
-}
 
 }  // namespace
 
 RosterFilterFactory::ReturnCode_t RosterFilterFactory::create_content_filter(
     const char*, const char*, const dds::TopicDataType*, const char* expression,
     const ParameterSeq& params, dds::IContentFilter*& filter) {
-  auto place = parse_place_filter(parameters(params));
-  if (!place) return ReturnCode_t::RETCODE_BAD_PARAMETER;
+  // The place is the factory's (set_local_place): a filter takes no parameters.
+  if (params.length() != 0) return ReturnCode_t::RETCODE_BAD_PARAMETER;
   if (filter != nullptr) {
-    // New parameters (nullptr: the expression stays): changed in place, since Fast DDS would
-    // otherwise swap the filter while its receive threads evaluate it. The expression (the
-    // roster) is made once, with the reader's topic, and never changes.
-    auto* mine = static_cast<RosterFilter*>(filter);  // this factory makes no other kind
+    // The expression (the roster) is made once, with the reader's topic, and never changes.
+    const auto* mine = static_cast<RosterFilter*>(filter);  // this factory makes no other kind
     if (expression != nullptr && parse_roster_filter(expression) != mine->expression())
       return ReturnCode_t::RETCODE_UNSUPPORTED;
-    mine->set_place(std::move(*place));
     return ReturnCode_t::RETCODE_OK;
   }
   auto expr = parse_roster_filter(expression ? expression : "");
   if (!expr) return ReturnCode_t::RETCODE_BAD_PARAMETER;
-  filter = new RosterFilter(std::move(*expr), std::move(*place), *this);
+  filter = new RosterFilter(std::move(*expr), *this);
   return ReturnCode_t::RETCODE_OK;
 }
 
 void RosterFilterFactory::set_local_place(PlaceFilter place) {
-  {
-    std::lock_guard<std::mutex> lock(local_place_.mu);
-    local_place_.place = std::move(place);
-  }
-  place_is_local_.store(true, std::memory_order_release);
+  std::lock_guard<std::mutex> lock(local_place_.mu);
+  local_place_.place = std::move(place);
 }
 
 RosterFilterFactory::ReturnCode_t RosterFilterFactory::delete_content_filter(
@@ -256,67 +209,9 @@ std::string roster_filter(std::vector<AgentId> roster, AgentId self) {
   return expr;
 }
 
-namespace {
-constexpr std::size_t kMaxParameter = 255;  // Fast DDS's string_255
-constexpr std::size_t kMaxPlaceParameters = 64;
-}  // namespace
-
 bool serialized_mentions(const unsigned char* data, std::size_t length, AgentId id) {
   const std::vector<AgentId> ids = mentioned_ids(data, length);
   return std::find(ids.begin(), ids.end(), id) != ids.end();
-}
-
-std::vector<std::string> place_filter(const std::vector<Reach>& near,
-                                      const std::vector<AgentId>& names) {
-  std::vector<std::string> out;
-  if (near.empty()) return out;
-  for (const Reach& r : near) {
-    // %.17g: a double read back is the double written, so the filter hears what the Reach says.
-    char buf[kMaxParameter];
-    std::snprintf(buf, sizeof buf, "%c %.17g %.17g %.17g %.17g %.17g %.17g %.17g", r.space,
-                  r.lo.x(), r.lo.y(), r.lo.z(), r.hi.x(), r.hi.y(), r.hi.z(), r.radius_m);
-    out.emplace_back(buf);
-  }
-  // The names as ranges, cut at commas into parameters Fast DDS can carry.
-  const std::string all = roster_filter(names);
-  constexpr std::size_t kRoom = kMaxParameter - 5;  // after "n "
-  for (std::size_t at = 0; at < all.size();) {
-    std::size_t end = all.size();
-    if (end - at > kRoom) end = all.rfind(',', at + kRoom);
-    out.push_back("n " + all.substr(at, end - at));
-    at = end + 1;
-  }
-  return out;
-}
-
-std::optional<PlaceFilter> parse_place_filter(const std::vector<std::string>& params) {
-  PlaceFilter out;
-  if (params.size() > kMaxPlaceParameters) return std::nullopt;
-  for (const std::string& p : params) {
-    if (p.size() < 3 || p.size() > kMaxParameter || p[1] != ' ') return std::nullopt;
-    if (p[0] == 'n') {
-      const auto ids = parse_roster_filter(p.substr(2));
-      if (!ids) return std::nullopt;
-      out.names.insert(out.names.end(), ids->ranges.begin(), ids->ranges.end());
-      continue;
-    }
-    if (p[0] != 'p' && p[0] != 'q') return std::nullopt;
-    std::istringstream in(p.substr(2));
-    in.imbue(std::locale::classic());
-    Reach r;
-    r.space = p[0];
-    double v[7];
-    for (double& x : v)
-      if (!(in >> x) || !std::isfinite(x)) return std::nullopt;
-    if (!(in >> std::ws).eof()) return std::nullopt;
-    r.lo = Vec3(v[0], v[1], v[2]);
-    r.hi = Vec3(v[3], v[4], v[5]);
-    r.radius_m = v[6];
-    if (r.radius_m < 0.0 || (r.lo.array() > r.hi.array()).any()) return std::nullopt;
-    out.near.push_back(r);
-  }
-  if (out.near.empty() && !out.names.empty()) return std::nullopt;
-  return out;
 }
 
 std::optional<RosterExpression> parse_roster_filter(const std::string& text) {

@@ -10,6 +10,7 @@
 #include "common/clock/clock.hpp"
 #include "common/dds/participant.hpp"
 #include "common/transport/neighbor_bus.hpp"
+#include "common/transport/routing.hpp"
 
 namespace qswarm {
 
@@ -36,42 +37,13 @@ struct StateBusOptions {
   // (WriterRegistry): with per-agent permissions a certificate then says which agent it speaks
   // as (a compose keystore's shared member identity may name any: docs/security.md).
   AgentId self = 0;
-  // The agent names of an interest (set_interest: "a7") become topics of their own
-  // ("qswarm/agent_state/a7"), not partitions of the shared topic, and cells partitions of their
-  // region's topic ("qswarm/agent_state/rp0.1.0": region_of_cell). For a Discovery Server client:
-  // the server relays a participant's announcement only to participants with an endpoint on a
-  // topic it uses (partitions are matched by the clients, after discovery), so an agent that
-  // hears its neighbours by name (a FIXED graph) discovers only them, and one that hears by place
-  // the agents of the regions about it, not the swarm. Cells are not topics of their own because
-  // a move between topics would replace the writer, and its readers would hear it only once the
-  // server has relayed the new one (a 64-agent formation lost neighbours and, once in five runs,
-  // edge-flow's exact average that way): an agent keeps idle writers, already matched, on the
-  // regions within a cell of its own. Cells are region topics only with `region_topics`, else
-  // partitions of the shared topic. No binding of writers
-  // to agents (the agent partitions DDS-Security's permissions name; Fast DDS 2.9 has no secure
-  // Discovery Server); the gate judges a sample's participant, not its writer, since an agent
-  // speaks through two. Until set_interest the state stream has no endpoints.
-  bool topic_per_name = false;
-  // With topic_per_name, cells are partitions of their region's topic rather than of the shared
-  // one (where the interest's cells are of one space). Each move then updates up to 8 readers and
-  // several writers through the server instead of one of each. Fast DDS 2.9.1's server corrupts
-  // its history, hangs and relays nothing more when two changes of one endpoint reach it in one
-  // batch (docs/architecture.md, "A hung Discovery Server"): a move changes each endpoint once
-  // (twice with filter_at_writer: partitions, then the place in the filter's parameters), but two
-  // moves a few ticks apart still can, the more often the less CPU the server gets.
-  // Worth it only where the shared topic cannot discover at all (256 agents: 159 s).
-  bool region_topics = false;
-  // The state writer evaluates its readers' place filters (Interest::near) and sends a sample only
-  // to the readers it passes (Fast DDS's writer-side content filtering, for up to max_agents + 16
-  // readers), so an agent is sent only what it hears. Each sample then carries 16 bytes per
-  // filtering reader its writer is matched with, and is judged once per reader: worth it where
-  // agents hear by place (a proximity or radio-range graph), not on a fixed graph. False: readers
-  // filter what they are sent.
-  // The product leaves it false: Fast DDS 2.9.1 adds and removes a writer's reader filters from
-  // its discovery thread without the writer's lock (the RTPS writer calls its listener unlocked)
-  // while write() walks the same map, so a reader matched or unmatched during a write (an agent
-  // changing cells, joining, leaving) can corrupt it. Fast DDS 3.0.0 locks there (#21188).
-  bool filter_at_writer = false;
+  // How the state stream reaches those who hear it (transport/routing.hpp, RunPlan::routing):
+  // partitions of one topic, or through a Discovery Server, agent names as topics of their own
+  // and cells as partitions of the one topic or of region topics. Under the latter two no writer
+  // is bound to its agent (Fast DDS 2.9 has no secure Discovery Server), and the gate judges a
+  // sample's participant, not its writer, since an agent speaks through several. Their endpoints
+  // come with set_interest.
+  Routing routing = Routing::kPartitions;
   // The state reader listens on this IPv4 multicast group, at its domain's data multicast port
   // (PortPlan::data_multicast_port), instead of its unicast port: a writer sends each sample
   // once, to the group, instead of once per reader. For a swarm where everyone hears everyone,
@@ -81,10 +53,6 @@ struct StateBusOptions {
   // group's port alone.
   std::string multicast_group;
 };
-
-// The DDS partitions of a run: the agents' state stream, and the record stream to the supervisor.
-std::string run_partition(std::uint64_t run_id);
-std::string record_partition(std::uint64_t run_id);
 
 // The product's NeighborBus: the keyed best-effort topic "qswarm/agent_state" on a participant, a
 // keep-last-1 writer and reader. Incoming samples are checked in the listener through the
@@ -101,11 +69,10 @@ class DdsStateBus final : public NeighborBus {
 
   void publish(const StateMessage& msg) override;
   void record(const StateMessage& msg) override;
-  // Moves the state writer's and reader's partitions (DDS re-matches them with their peers); with
-  // topic_per_name, creates and deletes the writers and readers of the names that come and go.
-  // Where it hears by place goes into its readers' filter: into the filter's parameters, which its
-  // peers' writers learn through discovery, only where they judge it (filter_at_writer); else it
-  // stays in this process, and a move updates each reader through discovery once.
+  // Moves the state writers' and readers' partitions (DDS re-matches them with their peers), and
+  // makes and deletes the endpoints of the names that come and go, as its routing says. Where it
+  // hears by place stays in this process (its readers' roster filter judges samples on arrival),
+  // so that a move updates each reader through discovery once.
   void set_interest(const Interest& interest) override;
   bool recorder_confirmed() const override;
   // Readers matched to our record writer (our side of discovery only: see recorder_confirmed).
@@ -116,8 +83,8 @@ class DdsStateBus final : public NeighborBus {
   // progress to finish.
   void set_listener(Listener listener) override;
   BusCounters counters() const override;
-  // Readers matched to our writer (DDS discovery; the start barrier waits on it); with
-  // topic_per_name, summed over the writers of its names.
+  // Readers matched to our writers (DDS discovery; the start barrier waits on it), summed over
+  // the writers its routing writes.
   int matched_readers() const override;
   // The readers matched with its writer on a region's topic ("rp1.0.0"), written or idle (0:
   // none). For tests and diagnostics.
@@ -128,8 +95,7 @@ class DdsStateBus final : public NeighborBus {
   // samples are counted in counters().dropped too).
   std::set<AgentId> strangers() const override;
   std::map<AgentId, std::uint8_t> suspects() const override;
-  // Samples its place filter judged on arrival (StateBusOptions::filter_at_writer: none, since
-  // each writer judges before it sends).
+  // Samples its place filter judged on arrival.
   std::uint64_t judged_on_arrival() const;
   // The multicast group its state readers listen on: StateBusOptions::multicast_group, or ""
   // where it listens by unicast (none asked for, or the port was held by another program).

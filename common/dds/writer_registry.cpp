@@ -4,25 +4,11 @@
 
 #include <cstring>
 
-#include "common/transport/interest.hpp"
+#include "common/transport/dds_names.hpp"
 
 namespace qswarm {
 
 namespace frtps = eprosima::fastrtps::rtps;
-
-std::optional<AgentId> agent_named_by(const std::string& partition) {
-  // "qswarm-run-" or "qswarm-record-", the run id's 16 hex digits, '/', an agent partition.
-  std::size_t at = 0;
-  for (const char* stream : {"qswarm-run-", "qswarm-record-"}) {
-    if (partition.compare(0, std::strlen(stream), stream) == 0) at = std::strlen(stream);
-  }
-  if (at == 0 || partition.size() < at + 17 || partition[at + 16] != '/') return {};
-  for (std::size_t i = at; i < at + 16; ++i) {
-    const char c = partition[i];
-    if (!((c >= '0' && c <= '9') || (c >= 'a' && c <= 'f'))) return {};
-  }
-  return agent_of_partition(partition.substr(at + 17));
-}
 
 bool is_partition_pattern(const std::string& partition) {
   return partition.find_first_of("*?[") != std::string::npos;
@@ -72,7 +58,7 @@ void WriterRegistry::on_publisher_discovery(eprosima::fastdds::dds::DomainPartic
                                             frtps::WriterDiscoveryInfo&& info) {
   try {
     const std::string topic = info.info.topicName().to_string();
-    if (topic != "qswarm/agent_state" && topic != "qswarm/record") return;
+    if (topic != dds_names::kStateTopic && topic != dds_names::kRecordTopic) return;
     const WriterId w = id_of(info.info.guid());
     std::lock_guard<std::mutex> lock(mu_);
     if (info.status == frtps::WriterDiscoveryInfo::REMOVED_WRITER) {
@@ -82,7 +68,8 @@ void WriterRegistry::on_publisher_discovery(eprosima::fastdds::dds::DomainPartic
     std::set<AgentId> named;
     bool pattern = false;
     for (const std::string& p : info.info.m_qos.m_partition.getNames()) {
-      if (const std::optional<AgentId> id = agent_named_by(p)) named.insert(*id);
+      if (const std::optional<AgentId> id = dds_names::agent_of_bound_partition(p))
+        named.insert(*id);
       pattern = pattern || is_partition_pattern(p);
     }
     auto [it, fresh] = writers_.try_emplace(w);

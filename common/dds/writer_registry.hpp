@@ -18,13 +18,14 @@ namespace qswarm {
 // What discovery says about the other participants' writers of the state and record topics: the
 // agent each is bound to, by the agent partition (".../a3") it publishes into. Under DDS-Security
 // a writer's partitions are checked against its certificate's permissions when it is discovered,
-// and those permissions name one agent (python/qswarm/keys.py), so a writer in ".../a3" holds
+// and those permissions name one agent (common/app/keystore.hpp), so a writer in ".../a3" holds
 // agent 3's certificate: readers then take a sample keyed 3 only from a writer bound to 3.
 //
 // Fast DDS 2.9.1 checks the partitions again when a writer changes them, but keeps the match it
 // already made when the check fails: a writer first bound to 3 that moves to ".../a5" would still
-// deliver. So a writer's binding is the one it was first discovered with, and a writer whose
-// partitions ever name another set of agents is bound to none, for good.
+// deliver (docs/fast-dds-workarounds.md, W7). So a writer's binding is the one it was first
+// discovered with, and a writer whose partitions ever name another set of agents is bound to
+// none, for good.
 //
 // A writer that publishes into a partition pattern ("qswarm-run-.../*") is bound to none, for
 // good. Fast DDS matches partitions with fnmatch both ways, so such a writer reaches every reader
@@ -66,9 +67,6 @@ class WriterRegistry final : public eprosima::fastdds::dds::DomainParticipantLis
   std::set<std::array<std::uint8_t, 12>> participants_;  // their GUID prefixes
 };
 
-// The agent an agent partition of the state or record stream names ("qswarm-run-<16 hex>/a3"
-// -> 3); nothing for any other partition.
-std::optional<AgentId> agent_named_by(const std::string& partition);
 // Whether a partition name may be a pattern to Fast DDS's fnmatch (FNM_NOESCAPE): it holds '*',
 // '?' or '[' (a '[' that closes no set is literal, and refused all the same).
 bool is_partition_pattern(const std::string& partition);

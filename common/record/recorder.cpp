@@ -25,7 +25,7 @@ Recorder::Recorder(RunConfig rc, RunDir dir, double time_scale)
       dir_(std::move(dir)),
       time_scale_(time_scale),
       sinks_(dir_, SceneSettings::of(rc_)),
-      presence_(ids_of(rc_), rc_.presence_timeout_s(), rc_.record_every()),
+      presence_(ids_of(rc_), rc_.plan.presence_timeout_s, rc_.plan.record_every),
       judge_(rc_.judge.tolerance_m, rc_.judge.hold_s, rc_.agent.neighbor_timeout_s,
              rc_.agent.law.kind == LawKind::kEdgeFlow ? rc_.judge.tolerance_m : -1.0, rc_.faults,
              rc_.agent.law.kind == LawKind::kWmsr ? rc_.agent.law.wmsr_f : 0),

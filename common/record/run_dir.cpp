@@ -1,6 +1,7 @@
 #include "common/record/run_dir.hpp"
 
 #include <fcntl.h>
+#include <google/protobuf/text_format.h>
 #include <google/protobuf/util/json_util.h>
 #include <unistd.h>
 
@@ -110,6 +111,7 @@ std::vector<RunDir::File> RunDir::files() {
   return {
       {kMarker, "the claim: created first, with O_EXCL; it holds the launcher's pid"},
       {kScenario, "the scenario as run: defaults filled in, agents listed, seed and run id"},
+      {kPlan, "the run plan: what the run's size, security and hosts decided"},
       {kSummary, "the run's result (written by the launcher if the supervisor died first)"},
       {kTelemetry, "every agent sample the supervisor received and accepted"},
       {kGraph, "the graph over time"},
@@ -123,6 +125,7 @@ std::vector<RunDir::File> RunDir::files() {
       {kDiscoveryOut, "the run's Discovery Server's output (transport.discovery SERVER)"},
       {kDiscoveryReady, "written by the run's Discovery Server once it listens"},
       {kPlots, "swarm plot's figures (a directory; not written by the run)"},
+      {kViewUrl, "where the supervisor serves the live view (with --view)"},
       {"agent-N.log", "an agent's log"},
       {"agent-N.out",
        "an agent process's stdout and stderr (agent-N-restartK.out: its K-th restart)"},
@@ -131,10 +134,47 @@ std::vector<RunDir::File> RunDir::files() {
   };
 }
 
+bool write_whole(const fs::path& path, const std::string& text) {
+  const fs::path tmp = path.string() + ".tmp";
+  {
+    std::ofstream f(tmp, std::ios::trunc);
+    f << text;
+    f.flush();
+    if (!f) {
+      std::error_code ec;
+      fs::remove(tmp, ec);
+      return false;
+    }
+  }
+  std::error_code ec;
+  fs::rename(tmp, path, ec);
+  if (ec) fs::remove(tmp, ec);
+  return !ec;
+}
+
 bool RunDir::write_scenario(const scenario::Scenario& resolved) const {
-  std::ofstream scen(scenario());
-  scen << "# The scenario as run (defaults filled in, agents listed).\n" << to_text(resolved);
-  return static_cast<bool>(scen.flush());
+  return write_whole(scenario(), "# The scenario as run (defaults filled in, agents listed).\n" +
+                                     to_text(resolved));
+}
+
+bool RunDir::write_plan(const plan::RunPlan& plan) const {
+  std::string text;
+  google::protobuf::TextFormat::PrintToString(plan, &text);
+  return write_whole(this->plan(),
+                     "# The run plan: what the run's size, security and hosts decided "
+                     "(docs/run-plan.md).\n" +
+                         text);
+}
+
+bool RunDir::write_view_url(const std::string& url) const {
+  return write_whole(view_url(), url + "\n");
+}
+
+std::string RunDir::read_view_url() const {
+  std::ifstream in(view_url());
+  std::string line;
+  std::getline(in, line);
+  return line;
 }
 
 bool RunDir::mark_planned_kill(AgentId id, double t_s) const {
@@ -163,28 +203,14 @@ bool RunDir::write_fallback_summary(const RunConfig& rc, const std::string& reas
   s.set_run_id(rc.transport.run_id);
   s.set_seed(static_cast<std::uint32_t>(rc.seed));
   s.set_agents_expected(static_cast<std::uint32_t>(rc.agents.size()));
+  s.set_secure(!rc.transport.keystore.empty());
   s.set_law(to_string(rc.agent.law.kind));
   s.set_mode(rc.agent.mode == AgentMode::kQuadcopter ? "quadcopter" : "particle");
   for (int k = 0; k < 3; ++k) s.add_initial_average(rc.initial_average()[k]);
   return write_summary(to_json(s));
 }
 
-bool RunDir::write_summary(const std::string& json) const {
-  const fs::path tmp = summary().string() + ".tmp";
-  {
-    std::ofstream f(tmp, std::ios::trunc);
-    f << json;
-    f.flush();
-    if (!f) {
-      std::error_code ec;
-      fs::remove(tmp, ec);
-      return false;
-    }
-  }
-  std::error_code ec;
-  fs::rename(tmp, summary(), ec);
-  return !ec;
-}
+bool RunDir::write_summary(const std::string& json) const { return write_whole(summary(), json); }
 
 std::optional<records::Summary> RunDir::read_summary() const {
   std::ifstream in(summary());

@@ -42,6 +42,7 @@ class RunDir {
 
   std::filesystem::path marker() const { return file(kMarker); }
   std::filesystem::path scenario() const { return file(kScenario); }
+  std::filesystem::path plan() const { return file(kPlan); }
   std::filesystem::path summary() const { return file(kSummary); }
   std::filesystem::path telemetry() const { return file(kTelemetry); }
   std::filesystem::path graph() const { return file(kGraph); }
@@ -55,6 +56,7 @@ class RunDir {
   std::filesystem::path discovery_out() const { return file(kDiscoveryOut); }
   std::filesystem::path discovery_ready() const { return file(kDiscoveryReady); }
   std::filesystem::path plots() const { return file(kPlots); }
+  std::filesystem::path view_url() const { return file(kViewUrl); }
   std::filesystem::path agent_log(AgentId id) const;
   // The agent's process output: its first life's, or the k-th restart's.
   std::filesystem::path agent_out(AgentId id, int life) const;
@@ -63,15 +65,21 @@ class RunDir {
   // plan's SIGKILL from one sent from outside.
   std::filesystem::path planned_kills(AgentId id) const;
 
-  // The scenario as run (defaults filled in, agents listed). False if it could not be written.
+  // The scenario as run (defaults filled in, agents listed), and the plan it flies by. False if
+  // it could not be written.
   bool write_scenario(const scenario::Scenario& resolved) const;
+  bool write_plan(const plan::RunPlan& plan) const;
+  // Where the supervisor serves the run's live view ("http://127.0.0.1:8765/"), and back (""
+  // when there is none yet).
+  bool write_view_url(const std::string& url) const;
+  std::string read_view_url() const;
   // Appends a planned kill at simulated time t_s (false if it could not be written: the launcher
   // will then report the kill as one from outside).
   bool mark_planned_kill(AgentId id, double t_s) const;
   int planned_kills_marked(AgentId id) const;
 
-  // summary.json written whole or not at all (a temporary file renamed over it), so that a process
-  // killed while writing never leaves a summary cut short. False if it could not be written.
+  // summary.json written whole or not at all (write_whole), so that a process killed while
+  // writing never leaves a summary cut short. False if it could not be written.
   bool write_summary(const std::string& json) const;
   // summary.json as a summary; nothing if it is missing or does not read as one.
   std::optional<records::Summary> read_summary() const;
@@ -94,6 +102,7 @@ class RunDir {
 
   static constexpr const char* kMarker = ".swarm-run";
   static constexpr const char* kScenario = "scenario.txtpb";
+  static constexpr const char* kPlan = "plan.txtpb";
   static constexpr const char* kSummary = "summary.json";
   static constexpr const char* kTelemetry = "telemetry.csv";
   static constexpr const char* kGraph = "graph.csv";
@@ -107,6 +116,7 @@ class RunDir {
   static constexpr const char* kDiscoveryOut = "discovery.out";
   static constexpr const char* kDiscoveryReady = "discovery.ready";
   static constexpr const char* kPlots = "plots";
+  static constexpr const char* kViewUrl = "view.url";
 
  private:
   std::filesystem::path file(const char* name) const { return path_ / name; }
@@ -116,6 +126,11 @@ class RunDir {
 // A scenario name as a file name: letters, digits, '.', '-', '_' kept, anything else '_', no
 // leading dot, at most 64 characters ("../../x" cannot leave runs/).
 std::string safe_name(const std::string& name);
+
+// `text` into `path` whole or not at all: written to a file beside it, then renamed over it, so
+// that a reader never sees it cut short and a complete file is never replaced by a partial one.
+// False (and nothing left behind) if it could not be written.
+bool write_whole(const std::filesystem::path& path, const std::string& text);
 
 // The local time as run directories are named: YYYYMMDD-HHMMSS.
 std::string run_timestamp();

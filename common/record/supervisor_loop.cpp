@@ -13,7 +13,7 @@ SupervisorLoop::SupervisorLoop(const RunConfig& rc, RunDir dir, SupervisorOption
       clock_(clock),
       start_s_(clock.now_s()),
       recorder_(rc, dir_, opts.time_scale) {
-  if (opts_.start_timeout_s < 0.0) opts_.start_timeout_s = rc.start_timeout_s();
+  if (opts_.start_timeout_s < 0.0) opts_.start_timeout_s = rc.plan.start_timeout_s;
   bus_.set_listener([this](const StateMessage& m) {
     // The clock is read under the lock, so that the inbox is in order of arrival time and a
     // swap (record_inbox) splits it at one instant.
@@ -80,6 +80,18 @@ SupervisorLoop::Poll SupervisorLoop::poll(bool interrupted) {
     p.end_reason = "no agents running";
   }
   return p;
+}
+
+std::string SupervisorLoop::run(const std::atomic<bool>& stop,
+                                const std::function<void(const std::string&)>& warn,
+                                const std::function<void(const std::string&)>& progress) {
+  for (;;) {
+    const Poll p = poll(stop);
+    for (const std::string& w : p.warnings) warn(w);
+    if (p.progress) progress(*p.progress);
+    if (p.end_reason) return *p.end_reason;
+    clock_.sleep_until(p.wake_at_s);
+  }
 }
 
 std::string SupervisorLoop::finish(const std::string& reason) {

@@ -1,7 +1,9 @@
 #pragma once
 
+#include <atomic>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <mutex>
 #include <optional>
 #include <string>
@@ -61,6 +63,11 @@ class SupervisorLoop {
   // One pass: the recorder's periodic work, what the transport refused, the live line, the end
   // conditions (the recorder's verdict, `interrupted`, no agent after the start timeout).
   Poll poll(bool interrupted);
+  // Polls until the run is over (`stop` set: interrupted), sleeping on the clock in between;
+  // warnings and live lines go to the callbacks. Returns why it ended.
+  std::string run(const std::atomic<bool>& stop,
+                  const std::function<void(const std::string&)>& warn,
+                  const std::function<void(const std::string&)>& progress);
   // Stops listening and writes the end of the record and summary.json; returns the summary for
   // people. Call once, after poll() returned an end reason (or at any time, to stop early).
   std::string finish(const std::string& reason);

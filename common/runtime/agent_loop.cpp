@@ -20,6 +20,14 @@ double tick_wall_s(const RunConfig& rc, const AgentLoopOptions& o) {
   return rc.agent.steps_per_tick() / (rc.agent.physics_hz * o.time_scale);
 }
 
+// The run's plan at this process's time scale (its wall periods and limits follow it).
+RunPlan plan_at(const RunConfig& rc, const AgentLoopOptions& o) {
+  if (rc.plan.hosts.time_scale == o.time_scale) return rc.plan;
+  Hosts hosts = rc.plan.hosts;
+  hosts.time_scale = o.time_scale;
+  return plan_run(rc, hosts);
+}
+
 LifecycleConfig lifecycle_config(const RunConfig& rc, AgentId id, const AgentLoopOptions& o,
                                  double tick_origin_s) {
   LifecycleConfig c;
@@ -36,44 +44,21 @@ LifecycleConfig lifecycle_config(const RunConfig& rc, AgentId id, const AgentLoo
     c.shared_origin_s = tick_origin_s;
   }
   c.time_scale = o.time_scale;
-  c.start_timeout_s = o.start_timeout_s >= 0.0 ? o.start_timeout_s : rc.start_timeout_s();
-  c.join_timeout_s = c.start_timeout_s + 10.0;
-  // Every waiting agent announces to every other: N^2 samples per period. 5 ms keeps the start
-  // skew small for a few agents; beyond 8 the period grows with N so that the barrier costs no
-  // more than flying does (at 5 ms, 32 containers saturate two cores: docs/architecture.md).
-  c.announce_period_s = 0.005 * std::max(1.0, static_cast<double>(rc.agents.size()) / 8.0);
-  // Until every peer is heard (which in compose can take minutes while replicas claim ids), a
-  // waiting agent only says it is here: 0.05 s per 8 agents (0.2 s at 32; 5 ms up to 8 agents).
-  c.waiting_period_s = rc.agents.size() <= 8 ? c.announce_period_s
-                                             : 0.05 * static_cast<double>(rc.agents.size()) / 8.0;
-  if (!rc.transport.keystore.empty()) {
-    // DDS-Security encrypts and signs every sample (several times the CPU of a plain one): at 5 ms
-    // the announcements of 8 agents took the CPU the authentication handshakes needed, and pairs
-    // never met before the start timeout (bench/swarm_scale.sh SECURE=1, docs/security.md).
-    c.announce_period_s *= 10.0;
-    c.waiting_period_s *= 10.0;
-  }
-  // The supervisor hears an agent at the barrier only through these announcements: one at least
-  // every half of its presence timeout, or it would count the agent departed between two.
-  c.waiting_period_s = std::min(c.waiting_period_s, 0.5 * rc.presence_timeout_s() / o.time_scale);
-  c.announce_period_s = std::min(c.announce_period_s, c.waiting_period_s);
+  const RunPlan plan = plan_at(rc, o);
+  c.start_timeout_s = o.start_timeout_s >= 0.0 ? o.start_timeout_s : plan.start_timeout_s;
+  c.join_timeout_s = c.start_timeout_s + (plan.join_timeout_s - plan.start_timeout_s);
+  c.announce_period_s = plan.barrier_announce_period_s;
+  c.waiting_period_s = plan.barrier_waiting_period_s;
   c.tick_wall_s = tick_wall_s(rc, o);
   // The lifecycle's grid lies at multiples of the period from tick_origin_s: a later phase moves
   // that origin back.
   c.tick_origin_s = tick_origin_s - o.tick_phase * c.tick_wall_s;
-  c.max_wall_s =
-      o.max_wall_s >= 0.0 ? o.max_wall_s : 2.0 * rc.judge.duration_s / o.time_scale + 30.0;
+  c.max_wall_s = o.max_wall_s >= 0.0 ? o.max_wall_s : plan.agent_wall_limit_s;
   c.kill_at_s = rc.faults.kills_of(id);
   return c;
 }
 
 }  // namespace
-
-double tick_phase(const std::set<AgentId>& ids, AgentId id) {
-  const auto it = ids.find(id);
-  if (ids.size() <= kTickPhaseAbove || it == ids.end()) return 0.0;
-  return std::distance(ids.begin(), it) % 2 == 1 ? 0.5 : 0.0;
-}
 
 namespace {
 
@@ -84,9 +69,9 @@ AgentParams params_for(const RunConfig& rc, AgentId id, const AgentLoopOptions& 
   p.start.incarnation = o.incarnation;
   p.start.run_id = rc.transport.run_id;
   p.start.expected_peers = start_peers(rc, id).size();
-  p.start.record_every = rc.record_every();
-  p.start.spread_records = rc.agents.size() > kSpreadRecordsAbove;
-  p.start.links_to_neighbours = rc.transport.delivery == Delivery::kReach;
+  p.start.record_every = rc.plan.record_every;
+  p.start.spread_records = rc.plan.spread_records;
+  p.start.links_to_neighbours = rc.plan.delivery == Delivery::kReach;
   if (join_time(rc, id, o)) {
     p.start.expected_peers = 0;  // joins a running swarm: no first-tick wait
     p.start.recover_flows = o.restarted;
@@ -106,7 +91,7 @@ AgentLoop::AgentLoop(const RunConfig& rc, AgentId id, const AgentLoopOptions& op
       runtime_(params_for(rc, id, opts), faulty_),
       life_(lifecycle_config(rc, id, opts, clock.shared_origin_s()), clock.now_s()),
       neighbourhood_(rc, id),
-      record_period_wall_s_(rc.record_every() * tick_wall_s(rc, opts)),
+      record_period_wall_s_(rc.plan.record_every * tick_wall_s(rc, opts)),
       last_announce_record_s_(clock.now_s()) {
   runtime_.set_wall_clock(&clock_);
   update_interest();

@@ -18,7 +18,7 @@ namespace qswarm {
 // How this process of the agent was started (the swarm-agent flags beyond the scenario).
 struct AgentLoopOptions {
   double time_scale = 1.0;  // simulated seconds per wall second
-  // Wall seconds at the start barrier before starting anyway (-1: RunConfig::start_timeout_s).
+  // Wall seconds at the start barrier before starting anyway (-1: RunPlan::start_timeout_s).
   double start_timeout_s = -1.0;
   double max_wall_s = -1.0;      // wall limit once running (default 2 x duration + 30 s)
   double join_at_s = -1.0;       // join on the swarm's clock at this time (-1: the plan's)
@@ -26,26 +26,9 @@ struct AgentLoopOptions {
   bool wait_supervisor = false;  // the barrier also waits for the supervisor's reader
   std::int64_t incarnation = 0;  // this life's identity (the process uses its start time)
   // Where in each tick period of the host's shared grid this agent ticks, as a fraction of the
-  // period (tick_phase; the in-process swarm ticks every agent at 0).
+  // period (RunPlan::tick_phase; the in-process swarm ticks every agent at 0).
   double tick_phase = 0.0;
 };
-
-// The phase at which agent `id` of a swarm of `ids` ticks (AgentLoopOptions::tick_phase). Ticks
-// on one shared grid let a process woken by one neighbour's sample find the others' there too,
-// but where many agents share two cores every one of them wakes, sends and is heard in one burst,
-// and a sample waits for the burst to pass before its reader runs. Past kTickPhaseAbove agents,
-// every second one in order of id ticks half a period after the others: two bursts of half the
-// size, each process still woken once per tick by its own (docs/benchmarks.md, "Two tick
-// phases"). 0 for an id not in `ids`.
-constexpr std::size_t kTickPhaseAbove = 16;
-double tick_phase(const std::set<AgentId>& ids, AgentId id);
-
-// Up to this many agents every agent records the same ticks (one in k), so that each graph.csv
-// row is the swarm at one instant whatever the delivery. Past it their records are spread over
-// the k ticks by id: at 256 agents a record from every agent on one tick lost the recorder a fifth
-// to a third of them, and it counted agents departed that were flying (docs/benchmarks.md, "Records
-// spread over the ticks").
-constexpr std::size_t kSpreadRecordsAbove = 64;
 
 // One agent as the product runs it: its lifecycle (join wait, barrier, paced ticks, planned kills)
 // over a transport, the fault-injecting decorator, and the AgentRuntime (dynamics, control, law).

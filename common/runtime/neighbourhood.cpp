@@ -51,8 +51,8 @@ double Neighbourhood::margin_m(double reach_m) { return std::max(1.0, 0.25 * rea
 
 Neighbourhood::Neighbourhood(const RunConfig& rc, AgentId self) : self_(self) {
   const TopologyConfig& t = rc.agent.law.topology;
-  whole_run_ = rc.transport.delivery == Delivery::kAll;
-  reach_ = rc.transport.delivery == Delivery::kReach;
+  whole_run_ = rc.plan.delivery == Delivery::kAll;
+  reach_ = rc.plan.delivery == Delivery::kReach;
   for (const auto& [a, b] : t.edges) {
     if (a == self) listed_.insert(b);
     if (b == self) listed_.insert(a);
@@ -146,7 +146,7 @@ std::set<AgentId> Neighbourhood::heard_at_start(const RunConfig& rc, AgentId id)
 std::set<AgentId> start_peers(const RunConfig& rc, AgentId id) {
   std::set<AgentId> peers;
   const TopologyConfig& t = rc.agent.law.topology;
-  if (t.policy == TopologyPolicy::kFixed && rc.transport.delivery == Delivery::kAll) {
+  if (t.policy == TopologyPolicy::kFixed && rc.plan.delivery == Delivery::kAll) {
     peers = listed_peers(t, id);  // everyone is heard, but only the listed are neighbours
   } else {
     peers = Neighbourhood::heard_at_start(rc, id);

@@ -37,15 +37,6 @@ int AgentConfig::steps_per_tick() const {
   return std::max(1, static_cast<int>(std::lround(physics_hz / consensus_hz)));
 }
 
-std::uint32_t RunConfig::record_every() const {
-  return static_cast<std::uint32_t>(
-      std::max(1L, std::lround(agent.consensus_hz / judge.record_hz)));
-}
-
-double RunConfig::presence_timeout_s() const {
-  return std::max(agent.neighbor_timeout_s, 3.0 / judge.record_hz);
-}
-
 std::vector<Vec3> formation_slots(int shape, int n, double spacing_m) {
   // Shapes as in proto/scenario.proto: 2 line, 3 grid, 4 circle, 5 lattice; else none.
   std::vector<Vec3> out;

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <set>
 #include <string>
 #include <vector>
@@ -11,6 +12,7 @@
 #include "common/core/tracking_controller.hpp"
 #include "common/core/update_law.hpp"
 #include "common/scenario/fault_plan.hpp"
+#include "common/scenario/run_plan.hpp"
 #include "proto/scenario.pb.h"
 
 namespace qswarm {
@@ -49,16 +51,10 @@ struct JudgeConfig {
   double tolerance_m = 0.01;  // agreed: every state within this of the mean
   double hold_s = 1.0;        // for this long
   double duration_s = 60.0;   // simulated seconds before the run gives up
-  // Samples per second per agent the supervisor records (each agent sends every record_every()-th
-  // sample to it); at most the consensus rate.
-  double record_hz = 10.0;
+  // Samples per second per agent the supervisor records, as the scenario asks (unset: the plan's,
+  // which says what is recorded: RunPlan::record_hz).
+  std::optional<double> record_hz;
 };
-
-// Which samples an agent is sent: those of the agents that can be its neighbours (the default), or
-// everyone's.
-enum class Delivery { kNeighbours, kAll, kReach };
-// How a run's participants discover each other (scenario Transport.Discovery).
-enum class Discovery { kSimple, kServer };
 
 // Where the run's DDS traffic goes.
 struct TransportConfig {
@@ -66,9 +62,10 @@ struct TransportConfig {
   std::string interface = "127.0.0.1";  // DDS traffic stays on this host by default
   bool shared_memory = false;
   std::uint64_t run_id = 0;  // isolates this run on a shared DDS domain (0: the launcher draws one)
-  Delivery delivery = Delivery::kNeighbours;
+  // As the scenario asks; unset: as the plan decides for the run's size and hosts (RunPlan).
+  std::optional<Delivery> delivery;
   std::string keystore;  // DDS-Security keystore (an absolute path); empty: plain DDS
-  Discovery discovery = Discovery::kSimple;
+  std::optional<Discovery> discovery;
   // Under Delivery::kAll on loopback a sample is one datagram to the run's multicast group;
   // false: one per reader (a host whose loopback carries no multicast).
   bool multicast = true;
@@ -84,6 +81,9 @@ struct RunConfig {
   TransportConfig transport;
   FaultPlan faults;
   scenario::Scenario resolved;  // the scenario as run (agents listed, defaults explicit)
+  // What its size, security and hosts decide: resolve_scenario plans it for `swarm run` on one
+  // host; a process elsewhere (a container, a pod) plans again for its hosts (replan).
+  RunPlan plan;
 
   // The average of the agents' initial consensus states (their estimates of the centre): the
   // point the swarm agrees on.
@@ -96,17 +96,6 @@ struct RunConfig {
   // agent's slot (every agent of a rendezvous to one point). They cannot all reach their slots; the
   // record counts them arrived when they hold still. Empty without avoidance.
   std::set<AgentId> held_agents() const;
-  // Wall seconds an agent waits at the start barrier before it starts anyway, and the supervisor
-  // for the first running agent: discovery grows with the swarm (100 agents on 2 cores took 25 s),
-  // so 30 s plus half a second per agent.
-  double start_timeout_s() const { return 30.0 + 0.5 * static_cast<double>(agents.size()); }
-  // Every how many of its samples an agent sends one to the supervisor: the consensus rate over
-  // the record rate, rounded, at least 1.
-  std::uint32_t record_every() const;
-  // How long an agent the supervisor hears nothing of stays present (swarm seconds): three record
-  // periods at least, so that a record rate lowered for a large swarm (2.5 Hz at 512 agents) does
-  // not make two lost records a departure.
-  double presence_timeout_s() const;
 };
 
 // The slots of a generated formation for n agents (scenario Formation.Shape as an int), centred on

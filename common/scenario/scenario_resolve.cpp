@@ -59,8 +59,9 @@ const NumberField kNumberFields[] = {
   {"convergence.tolerance_m", [](RunConfig& c) -> double& { return c.judge.tolerance_m; }, 0.0, 1e9, true},
   {"convergence.hold_s", [](RunConfig& c) -> double& { return c.judge.hold_s; }, 0.0, 1e6, false},
   {"duration_s", [](RunConfig& c) -> double& { return c.judge.duration_s; }, 0.0, 1e7, true},
-  {"record.rate_hz", [](RunConfig& c) -> double& { return c.judge.record_hz; }, 0.0, 1e3, true},
 };
+// The record's rate: checked as a number, but unset it stays the plan's to choose.
+const NumberField kRecordRate = {"record.rate_hz", nullptr, 0.0, 1e3, true};
 // clang-format on
 
 using google::protobuf::FieldDescriptor;
@@ -341,16 +342,6 @@ void resolve_law(const scenario::Scenario& s, RunConfig& rc) {
   }
 }
 
-// Unset, the record's rate keeps the supervisor's share of the swarm's traffic bounded: every
-// agent's records reach the one supervisor, so 10 Hz up to 128 agents, then
-// kRecordSamplesPerS over the agents (5 Hz at 256, 2.5 Hz at 512).
-constexpr double kRecordSamplesPerS = 1280.0;
-void default_record_rate(const scenario::Scenario& s, RunConfig& rc) {
-  if (s.record().has_rate_hz() || rc.agents.empty()) return;
-  rc.judge.record_hz =
-      std::min(rc.judge.record_hz, kRecordSamplesPerS / static_cast<double>(rc.agents.size()));
-}
-
 // What holds between fields: rates a tick can keep, a controller and airframe that fly, a timeout a
 // neighbour can meet.
 void check_agent(RunConfig& rc) {
@@ -377,9 +368,6 @@ void check_agent(RunConfig& rc) {
   } catch (const std::invalid_argument& e) {
     throw ScenarioError(std::string("scenario limits: ") + e.what());
   }
-  // The supervisor records whole samples: the effective rate is the consensus rate over a whole
-  // number (written back, so the scenario as run says what was recorded).
-  rc.judge.record_hz = a.consensus_hz / static_cast<double>(rc.record_every());
   // At least two consensus ticks: a shorter timeout makes every neighbour flap.
   if (a.neighbor_timeout_s < 2.0 / a.consensus_hz) {
     fail("transport.neighbor_timeout_s",
@@ -388,13 +376,6 @@ void check_agent(RunConfig& rc) {
          quoted_number(a.neighbor_timeout_s));
   }
 }
-
-// Swarms of up to this many agents hear everyone unless the scenario says otherwise.
-constexpr std::size_t kAllToAllUpTo = 8;
-// Plain swarms of more agents discover through a Discovery Server unless the scenario says
-// otherwise: there each agent discovers only the agents it may hear (StateBusOptions::
-// topic_per_name), where simple discovery has every pair match.
-constexpr std::size_t kSimpleDiscoveryUpTo = 32;
 
 void resolve_transport(const scenario::Transport& t, RunConfig& rc) {
   TransportConfig& tc = rc.transport;
@@ -412,33 +393,26 @@ void resolve_transport(const scenario::Transport& t, RunConfig& rc) {
   if (!t.keystore().empty()) {
     std::error_code ec;
     const std::filesystem::path ks = std::filesystem::absolute(t.keystore(), ec);
-    if (ec || !std::filesystem::is_directory(ks))
+    // With an error code: a symlink loop is bad input, not an exception out of the resolver.
+    if (ec || !std::filesystem::is_directory(ks, ec) || ec)
       fail("transport.keystore", "a directory written by `swarm keys`", t.keystore());
     tc.keystore = ks.lexically_normal().string();
   }
-  // Unset: a small swarm hears everyone (it costs nothing there, and its start barrier then waits
-  // for every agent, so all start together as the paper's runs do); a larger one its neighbours.
-  if (t.delivery() == scenario::Transport::DELIVERY_UNSPECIFIED)
-    tc.delivery = rc.agents.size() <= kAllToAllUpTo ? Delivery::kAll : Delivery::kNeighbours;
-  else
-    tc.delivery = t.delivery() == scenario::Transport::ALL     ? Delivery::kAll
-                  : t.delivery() == scenario::Transport::REACH ? Delivery::kReach
-                                                               : Delivery::kNeighbours;
-  const bool secure = !tc.keystore.empty();
-  switch (t.discovery()) {
-    case scenario::Transport::SERVER:
-      if (secure)
-        fail("transport.discovery",
-             "SIMPLE with a keystore (Fast DDS 2.9 has no secure Discovery Server)", "SERVER");
-      tc.discovery = Discovery::kServer;
+  switch (t.delivery()) {
+    case scenario::Transport::ALL:
+      tc.delivery = Delivery::kAll;
       break;
-    case scenario::Transport::SIMPLE:
-      tc.discovery = Discovery::kSimple;
+    case scenario::Transport::REACH:
+      tc.delivery = Delivery::kReach;
+      break;
+    case scenario::Transport::NEIGHBOURS:
+      tc.delivery = Delivery::kNeighbours;
       break;
     default:
-      tc.discovery = !secure && rc.agents.size() > kSimpleDiscoveryUpTo ? Discovery::kServer
-                                                                        : Discovery::kSimple;
+      break;  // the plan's
   }
+  if (t.discovery() == scenario::Transport::SERVER) tc.discovery = Discovery::kServer;
+  if (t.discovery() == scenario::Transport::SIMPLE) tc.discovery = Discovery::kSimple;
 }
 
 // Checks shared by the fault entries: agent ids, time windows, probabilities.
@@ -589,13 +563,6 @@ void write_back_defaults(RunConfig& rc, scenario::Scenario& s) {
   s.mutable_transport()->set_multicast(rc.transport.multicast);
   if (!rc.transport.keystore.empty()) s.mutable_transport()->set_keystore(rc.transport.keystore);
   s.mutable_transport()->set_run_id(rc.transport.run_id);
-  s.mutable_transport()->set_delivery(
-      rc.transport.delivery == Delivery::kAll     ? scenario::Transport::ALL
-      : rc.transport.delivery == Delivery::kReach ? scenario::Transport::REACH
-                                                  : scenario::Transport::NEIGHBOURS);
-  s.mutable_transport()->set_discovery(rc.transport.discovery == Discovery::kServer
-                                           ? scenario::Transport::SERVER
-                                           : scenario::Transport::SIMPLE);
   s.mutable_avoidance()->set_enabled(rc.agent.avoidance.enabled);
 }
 
@@ -616,12 +583,19 @@ RunConfig resolve_scenario(scenario::Scenario s, const ScenarioOverrides& o) {
   check_start_separation(s, rc);
   resolve_formation(s, rc);
   resolve_law(s, rc);
-  default_record_rate(s, rc);
   check_agent(rc);
+  if (s.record().has_rate_hz()) {
+    check_range(kRecordRate, s.record().rate_hz());
+    rc.judge.record_hz = s.record().rate_hz();
+  }
   resolve_transport(s.transport(), rc);
   resolve_faults(s.faults(), rc);
   write_back_defaults(rc, s);
   rc.resolved = std::move(s);
+  // Planned for `swarm run` on this host; the plan's decisions join the scenario as run.
+  Hosts here;
+  here.interface = rc.transport.interface == "any" ? "" : rc.transport.interface;
+  replan(rc, here);
   return rc;
 }
 

@@ -7,8 +7,18 @@
 
 namespace qswarm {
 
+namespace {
+// The run planned for one process on this host at the swarm's time scale.
+RunConfig planned(RunConfig rc, double time_scale) {
+  Hosts hosts = rc.plan.hosts;
+  hosts.time_scale = time_scale;
+  replan(rc, hosts);
+  return rc;
+}
+}  // namespace
+
 InProcessSwarm::InProcessSwarm(RunConfig rc, double time_scale, RunDir record_in)
-    : rc_(std::move(rc)), time_scale_(time_scale), restarts_(rc_.faults) {
+    : rc_(planned(std::move(rc), time_scale)), time_scale_(time_scale), restarts_(rc_.faults) {
   if (!record_in.empty()) {
     supervisor_bus_ = std::make_unique<InMemoryBus>(net_, InMemoryBus::Role::kRecorder);
     SupervisorOptions o;

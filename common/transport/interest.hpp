@@ -73,7 +73,8 @@ std::vector<std::string> cells_about(const std::string& cell, int span);
 // The partition every agent publishes into, named for its id ("a3"): others listen to it to hear
 // that agent by name, and under DDS-Security its certificate's permissions let it publish state
 // only there (and in partitions that name no agent), which binds its samples to its id
-// (python/qswarm/keys.py writes the permissions; names starting with 'a' are reserved for it).
+// (the keystore writes the permissions, common/security/keystore.hpp; names starting with 'a' are
+// reserved for it).
 std::string agent_partition(AgentId id);
 // The agent an agent partition names ("a3" -> 3); nothing for any other name ("a03", "a3x").
 std::optional<AgentId> agent_of_partition(const std::string& name);

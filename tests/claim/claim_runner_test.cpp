@@ -11,6 +11,7 @@
 #include <set>
 
 #include "common/claim/claim_runner.hpp"
+#include "tests/support/plan_for.hpp"
 
 namespace qswarm {
 namespace {
@@ -41,11 +42,12 @@ class Swarm {
       for (Replica& r : replicas_) {
         if (r.refused || clock_.now_s() < r.start_s) continue;
         if (!r.runner) {  // the replica's process starts now
-          r.bus = std::make_unique<InMemoryClaimBus>(
-              net_, kRun, claim_capacity(static_cast<std::size_t>(size_)));
+          const RunPlan plan = test::plan_for(static_cast<std::size_t>(size_));
+          r.bus = std::make_unique<InMemoryClaimBus>(net_, kRun, plan.claim_capacity);
           r.runner = std::make_unique<IdClaimRunner>(
               *r.bus, roster, kRun, r.fixed,
-              IdClaimer::Config::for_swarm(static_cast<std::size_t>(size_), -1.0), rng_(), clock_);
+              IdClaimer::Config::with_period(plan.claim_period_s, plan.claim_timeout_s), rng_(),
+              clock_);
         }
         if (r.taken) {  // flying: keeps its claim up, and yields only to an earlier flight
           if (const auto why = r.runner->keep()) stop(r, *why);
@@ -108,7 +110,7 @@ TEST(ClaimRunner, ThirtyTwoReplicasALateOneAndTwoTooManyFlyEveryIdExactlyOnce) {
 
 TEST(ClaimInbox, AFloodOfNoncesStaysBoundedAndDoesNotHideALaterReplica) {
   // Given an inbox for a swarm of 4 (2 x 4 + 16 claims) and a stranger who floods 200 nonces once
-  ClaimInbox inbox(kRun, claim_capacity(4));
+  ClaimInbox inbox(kRun, test::plan_for(4).claim_capacity);
   bool logged = false;
   for (std::uint64_t n = 1000; n < 1200; ++n)
     logged |= inbox.hear(IdClaim{n, 1, kRun, 4, 0, kRanking, 0.0});

@@ -10,6 +10,7 @@
 #include <set>
 
 #include "common/claim/id_claimer.hpp"
+#include "tests/support/plan_for.hpp"
 
 namespace qswarm {
 namespace {
@@ -203,11 +204,14 @@ TEST(IdClaimer, NothingIsDecidedBeforeEveryMatchedWriterIsHeard) {
 }
 
 TEST(IdClaimer, ABigSwarmClaimsLessOftenWithWindowsToMatch) {
-  const IdClaimer::Config few = IdClaimer::Config::for_swarm(4, -1.0);
+  const RunPlan four = test::plan_for(4);
+  const IdClaimer::Config few =
+      IdClaimer::Config::with_period(four.claim_period_s, four.claim_timeout_s);
   EXPECT_DOUBLE_EQ(few.period_s, 0.1);
   EXPECT_DOUBLE_EQ(few.expire_s, 2.0);
   EXPECT_DOUBLE_EQ(few.timeout_s, 76.0);
-  const IdClaimer::Config many = IdClaimer::Config::for_swarm(32, 30.0);
+  const IdClaimer::Config many =
+      IdClaimer::Config::with_period(test::plan_for(32).claim_period_s, 30.0);
   EXPECT_NEAR(many.period_s, 0.1 * 32 / 6, 1e-12);
   EXPECT_NEAR(many.expire_s, 15 * many.period_s, 1e-12);
   EXPECT_NEAR(many.settle_s, 3 * many.period_s, 1e-12);
@@ -300,7 +304,9 @@ TEST(IdClaimer, ThirtyTwoStarvedReplicasStartedOneASecondStillTakeEveryIdOnce) {
     std::mt19937_64 rng(seed);
     std::uniform_real_distribution<double> u01(0.0, 1.0);
     const int n = 32;
-    const IdClaimer::Config cfg = IdClaimer::Config::for_swarm(n, -1.0);
+    const RunPlan plan = test::plan_for(n);
+    const IdClaimer::Config cfg =
+        IdClaimer::Config::with_period(plan.claim_period_s, plan.claim_timeout_s);
     struct R {
       std::optional<IdClaimer> claimer;
       double start_s, next_s;

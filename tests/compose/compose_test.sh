@@ -185,7 +185,7 @@ check "secure: the stranger announced itself to the $((N + 1)) peer hosts" \
 check "secure: the stranger heard none of the replicas" \
   'grep -q "start timeout: 0 of" "$WORK/stranger.log"'
 # Discovery by unicast to every replica and the supervisor, not by multicast (docs/security.md,
-# "A secure pair that never hears each other"): each replica's log says where it found them.
+# "Discovery by unicast"): each replica's log says where it found them.
 # (grep reads the whole log: with -q it would stop early, and pipefail would see podman's SIGPIPE.)
 unicast=0
 for c in $(podman ps -a --format '{{.Names}}' | grep "^${SECURE}_agent_" || true); do

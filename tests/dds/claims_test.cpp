@@ -15,7 +15,8 @@ DdsOptions options(const char* name) {
   DdsOptions o;
   o.participant.domain_id = static_cast<std::uint32_t>(test::test_domain().domain());
   o.participant.name = name;
-  o.state.max_agents = 4;  // keeps 2 * 4 + 16 = 24 claims
+  o.state.max_agents = 4;
+  o.claims_kept = 24;  // a swarm of 4's (RunPlan::claim_capacity: 2 * 4 + 16)
   o.state.run_id = 0xC1;
   o.id_claims = true;
   return o;

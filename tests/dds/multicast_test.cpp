@@ -14,7 +14,8 @@
 #include <string>
 #include <vector>
 
-#include "common/app/process_setup.hpp"
+#include "common/app/process_dds.hpp"
+#include "common/app/process_life.hpp"
 #include "common/dds/dds_bus.hpp"
 #include "common/scenario/scenario.hpp"
 #include "common/transport/port_plan.hpp"
@@ -203,13 +204,19 @@ TEST(StateMulticast, ABadGroupIsRefusedNamingIt) {
   }
 }
 
+// A process's participant and bus settings as its flags plan them (load_for_process's replan).
+DdsOptions planned(RunConfig rc, const ProcessOptions& po) {
+  replan(rc, hosts_of(rc, po));
+  return dds_options(rc, "agent", po);
+}
+
 // Which runs use the group: those where everyone hears everyone on loopback, and no others.
 TEST(StateMulticast, OnlyAllToAllRunsOnLoopbackWithoutTheTestTransportOrUnicastDiscoveryUseIt) {
   RunConfig rc =
       resolve_scenario(parse_scenario_text("random_agents { count: 4 box_m: 10 } seed: 1", "test"));
-  ASSERT_EQ(rc.transport.delivery, Delivery::kAll);
+  ASSERT_EQ(rc.plan.delivery, Delivery::kAll);
   const auto group = [](const RunConfig& r, ProcessOptions po = {}) {
-    return dds_options(r, "agent", po).state.multicast_group;
+    return planned(r, po).state.multicast_group;
   };
   EXPECT_EQ(group(rc), state_multicast_group(rc.transport.run_id));
   ProcessOptions server;  // discovery is not data: through a Discovery Server too
@@ -253,9 +260,9 @@ TEST(RegionTopics, OnlyThroughADiscoveryServerAndPastOneHundredTwentyEightAgents
         "random_agents { count: " + std::to_string(agents) + " box_m: 100 } seed: 1", "test"));
     ProcessOptions po;
     po.discovery_server = server;
-    const DdsOptions d = dds_options(rc, "agent", po);
-    EXPECT_EQ(d.state.topic_per_name, !server.empty());
-    return d.state.region_topics;
+    const DdsOptions d = planned(rc, po);
+    EXPECT_EQ(d.state.routing != Routing::kPartitions, !server.empty());
+    return d.state.routing == Routing::kRegionTopics;
   };
   EXPECT_FALSE(regions(128, "127.0.0.1:11811"));
   EXPECT_TRUE(regions(129, "127.0.0.1:11811"));
@@ -271,14 +278,14 @@ TEST(PeerHosts, MeanOneParticipantPerHostUnlessTold) {
   ProcessOptions po;
   po.interface = "any";
   po.peer_hosts = "agent,supervisor";
-  DdsOptions d = dds_options(rc, "agent", po);
+  DdsOptions d = planned(rc, po);
   EXPECT_EQ(d.participant.participant_id, 0);
   EXPECT_EQ(d.participant.unicast_peers_first, 0);
   EXPECT_EQ(d.participant.unicast_peers_count, 1);
   EXPECT_EQ(d.state.multicast_group, "");
   po.participant_id = 7;
   po.unicast_peers = "5:3";
-  d = dds_options(rc, "agent", po);
+  d = planned(rc, po);
   EXPECT_EQ(d.participant.participant_id, 7);
   EXPECT_EQ(d.participant.unicast_peers_first, 5);
   EXPECT_EQ(d.participant.unicast_peers_count, 3);

@@ -1,6 +1,7 @@
-// Through a Discovery Server, an agent whose interest names are topics (topic_per_name) discovers
-// only the participants it shares a name with, and meets a new one when its interest grows; with
-// names as partitions of one topic (the control) every participant discovers every other.
+// Through a Discovery Server, an agent whose interest names are topics (Routing::kNamedTopics)
+// discovers only the participants it shares a name with, and meets a new one when its interest
+// grows; with names as partitions of one topic (the control) every participant discovers every
+// other.
 #include <arpa/inet.h>
 #include <gtest/gtest.h>
 #include <netinet/in.h>
@@ -42,7 +43,7 @@ struct Swarm {
   std::vector<std::unique_ptr<DdsBus>> agents;  // agents 1 to 4
   std::uint64_t seq = 0;
 
-  explicit Swarm(bool topic_per_name, bool pairs = true, bool region_topics = false) {
+  explicit Swarm(Routing routing, bool pairs = true) {
     const auto domain = static_cast<std::uint32_t>(test::test_domain().domain());
     const std::optional<int> id = free_participant_block(domain, 1, "127.0.0.1");
     if (!id) throw std::runtime_error("no free participant id on the test's domain");
@@ -51,8 +52,7 @@ struct Swarm {
     for (AgentId a = 1; a <= 4; ++a) {
       DdsOptions o = test::dds_options(("agent-" + std::to_string(a)).c_str(), kRun);
       o.participant.discovery_server = "127.0.0.1:" + std::to_string(port);
-      o.state.topic_per_name = topic_per_name;
-      o.state.region_topics = region_topics;
+      o.state.routing = routing;
       o.state.self = a;
       o.state.roster = {1, 2, 3, 4};
       agents.push_back(std::make_unique<DdsBus>(o));
@@ -96,7 +96,7 @@ struct Swarm {
 // output channel for yet (discovery_server.cpp): the server never announces on a timer, and its
 // clients still meet it and, through it, each other.
 TEST(NeighbourTopics, TheDiscoveryServerNeverAnnouncesOnATimerAndItsClientsStillMeet) {
-  Swarm s(/*topic_per_name=*/true);
+  Swarm s(Routing::kNamedTopics);
   const DiscoveryServer::Announcements own = s.server->announcements();
   EXPECT_EQ(own.initial, 0u);
   EXPECT_GE(own.period_s, 30.0 * 24 * 3600);
@@ -150,7 +150,7 @@ TEST(NeighbourTopics, ADiscoveryServerOnLoopbackHasNoSocketOnAnyOtherAddress) {
 }
 
 TEST(NeighbourTopics, ThroughADiscoveryServerAnAgentDiscoversOnlyThoseItSharesANameWith) {
-  Swarm s(/*topic_per_name=*/true);
+  Swarm s(Routing::kNamedTopics);
   ASSERT_TRUE(s.pairs_meet());
   // Each knows its partner and the server, and was sent nothing of the other pair.
   for (AgentId a = 1; a <= 4; ++a) EXPECT_EQ(s.known(a), 2) << "agent " << a;
@@ -205,7 +205,7 @@ Interest in_cell(AgentId id, int x) {
 // into another region is heard there at once, through a writer its new listeners matched while
 // it was a cell away.
 TEST(NeighbourTopics, CellsArePartitionsOfRegionTopicsAndAMoveAcrossNeedsNoDiscovery) {
-  Swarm s(/*topic_per_name=*/true, /*pairs=*/false, /*region_topics=*/true);
+  Swarm s(Routing::kRegionTopics, /*pairs=*/false);
   s.agent(1).set_interest(in_cell(1, 4));  // the mover, at the edge of region 0
   s.agent(2).set_interest(in_cell(2, 2));  // listens to x 0..4: region 0 alone
   s.agent(3).set_interest(in_cell(3, 7));  // listens to x 5..9: region 1 alone
@@ -258,7 +258,7 @@ TEST(NeighbourTopics, CellsArePartitionsOfRegionTopicsAndAMoveAcrossNeedsNoDisco
 // Cells of two spaces (proximity and collision avoidance) stay partitions of the shared topic: as
 // regions, each sample would go out once per space, and a listener of both would hear it twice.
 TEST(NeighbourTopics, CellsOfTwoSpacesStayOnTheSharedTopic) {
-  Swarm s(/*topic_per_name=*/true, /*pairs=*/false, /*region_topics=*/true);
+  Swarm s(Routing::kRegionTopics, /*pairs=*/false);
   for (AgentId a = 1; a <= 2; ++a) {
     Interest in = in_cell(a, 0);
     const std::vector<std::string> q = cells_about("q0.0.0", 2);
@@ -281,7 +281,7 @@ TEST(NeighbourTopics, CellsOfTwoSpacesStayOnTheSharedTopic) {
 // The control: the same interests as partitions of one topic. The server relays every participant
 // to every other, whatever the partitions (DDS matches partitions after discovery).
 TEST(NeighbourTopics, AsPartitionsOfOneTopicEveryAgentDiscoversEveryOther) {
-  Swarm s(/*topic_per_name=*/false);
+  Swarm s(Routing::kPartitions);
   ASSERT_TRUE(test::wait_for(
       [&] {
         s.publish();
@@ -327,15 +327,14 @@ class ReaderUpdates final : public dds::DomainParticipantListener {
 // How often a move (another cell, another place; or only another place) updates each state
 // reader of the agent that moves, as its peers hear through discovery. Fast DDS 2.9.1's Discovery
 // Server corrupts its history when two updates of one reader reach it together
-// (docs/architecture.md, "A hung Discovery Server"), as a change of the readers' partitions
+// (docs/fast-dds-workarounds.md, W5), as a change of the readers' partitions
 // followed by one of their filter parameters did. Simple discovery here: an observer hears every
 // update itself.
 std::vector<int> updates_per_reader(bool region_topics, int to_x, double near_x) {
   DdsOptions o = test::dds_options("mover", kRun);
   o.state.self = 1;
   o.state.roster = {1, 2};
-  o.state.topic_per_name = region_topics;
-  o.state.region_topics = region_topics;
+  o.state.routing = region_topics ? Routing::kRegionTopics : Routing::kPartitions;
   DdsBus mover(o);
   dds::DomainParticipant* p = mover.participant().get();
   ReaderUpdates updates(p->guid().guidPrefix);

@@ -9,7 +9,8 @@
 #include <system_error>
 #include <thread>
 
-#include "common/app/process_setup.hpp"
+#include "common/app/process_dds.hpp"
+#include "common/app/process_life.hpp"
 
 namespace qswarm {
 namespace {

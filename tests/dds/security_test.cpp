@@ -367,8 +367,36 @@ TEST_F(Security, ABadKeystoreStopsTheRunBeforeAnythingFliesNamingTheFile) {
   r = secure_run(compose, "compose");
   EXPECT_EQ(r.code, 2) << r.output;
   EXPECT_NE(r.output.find("a compose keystore"), std::string::npos) << r.output;
+  // Agent 2's and agent 3's identities swapped (each certificate with its own key).
+  const fs::path swapped = runs / "swapped";
+  fs::copy(ours(), swapped, fs::copy_options::recursive);
+  fs::rename(swapped / "agent-2", swapped / "agent-x");
+  fs::rename(swapped / "agent-3", swapped / "agent-2");
+  fs::rename(swapped / "agent-x", swapped / "agent-3");
+  r = secure_run(swapped, "swapped");
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_NE(r.output.find("agent-2/cert.pem: the certificate of agent-3"), std::string::npos)
+      << r.output;
+  // A private key anyone may read, in a directory anyone may write.
+  const fs::path open = runs / "open";
+  fs::copy(ours(), open, fs::copy_options::recursive);
+  fs::permissions(open / "agent-1" / "key.pem", fs::perms::all);
+  r = secure_run(open, "open");
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_NE(r.output.find("agent-1/key.pem: a private key readable by others"), std::string::npos)
+      << r.output;
+  // The supervisor's certificate a link to one outside the keystore.
+  const fs::path linked = runs / "linked";
+  fs::copy(ours(), linked, fs::copy_options::recursive);
+  fs::rename(linked / "supervisor" / "cert.pem", runs / "supervisor-cert.pem");
+  fs::create_symlink(runs / "supervisor-cert.pem", linked / "supervisor" / "cert.pem");
+  r = secure_run(linked, "linked");
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_NE(r.output.find("supervisor/cert.pem: a link out of the keystore"), std::string::npos)
+      << r.output;
   // Nothing flew: no run directory holds a record.
-  for (const char* name : {"missing", "partial", "tampered", "unbound", "compose"})
+  for (const char* name :
+       {"missing", "partial", "tampered", "unbound", "compose", "swapped", "open", "linked"})
     EXPECT_FALSE(fs::exists(runs / name / "summary.json")) << name;
 }
 

@@ -88,7 +88,9 @@ LaunchSpec spec_for(const std::string& extra) {
                      "-" + std::to_string(::getpid())));
   std::filesystem::create_directories(spec.dir.path());
   spec.bin_dir = "/bin-dir";
-  spec.time_scale = 2.0;
+  Hosts hosts = spec.rc.plan.hosts;
+  hosts.time_scale = 2.0;
+  replan(spec.rc, hosts);
   return spec;
 }
 
@@ -140,7 +142,8 @@ TEST(Launcher, ARunsOwnDiscoveryServerStartsFirstAndEveryParticipantIsToldItsAdd
 TEST(Launcher, ASecureRunsProcessesDiscoverByUnicastWithinItsBlockAndAPlainRunsDoNot) {
   LaunchSpec spec = spec_for("");
   spec.rc.transport.keystore = "/ks";  // (the launcher only passes it on)
-  spec.participant_base = 10;          // the supervisor 10, agents 1..3 on 11..13
+  replan(spec.rc, spec.rc.plan.hosts);
+  spec.participant_base = 10;  // the supervisor 10, agents 1..3 on 11..13
   const auto peers = [](const std::vector<std::string>& argv) {
     const auto it = std::find(argv.begin(), argv.end(), "--unicast-peers");
     return it == argv.end() || it + 1 == argv.end() ? std::string() : *(it + 1);
@@ -152,6 +155,7 @@ TEST(Launcher, ASecureRunsProcessesDiscoverByUnicastWithinItsBlockAndAPlainRunsD
   for (AgentId id : {1u, 2u, 3u}) EXPECT_EQ(peers(secure.agent_argv(id, -1.0, false)), "10:4");
   // Plain: multicast discovery, as Fast DDS does by default.
   spec.rc.transport.keystore.clear();
+  replan(spec.rc, spec.rc.plan.hosts);
   const Launcher plain(spec, procs, clock, [] { return true; });
   EXPECT_EQ(peers(plain.supervisor_argv()), "");
   EXPECT_EQ(peers(plain.agent_argv(1, -1.0, false)), "");

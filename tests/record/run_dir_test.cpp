@@ -94,26 +94,37 @@ TEST_F(RunDirs, ACrashTheSupervisorCouldNotSeeUnmakesConvergedInTheSummary) {
   EXPECT_EQ(back.end_reason(), "converged; agent 3 killed by signal Aborted at teardown");
 }
 
-// The figure scripts spell the run directory's files in python/qswarm/run_dir.py: every name there
-// must be one RunDir writes (or lists), so the two cannot drift apart.
-TEST(RunDirFiles, ThePythonSpellsEveryFileAsRunDirDoes) {
-  std::ifstream in(std::string(QSWARM_SOURCE_DIR) + "/python/qswarm/run_dir.py");
-  ASSERT_TRUE(in) << "cannot read python/qswarm/run_dir.py";
+// The names of a run directory's files in the block "# One run directory." of a script of
+// another language (`file`), each a constant matching `constant`: how many it checked.
+int check_spelled(const std::string& file, const std::regex& constant) {
+  std::ifstream in(std::string(QSWARM_SOURCE_DIR) + "/" + file);
+  EXPECT_TRUE(in) << "cannot read " << file;
   std::set<std::string> known;
   for (const RunDir::File& f : RunDir::files()) known.insert(f.name);
-  const std::regex constant(R"re(^[A-Z_]+ = "([^"]+)")re");
   std::string line;
   bool in_block = false;
   int checked = 0;
   std::smatch m;
   while (std::getline(in, line)) {
-    if (line == "# One run directory.") in_block = true;
+    if (line == "# One run directory." || line == "// One run directory.") in_block = true;
     if (in_block && line.empty()) break;
     if (!in_block || !std::regex_search(line, m, constant)) continue;
-    EXPECT_TRUE(known.count(m[1])) << m[1] << " is not a file RunDir knows";
+    EXPECT_TRUE(known.count(m[1])) << m[1] << " in " << file << " is not a file RunDir knows";
     ++checked;
   }
-  EXPECT_GE(checked, 6) << "python/qswarm/run_dir.py's block of run directory names not found";
+  return checked;
+}
+
+// The figure scripts spell the run directory's files in python/qswarm/run_dir.py, and the view's
+// tests in tests/view/harness.mjs: every name there must be one RunDir writes (or lists), so they
+// cannot drift apart.
+TEST(RunDirFiles, ThePythonAndTheViewTestsSpellEveryFileAsRunDirDoes) {
+  EXPECT_GE(check_spelled("python/qswarm/run_dir.py", std::regex(R"re(^[A-Z_]+ = "([^"]+)")re")), 6)
+      << "python/qswarm/run_dir.py's block of run directory names not found";
+  EXPECT_GE(check_spelled("tests/view/harness.mjs",
+                          std::regex(R"re(^export const [A-Z_]+ = '([^']+)')re")),
+            5)
+      << "tests/view/harness.mjs's block of run directory names not found";
 }
 
 }  // namespace

@@ -18,6 +18,7 @@
 #include "common/runtime/faulty_bus.hpp"
 #include "common/scenario/scenario.hpp"
 #include "tests/runtime/threaded_bus.hpp"
+#include "tests/support/plan_for.hpp"
 
 namespace qswarm {
 namespace {
@@ -267,7 +268,8 @@ TEST(Concurrency, ASupervisorThatRecordsSlowlyJudgesSilenceWhenTheSamplesArrived
 }
 
 TEST(Concurrency, AClaimInboxHeardOnOneThreadIsReadOnAnother) {
-  ClaimInbox inbox(5, claim_capacity(8));
+  const std::size_t kept = test::plan_for(8).claim_capacity;
+  ClaimInbox inbox(5, kept);
   std::atomic<bool> stop{false};
   std::atomic<std::uint64_t> heard{0};
   std::thread hearer([&] {
@@ -280,7 +282,7 @@ TEST(Concurrency, AClaimInboxHeardOnOneThreadIsReadOnAnother) {
   while (heard < 5000) most = std::max(most, inbox.claims().size());
   stop = true;
   hearer.join();
-  EXPECT_LE(most, claim_capacity(8));
+  EXPECT_LE(most, kept);
   EXPECT_GT(inbox.evicted(), 0u);
 }
 

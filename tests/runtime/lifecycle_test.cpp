@@ -12,6 +12,7 @@
 #include "common/scenario/scenario.hpp"
 #include "common/transport/in_memory_bus.hpp"
 #include "common/transport/state_message.hpp"
+#include "tests/support/plan_for.hpp"
 
 namespace qswarm {
 namespace {
@@ -270,16 +271,18 @@ std::set<AgentId> ids_from(AgentId first, AgentId step, int n) {
 
 TEST(TickPhase, PastSixteenAgentsEverySecondOneTicksHalfAPeriodLate) {
   const std::set<AgentId> swarm = ids_from(1, 1, 32);  // 1 .. 32
-  EXPECT_EQ(tick_phase(swarm, 1), 0.0);
-  EXPECT_EQ(tick_phase(swarm, 2), 0.5);
-  EXPECT_EQ(tick_phase(swarm, 32), 0.5);
-  EXPECT_EQ(tick_phase(swarm, 33), 0.0);  // not in the swarm
-  EXPECT_EQ(tick_phase(ids_from(1, 1, 17), 2), 0.5);
-  EXPECT_EQ(tick_phase(ids_from(1, 1, 16), 2), 0.0);  // a burst of a few agents passes at once
+  const RunPlan plan = test::plan_for(32);
+  EXPECT_EQ(plan.tick_phase(swarm, 1), 0.0);
+  EXPECT_EQ(plan.tick_phase(swarm, 2), 0.5);
+  EXPECT_EQ(plan.tick_phase(swarm, 32), 0.5);
+  EXPECT_EQ(plan.tick_phase(swarm, 33), 0.0);  // not in the swarm
+  EXPECT_EQ(test::plan_for(17).tick_phase(ids_from(1, 1, 17), 2), 0.5);
+  // a burst of a few agents passes at once
+  EXPECT_EQ(test::plan_for(16).tick_phase(ids_from(1, 1, 16), 2), 0.0);
   // By order, not by id: a swarm of even ids still splits in half
   const std::set<AgentId> even = ids_from(2, 2, 20);  // 2, 4 .. 40
   int late = 0;
-  for (const AgentId id : even) late += tick_phase(even, id) > 0.0 ? 1 : 0;
+  for (const AgentId id : even) late += test::plan_for(20).tick_phase(even, id) > 0.0 ? 1 : 0;
   EXPECT_EQ(late, 10);
 }
 

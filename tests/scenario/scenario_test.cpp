@@ -137,13 +137,13 @@ TEST(Scenario, SwarmsBeyondWhatTheWireCarriesAreRefusedAndTheBoundItselfIsAccept
 
 TEST(Scenario, DiscoveryIsThroughAServerAbove32PlainAgentsAndSecureRunsCannotAskForOne) {
   const auto discovery = [](const std::string& text) {
-    return resolve_scenario(parse_scenario_text(text, "s")).transport.discovery;
+    return resolve_scenario(parse_scenario_text(text, "s")).plan.discovery;
   };
-  EXPECT_EQ(discovery("random_agents { count: 32 }\n"), Discovery::kSimple);
-  EXPECT_EQ(discovery("random_agents { count: 33 }\n"), Discovery::kServer);
+  EXPECT_EQ(discovery("random_agents { count: 32 }\n"), DiscoveryMode::kMulticast);
+  EXPECT_EQ(discovery("random_agents { count: 33 }\n"), DiscoveryMode::kServer);
   EXPECT_EQ(discovery("random_agents { count: 33 }\ntransport { discovery: SIMPLE }\n"),
-            Discovery::kSimple);
-  EXPECT_EQ(discovery(kTwo + "transport { discovery: SERVER }\n"), Discovery::kServer);
+            DiscoveryMode::kMulticast);
+  EXPECT_EQ(discovery(kTwo + "transport { discovery: SERVER }\n"), DiscoveryMode::kServer);
   // A secure run (a keystore; any directory passes the resolver, `swarm keys --check` judges it).
   const std::string keystore =
       "transport { keystore: \"" + std::filesystem::temp_directory_path().string() + "\" ";
@@ -151,8 +151,8 @@ TEST(Scenario, DiscoveryIsThroughAServerAbove32PlainAgentsAndSecureRunsCannotAsk
             std::string::npos);
   EXPECT_EQ(
       resolve_scenario(parse_scenario_text("random_agents { count: 64 }\n" + keystore + "}\n", "s"))
-          .transport.discovery,
-      Discovery::kSimple);
+          .plan.discovery,
+      DiscoveryMode::kUnicastBlock);
   // The scenario as run says which was used.
   const RunConfig rc = resolve_scenario(
       parse_scenario_text("random_agents { count: 4 }\ntransport { discovery: SERVER }\n", "s"));
@@ -163,7 +163,7 @@ TEST(Scenario, DiscoveryIsThroughAServerAbove32PlainAgentsAndSecureRunsCannotAsk
 
 TEST(Scenario, TheRecordRateFallsAbove128AgentsUnlessTheScenarioSetsIt) {
   const auto record_hz = [](const std::string& text) {
-    return resolve_scenario(parse_scenario_text(text, "s")).judge.record_hz;
+    return resolve_scenario(parse_scenario_text(text, "s")).plan.record_hz;
   };
   // 50 Hz consensus: the supervisor gets every k-th sample, k = 50 / rate rounded.
   const std::string rates = "rates { consensus_hz: 50 physics_hz: 50 }\n";
@@ -176,7 +176,7 @@ TEST(Scenario, TheRecordRateFallsAbove128AgentsUnlessTheScenarioSetsIt) {
   const RunConfig rc =
       resolve_scenario(parse_scenario_text("random_agents { count: 256 }\n" + rates, "s"));
   EXPECT_EQ(rc.resolved.record().rate_hz(), 5.0);
-  EXPECT_EQ(rc.record_every(), 10u);
+  EXPECT_EQ(rc.plan.record_every, 10u);
 }
 
 TEST(Scenario, DefaultsAreWrittenBackSoTheRecordSaysWhatRan) {

@@ -69,13 +69,13 @@ TEST(InProcessSwarm, AnAgentThatNeverComesHoldsTheWholeSwarmUntilTheStartTimeout
           if (swarm.agent(id)->phase() != LifePhase::kRunning) return false;
         return true;
       },
-      rc.start_timeout_s() + 5.0));
+      rc.plan.start_timeout_s + 5.0));
   // Then nobody ran before the start timeout, not even the far end of the line, and then all
   // started together (each at its first poll past the timeout: a beacon period at most, 75 ms
   // for agent 11, which never heard all its peers), each saying why
   for (AgentId id = 1; id <= 11; ++id) {
-    EXPECT_GE(swarm.agent(id)->running_since_s(), rc.start_timeout_s()) << id;
-    EXPECT_LT(swarm.agent(id)->running_since_s(), rc.start_timeout_s() + 0.1) << id;
+    EXPECT_GE(swarm.agent(id)->running_since_s(), rc.plan.start_timeout_s) << id;
+    EXPECT_LT(swarm.agent(id)->running_since_s(), rc.plan.start_timeout_s + 0.1) << id;
   }
   // (the first to time out say so; the others may follow a running neighbour)
   EXPECT_GE(std::count_if(

@@ -81,12 +81,10 @@ TEST(Neighbourhood, CellsCoverTheLinkReachAndIdsCoverTheGraph) {
   EXPECT_TRUE(Neighbourhood(all, 1).whole_run());
   EXPECT_EQ(Neighbourhood::heard_at_start(all, 1), (std::set<AgentId>{2}));
   // Unset, a swarm of up to 8 hears everyone (and starts together); a larger one its neighbours.
-  EXPECT_EQ(
-      resolve_scenario(parse_scenario_text("random_agents { count: 8 }", "s")).transport.delivery,
-      Delivery::kAll);
-  EXPECT_EQ(
-      resolve_scenario(parse_scenario_text("random_agents { count: 9 }", "s")).transport.delivery,
-      Delivery::kNeighbours);
+  EXPECT_EQ(resolve_scenario(parse_scenario_text("random_agents { count: 8 }", "s")).plan.delivery,
+            Delivery::kAll);
+  EXPECT_EQ(resolve_scenario(parse_scenario_text("random_agents { count: 9 }", "s")).plan.delivery,
+            Delivery::kNeighbours);
 }
 
 TEST(Neighbourhood, EveryPairWithinTheReachPlusMarginHearsEachOtherAsTheyWander) {

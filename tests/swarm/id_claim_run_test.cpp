@@ -135,7 +135,7 @@ TEST(IdClaimRun, ReplicasWithAComposeKeystoreFlyAndAStrangerWithoutItIsHeardByNo
   EXPECT_NE(refused.output.find("needs a compose keystore"), std::string::npos) << refused.output;
 
   // Secure processes on one host discover by unicast within a block of the port plan, as swarm
-  // run starts them (docs/security.md, "A secure pair that never hears each other"): the
+  // run starts them (docs/security.md, "Discovery by unicast"): the
   // supervisor takes id 0, the replicas 1 to 4 and the stranger 5, announcing to all six.
   const auto place = [](int id) {
     return std::vector<std::string>{"--participant-id", std::to_string(id), "--unicast-peers",

@@ -6,6 +6,15 @@ import fs from 'node:fs';
 import path from 'node:path';
 import { createRequire } from 'node:module';
 
+// The run directory's files these tests read, spelled as RunDir names them
+// (common/record/run_dir.hpp; tests/record/run_dir_test.cpp checks this block against it).
+// One run directory.
+export const SCENARIO = 'scenario.txtpb';
+export const SUMMARY = 'summary.json';
+export const TELEMETRY = 'telemetry.csv';
+export const RECORDS = 'records.pb';
+export const VIEW_URL = 'view.url';
+
 export const binDir = process.env.QSWARM_BIN_DIR;
 export const nodeModules = process.env.QSWARM_NODE_MODULES;
 export const runsDir = process.env.QSWARM_TEST_RUNS_DIR;
@@ -70,10 +79,10 @@ export async function startRun(name, args) {
   const done = new Promise((resolve) => proc.on('exit', (code, sig) => resolve(sig ? 128 : code)));
   let exited = false;
   done.then(() => { exited = true; });
-  const urlFile = path.join(dir, 'view.url');
-  await until(() => exited || fs.existsSync(urlFile), 60000, 'the view to listen (view.url)');
+  const urlFile = path.join(dir, VIEW_URL);
+  await until(() => exited || fs.existsSync(urlFile), 60000, `the view to listen (${VIEW_URL})`);
   if (exited) throw new Error(`swarm run ended before its view listened:\n${out}`);
-  const url = (await until(() => fs.readFileSync(urlFile, 'utf8').trim(), 5000, 'view.url')).trim();
+  const url = (await until(() => fs.readFileSync(urlFile, 'utf8').trim(), 5000, VIEW_URL)).trim();
   process.on('exit', () => { if (!exited) proc.kill('SIGKILL'); });
   return { proc, dir, url, done, output: () => out };
 }

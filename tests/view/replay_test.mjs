@@ -4,7 +4,8 @@ import { spawn, spawnSync } from 'node:child_process';
 import fs from 'node:fs';
 import net from 'node:net';
 import path from 'node:path';
-import { binDir, check, domain, finish, freshDir, npm, until, sleep } from './harness.mjs';
+import { binDir, check, domain, finish, freshDir, npm, until, sleep, SCENARIO, SUMMARY, TELEMETRY,
+  RECORDS, VIEW_URL } from './harness.mjs';
 
 const { FoxgloveClient } = npm('@foxglove/ws-protocol');
 const WebSocket = npm('ws');
@@ -25,10 +26,10 @@ function refused(args, words, what) {
 refused(['view', path.join(dir, 'nope')], ['RUN_DIR', 'no such run directory'], 'a missing directory');
 const empty = freshDir('view-replay-empty');
 fs.mkdirSync(empty);
-fs.copyFileSync(path.join(dir, 'scenario.txtpb'), path.join(empty, 'scenario.txtpb'));
-refused(['view', empty], ['RUN_DIR', 'records.pb'], 'a run directory without records.pb');
-fs.writeFileSync(path.join(empty, 'records.pb'), '');
-refused(['view', empty], ['no records'], 'an empty records.pb');
+fs.copyFileSync(path.join(dir, SCENARIO), path.join(empty, SCENARIO));
+refused(['view', empty], ['RUN_DIR', RECORDS], `a run directory without ${RECORDS}`);
+fs.writeFileSync(path.join(empty, RECORDS), '');
+refused(['view', empty], ['no records'], `an empty ${RECORDS}`);
 for (const k of ['0', '-1', 'nan', 'inf', '1e9'])
   refused(['view', dir, '--speed', k], ['--speed'], `--speed ${k}`);
 refused(['view', dir, '--listen', 'nowhere'], ['--listen', 'not an IP address'], 'a listen address that is none');
@@ -48,18 +49,18 @@ blocker.close();
   const run = spawn(swarm, ['run', '--agents', '8', '--seed', '4', '--quiet', '--duration', '120',
     '--time-scale', '0.5', '--out', dirC, '--domain', domain, '--view', '0'], { stdio: 'ignore' });
   const exited = new Promise((r) => run.on('exit', (c, sig) => r(sig ? 128 : c)));
-  const urlFile = path.join(dirC, 'view.url');
-  await until(() => fs.existsSync(urlFile) && fs.readFileSync(urlFile, 'utf8').trim(), 60000, 'view.url');
+  const urlFile = path.join(dirC, VIEW_URL);
+  await until(() => fs.existsSync(urlFile) && fs.readFileSync(urlFile, 'utf8').trim(), 60000, VIEW_URL);
   const url = fs.readFileSync(urlFile, 'utf8').trim();
   const stuck = new WebSocket(url.replace('http', 'ws'), ['foxglove.websocket.v1']);
   await until(() => stuck.readyState === 1, 5000, 'a client');
   stuck.send(JSON.stringify({ op: 'subscribe', subscriptions: [1, 2, 3, 4, 5].map((c) => ({ id: c, channelId: c })) }));
-  await until(() => fs.existsSync(path.join(dirC, 'telemetry.csv')) &&
-    fs.readFileSync(path.join(dirC, 'telemetry.csv'), 'utf8').split('\n').length > 50, 60000, 'the swarm flying');
+  await until(() => fs.existsSync(path.join(dirC, TELEMETRY)) &&
+    fs.readFileSync(path.join(dirC, TELEMETRY), 'utf8').split('\n').length > 50, 60000, 'the swarm flying');
   stuck._socket.pause();
   run.kill('SIGINT');
   const code = await exited;
-  const summary = JSON.parse(fs.readFileSync(path.join(dirC, 'summary.json'), 'utf8'));
+  const summary = JSON.parse(fs.readFileSync(path.join(dirC, SUMMARY), 'utf8'));
   check(code === 1 && summary.end_reason === 'interrupted',
     `Ctrl-C with a view open: exit ${code}, end_reason ${summary.end_reason}`);
   const pids = fs.readFileSync(path.join(dirC, 'processes.csv'), 'utf8').trim().split('\n').slice(1)

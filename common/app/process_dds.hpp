@@ -1,0 +1,48 @@
+#pragma once
+
+#include <atomic>
+#include <cstddef>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "common/app/process_options.hpp"
+#include "common/dds/dds_bus.hpp"
+
+namespace qswarm {
+
+// A process's DDS side as its run's plan says: the participant's settings (discovery, ports,
+// transports, its keystore identity) and its state bus's (routing, reader room, multicast group).
+DdsOptions dds_options(const RunConfig& rc, const std::string& participant_name,
+                       const ProcessOptions& o);
+
+// What a process does when a signal stops it while it waits for its peer hosts' names.
+enum class StoppedWaiting {
+  kExit,    // an agent: a stop, not a failure (exit 0)
+  kRecord,  // the supervisor: a participant that reaches no one, so the run still ends recorded
+};
+
+// dds_options, made ready to fly: in a secure run the keystore checked for `identity` (the one
+// the process speaks as), and --peer-hosts resolved (waiting for the names as the plan says, and
+// saying what it found through `say`). `exit_code` >= 0: nothing to fly; exit with it (2: bad
+// input, named on stderr after `prog`; 0: stopped while waiting).
+struct ProcessDds {
+  DdsOptions options;
+  int exit_code = -1;
+};
+ProcessDds process_dds(const char* prog, const RunConfig& rc, const ProcessOptions& o,
+                       const std::string& participant_name, const std::string& identity,
+                       const std::atomic<bool>& stop, StoppedWaiting when_stopped,
+                       const std::function<void(const std::string&)>& say);
+
+// The addresses of --peer-hosts (comma-separated names or IPv4 addresses), asked again every half
+// second until they are `want` (the run's processes: every agent replica and the supervisor, this
+// one included) or `timeout_s` has passed: a process started early waits for the others' names.
+// `say` hears progress every 10 s, and what it found once at the end. It returns at once, with
+// what it has, when `stop` is set (a signal). Empty: none of the names resolved. Discovery is
+// symmetric: a peer that comes up later finds this one in its own list.
+std::vector<std::string> find_peer_hosts(const std::string& names, std::size_t want,
+                                         double timeout_s, const std::atomic<bool>& stop,
+                                         const std::function<void(const std::string&)>& say);
+
+}  // namespace qswarm

@@ -1,0 +1,29 @@
+#pragma once
+
+#include <filesystem>
+#include <functional>
+#include <optional>
+
+namespace CLI {
+class App;
+}
+
+namespace qswarm {
+
+// The `swarm` command's subcommands, each in a file of its own with its flags. Each add_*
+// declares its subcommand on `app` and returns what runs it once the command line is parsed: its
+// exit code, or nothing when another subcommand was chosen.
+using Command = std::function<std::optional<int>()>;
+Command add_run_command(CLI::App& app);         // run_command.cpp: `swarm run`
+Command add_inspect_command(CLI::App& app);     // inspect_command.cpp: `swarm inspect`
+Command add_keys_command(CLI::App& app);        // keys_command.cpp: `swarm keys`
+Command add_export_command(CLI::App& app);      // export_command.cpp: `swarm export`
+Command add_view_command(CLI::App& app);        // view_command.cpp: `swarm view`
+Command add_plot_command(CLI::App& app);        // python_commands.cpp: `swarm plot`
+Command add_paper_command(CLI::App& app);       // ... `swarm paper`
+Command add_resilience_command(CLI::App& app);  // ... `swarm resilience`
+
+// Where this executable is, with swarm-agent, swarm-supervisor and the Python package beside it.
+std::filesystem::path bin_dir();
+
+}  // namespace qswarm
