@@ -26,7 +26,8 @@ void add_agent_options(CLI::App& app, AgentFlags& f) {
   app.add_option("--claim-timeout", f.claim_timeout_s,
                  "--id auto: wall seconds to wait for every replica (default: the run plan's)")
       ->check(finite_range(1.0, 3600.0));
-  app.add_option("--run-dir", f.run_dir, "directory for this agent's log");
+  app.add_option("--run-dir", f.run_dir, "directory for this agent's log")
+      ->check(CLI::ExistingDirectory);
   app.add_option("--start-timeout", f.loop.start_timeout_s,
                  "wall seconds to wait for all peers (default: the run plan's)")
       ->check(finite_range(0.0, 3600.0));

@@ -24,13 +24,20 @@ namespace {
 int export_run(const std::string& run_dir, const std::string& out_flag) {
   const RunDir dir(run_dir);
   const fs::path out = out_flag.empty() ? dir.mcap() : fs::path(out_flag);
-  const fs::path parent = fs::absolute(out).parent_path();
-  if (!out_flag.empty() && !fs::is_directory(parent)) {
+  std::error_code ec;
+  const fs::path parent = fs::absolute(out, ec).parent_path();
+  if (!out_flag.empty() && (ec || !fs::is_directory(parent, ec) || ec)) {
     std::cerr << "swarm export: --out " << out_flag << ": " << parent.string()
-              << " is not a directory\n";
+              << " is not a directory" << (ec ? " (" + ec.message() + ")" : std::string()) << "\n";
     return 2;
   }
-  const bool replacing = out == dir.mcap() && fs::exists(out);
+  const fs::file_status st = fs::symlink_status(out, ec);
+  if (fs::exists(st) && !fs::is_regular_file(fs::status(out, ec))) {
+    std::cerr << "swarm export: " << (out_flag.empty() ? "RUN_DIR/" : "--out ") << out.string()
+              << ": not a regular file, not replaced\n";
+    return 2;
+  }
+  const bool replacing = out == dir.mcap() && fs::exists(out, ec);
   const mcap::FileCheck before = replacing ? mcap::check_file(out) : mcap::FileCheck{};
   ExportResult r;
   try {
@@ -42,6 +49,10 @@ int export_run(const std::string& run_dir, const std::string& out_flag) {
   if (!r.write_error.empty()) {
     std::cerr << "swarm export: could not write " << r.write_error << "\n";
     return 3;
+  }
+  if (!r.kept.empty()) {
+    std::cerr << "swarm export: " << r.partial << "; " << r.kept << "\n";
+    return 2;
   }
   if (replacing && !before.complete)
     std::cout << "swarm export: " << out.string() << " was incomplete (" << before.problem

@@ -173,6 +173,8 @@ void Launcher::start() {
   }
   procs_.reap();
   const ChildProcesses::Child sup = supervisor();
+  if (!sup.running && WIFEXITED(sup.status) && WEXITSTATUS(sup.status) == 2)
+    throw SupervisorRefused("the supervisor refused its input (exit 2, said above): nothing flew");
   if (!sup.running || !supervisor_ready_()) {
     // Without a recorder there is no run: start no agent.
     throw std::runtime_error(

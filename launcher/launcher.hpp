@@ -3,6 +3,7 @@
 #include <functional>
 #include <map>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -37,6 +38,13 @@ struct LaunchSpec {
   std::string view_listen = "127.0.0.1";
 };
 
+// The supervisor refused its input (it exited 2 before it listened: a --view port another
+// program took since swarm run looked, say): bad input, nothing flew. It said why on stderr.
+class SupervisorRefused : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
 // The launcher as a unit: it starts the supervisor and, once it listens, one process per agent;
 // respawns an agent that died by its planned kill so that it rejoins at its restart time; ends the
 // run when the supervisor ends, on a signal, or at the wall limit; and tears everything down.
@@ -47,7 +55,8 @@ class Launcher {
            std::function<bool()> supervisor_ready);
 
   // Starts the supervisor, waits until it listens, then starts every agent. Throws
-  // std::runtime_error (saying why) if the supervisor does not come up; no agent is started then.
+  // std::runtime_error (saying why) if the supervisor does not come up, SupervisorRefused if it
+  // exited 2; no agent is started then.
   void start();
   // What poll() says when the supervisor ended the run itself (not an end to report).
   static constexpr const char* kFinished = "supervisor finished";

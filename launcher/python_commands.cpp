@@ -28,6 +28,16 @@ fs::path bin_dir() { return fs::read_symlink("/proc/self/exe").parent_path(); }
 
 namespace {
 
+// A default path of the repository's (`rel`, as in "scenarios/paper"): where the command runs,
+// when it is run from the repository, else in the source tree the build came from, so that the
+// defaults work from any directory.
+std::string in_repository(const std::string& rel) {
+  std::error_code ec;
+  if (fs::exists(rel, ec)) return rel;
+  const fs::path source = fs::path(QSWARM_SOURCE_DIR) / rel;
+  return fs::exists(source.parent_path(), ec) ? source.string() : rel;
+}
+
 // Runs a module of the Python package qswarm (python/qswarm/), whose copy the build keeps beside
 // this binary in python/, with Debian's interpreter first, where python3-matplotlib lives. Returns
 // only when it cannot be started.
@@ -161,6 +171,8 @@ Command add_paper_command(CLI::App& app) {
       ->excludes(from);
   return [cmd, o]() -> std::optional<int> {
     if (!*cmd) return std::nullopt;
+    if (cmd->count("--scenarios") == 0) o->scenarios = in_repository(o->scenarios);
+    if (cmd->count("--out") == 0) o->out = in_repository(o->out);
     return paper(*o);
   };
 }
@@ -181,6 +193,8 @@ Command add_resilience_command(CLI::App& app) {
       ->check(CLI::Range(1, 1000000));
   return [cmd, o]() -> std::optional<int> {
     if (!*cmd) return std::nullopt;
+    if (cmd->count("scenario") == 0) o->scenario = in_repository(o->scenario);
+    if (cmd->count("--out") == 0) o->out = in_repository(o->out);
     return resilience(o->scenario, o->out, o->liar);
   };
 }

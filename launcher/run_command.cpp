@@ -229,6 +229,10 @@ int run(const RunOptions& opt) {
   Launcher launcher(spec, procs, clock, [&] { return fs::exists(dir.supervisor_ready()); });
   try {
     launcher.start();
+  } catch (const SupervisorRefused& e) {
+    std::cerr << "swarm run: " << e.what() << "\n";
+    launcher.stop();
+    return 2;
   } catch (const std::exception& e) {
     std::cerr << "swarm run: " << e.what() << "\n";
     launcher.stop();
@@ -325,6 +329,11 @@ Command add_run_command(CLI::App& app) {
 
   return [cmd, o]() -> std::optional<int> {
     if (!*cmd) return std::nullopt;
+    if (cmd->count("--view-listen") > 0 && o->view_port < 0) {
+      std::cerr << "swarm run: --view-listen " << o->view_listen
+                << ": says where the live view listens, and there is none: add --view [PORT]\n";
+      return 2;
+    }
     return run(*o);
   };
 }

@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <csignal>
+#include <iomanip>
 #include <iostream>
 #include <thread>
 
@@ -24,7 +25,7 @@ void on_view_signal(int s) { g_view_signal = s; }
 
 int view_command(const ViewCommandOptions& o) {
   if (!std::isfinite(o.speed) || o.speed <= 0.0 || o.speed > ReplayPlayback::kMaxSpeed) {
-    std::cerr << "swarm view: --speed " << o.speed
+    std::cerr << "swarm view: --speed " << std::setprecision(15) << o.speed
               << ": expected a number above 0 and at most 1000\n";
     return 2;
   }

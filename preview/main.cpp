@@ -221,6 +221,20 @@ int main(int argc, char** argv) {
   LockstepLaws swarm(flight.lockstep);
   std::ofstream csv;
   if (!opt.csv.empty()) {
+    // A new file, a regular one to write over, or a character device (/dev/null): a FIFO would
+    // block the preview until someone reads it, and a directory or a socket is no file of states.
+    std::error_code ec;
+    const std::filesystem::file_status st = std::filesystem::status(opt.csv, ec);
+    if (std::filesystem::exists(st) && !std::filesystem::is_regular_file(st) &&
+        !std::filesystem::is_character_file(st)) {
+      std::fprintf(stderr, "swarm-preview: --csv %s: not a file to write states into\n",
+                   opt.csv.c_str());
+      return 2;
+    }
+    if (ec && ec != std::errc::no_such_file_or_directory) {
+      std::fprintf(stderr, "swarm-preview: --csv %s: %s\n", opt.csv.c_str(), ec.message().c_str());
+      return 2;
+    }
     csv.open(opt.csv);
     if (!csv) {
       std::fprintf(stderr, "swarm-preview: --csv: cannot write %s\n", opt.csv.c_str());

@@ -43,7 +43,7 @@ int main(int argc, char** argv) {
     if (!f.new_run_in.empty()) dir = new_run_dir(f.new_run_in, *rc);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "swarm-supervisor: --new-run-in %s: %s\n", f.new_run_in.c_str(), e.what());
-    return 3;
+    return dynamic_cast<const RunDirError*>(&e) ? 2 : 3;
   }
   if (!f.new_run_in.empty())
     std::printf("swarm-supervisor: recording into %s\n", dir.str().c_str());

@@ -3,6 +3,7 @@
 #include <CLI/CLI.hpp>
 
 #include <cstdio>
+#include <stdexcept>
 
 #include "common/app/cli_checks.hpp"
 
@@ -13,7 +14,8 @@ namespace qswarm {
 
 void add_supervisor_options(CLI::App& app, SupervisorFlags& f) {
   add_process_options(app, f.process);
-  auto* rd = app.add_option("--run-dir", f.run_dir, "run directory to write");
+  auto* rd = app.add_option("--run-dir", f.run_dir, "run directory to write (swarm run's)")
+                 ->check(CLI::ExistingDirectory);
   app.add_option("--new-run-in", f.new_run_in,
                  "create a fresh run directory ROOT/TIMESTAMP-NAME and record there (compose)")
       ->excludes(rd);

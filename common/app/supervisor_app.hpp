@@ -26,7 +26,8 @@ struct SupervisorFlags {
 void add_supervisor_options(CLI::App& app, SupervisorFlags& f);
 
 // A fresh run directory ROOT/TIMESTAMP-NAME for a supervisor started alone (compose:
-// --new-run-in ROOT), with the scenario as run and its plan written there. Throws RunDirError.
+// --new-run-in ROOT), with the scenario as run and its plan written there. Throws RunDirError
+// when ROOT cannot hold one (bad input), std::runtime_error when a file cannot be written.
 RunDir new_run_dir(const std::string& root, const RunConfig& rc);
 
 // The live view beside a recording supervisor (--view): its server runs on its own thread and the

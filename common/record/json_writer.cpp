@@ -2,6 +2,9 @@
 
 #include <cmath>
 #include <cstdio>
+#include <string>
+
+#include "common/transport/utf8.hpp"
 
 namespace qswarm {
 
@@ -11,7 +14,10 @@ JsonWriter& JsonWriter::key(std::string_view k) {
   return *this;
 }
 
-JsonWriter& JsonWriter::str(std::string_view s) {
+JsonWriter& JsonWriter::str(std::string_view text) {
+  // Valid UTF-8 whatever it was given: a text frame that is not ends a client's session.
+  const std::string valid = valid_utf8(text) ? std::string() : to_valid_utf8(text);
+  const std::string_view s = valid.empty() ? text : std::string_view(valid);
   out_ += '"';
   for (const char c : s) {
     const auto u = static_cast<unsigned char>(c);

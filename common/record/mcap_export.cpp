@@ -1,53 +1,15 @@
 #include "common/record/mcap_export.hpp"
 
-#include <fstream>
+#include <optional>
 
+#include "common/mcap/file_check.hpp"
 #include "common/record/mcap_sink.hpp"
+#include "common/record/record_file.hpp"
 #include "common/scenario/scenario.hpp"
 
 namespace qswarm {
-namespace {
 
 namespace fs = std::filesystem;
-
-// records.pb's framing: a varint byte count, then the Record. Larger than any record the recorder
-// writes (a graph snapshot of 512 agents' complete graph is about 3 MB): a count above it is
-// damage.
-constexpr std::uint64_t kMaxRecordBytes = 64ull << 20;
-
-enum class Read { kRecord, kEnd, kCut, kDamaged };
-
-Read next_record(std::ifstream& in, std::string& bytes, std::string& why) {
-  std::uint64_t len = 0;
-  for (int shift = 0;; shift += 7) {
-    const int c = in.get();
-    if (c == std::char_traits<char>::eof()) {
-      if (shift == 0) return Read::kEnd;
-      why = "cut inside a record's length";
-      return Read::kCut;
-    }
-    len |= static_cast<std::uint64_t>(c & 0x7f) << shift;
-    if (!(c & 0x80)) break;
-    if (shift >= 28) {
-      why = "a record's length is not a 32-bit varint";
-      return Read::kDamaged;
-    }
-  }
-  if (len > kMaxRecordBytes) {
-    why = "a record's length (" + std::to_string(len) + " bytes) is not plausible";
-    return Read::kDamaged;
-  }
-  bytes.resize(len);
-  in.read(bytes.data(), static_cast<std::streamsize>(len));
-  if (static_cast<std::uint64_t>(in.gcount()) != len) {
-    why = "cut inside a record (" + std::to_string(in.gcount()) + " of its " + std::to_string(len) +
-          " bytes)";
-    return Read::kCut;
-  }
-  return Read::kRecord;
-}
-
-}  // namespace
 
 ExportResult export_mcap(const RunDir& dir, const fs::path& out) {
   std::error_code ec;
@@ -65,8 +27,12 @@ ExportResult export_mcap(const RunDir& dir, const fs::path& out) {
   } catch (const ScenarioError& e) {
     throw ExportError(std::string(e.what()));
   }
-  std::ifstream in(dir.records(), std::ios::binary);
-  if (!in) throw ExportError(dir.records().string() + ": cannot read");
+  std::optional<RecordFileReader> in;
+  try {
+    in.emplace(dir.records());
+  } catch (const RecordFileError& e) {
+    throw ExportError(e.what());
+  }
 
   ExportResult result;
   const fs::path tmp = out.string() + ".tmp";
@@ -76,15 +42,10 @@ ExportResult export_mcap(const RunDir& dir, const fs::path& out) {
     fs::remove(tmp, ec);
     return result;
   }
-  std::string bytes, why;
   records::Record r;
-  for (std::uint64_t at = 0;; at = static_cast<std::uint64_t>(in.tellg())) {
-    const Read got = next_record(in, bytes, why);
-    if (got == Read::kEnd) break;
-    if (got == Read::kRecord && !r.ParseFromString(bytes)) why = "a record does not parse";
-    if (got != Read::kRecord || !why.empty()) {
-      result.partial = dir.records().string() + ": " + why + " at byte " + std::to_string(at) +
-                       ", after " + std::to_string(result.records) + " whole records";
+  for (RecordFileReader::Next got; (got = in->next(r)) != RecordFileReader::Next::kEnd;) {
+    if (got != RecordFileReader::Next::kRecord) {
+      result.partial = (dir.path() / in->problem()).string();
       break;
     }
     sink.write(r);
@@ -94,6 +55,14 @@ ExportResult export_mcap(const RunDir& dir, const fs::path& out) {
   result.messages = sink.counts();
   if (!written) {
     result.write_error = sink.error();
+    fs::remove(tmp, ec);
+    return result;
+  }
+  // A complete file is never replaced by one cut short: from damaged records, only where there was
+  // none, or one cut short itself.
+  if (!result.partial.empty() && fs::exists(out, ec) && mcap::check_file(out).complete) {
+    result.kept = out.string() + " is complete: kept, not replaced by the " +
+                  std::to_string(result.records) + " records before the damage";
     fs::remove(tmp, ec);
     return result;
   }

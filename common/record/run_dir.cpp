@@ -40,8 +40,9 @@ bool try_claim(const fs::path& dir, const std::string& flag) {
   std::error_code ec;
   fs::create_directories(dir, ec);
   if (ec) throw RunDirError(flag + " " + dir.string() + ": cannot create (" + ec.message() + ")");
-  if (!fs::is_directory(dir)) throw RunDirError(flag + " " + dir.string() + ": not a directory");
-  for (const auto& entry : fs::directory_iterator(dir)) {
+  if (!fs::is_directory(dir, ec) || ec)
+    throw RunDirError(flag + " " + dir.string() + ": not a directory");
+  for (const auto& entry : fs::directory_iterator(dir, ec)) {
     if (entry.path().filename() == RunDir::kMarker) return false;
     std::string why = flag + " " + dir.string();
     why += ": expected a new or empty directory; it holds files (e.g. ";
@@ -84,7 +85,8 @@ RunDir RunDir::claim(const std::string& out, const std::string& scenario_name,
   const fs::path base = root / (timestamp + "-" + safe_name(scenario_name));
   for (int k = 1; k < 1000; ++k) {
     const fs::path dir = k == 1 ? base : fs::path(base.string() + "-" + std::to_string(k));
-    if (fs::exists(dir)) continue;
+    std::error_code ec;
+    if (fs::exists(dir, ec)) continue;
     if (try_claim(dir, "run directory")) return RunDir(fs::absolute(dir));
   }
   throw RunDirError("run directory " + base.string() + ": no free name; use " + flag);

@@ -10,6 +10,7 @@
 
 #include "common/scenario/scenario.hpp"
 #include "common/transport/port_plan.hpp"
+#include "common/transport/utf8.hpp"
 
 namespace qswarm {
 
@@ -573,6 +574,11 @@ RunConfig resolve_scenario(scenario::Scenario s, const ScenarioOverrides& o) {
   RunConfig rc;
   if (s.has_seed()) rc.seed = s.seed();
   if (rc.seed > 0xFFFFFFFFull) fail("seed", "a value below 2^32", std::to_string(rc.seed));
+  // Text that reaches a viewer, the record and the run directory's name: UTF-8, as a person wrote
+  // it (a byte that is not ends every standard viewer's session, and cuts summary.json's name).
+  for (const auto& [field, text] :
+       {std::pair{"name", &s.name()}, std::pair{"description", &s.description()}})
+    if (!valid_utf8(*text)) fail(field, "text in UTF-8", "bytes that are not UTF-8");
   if (!s.name().empty()) rc.name = s.name();
   rc.agent.mode = s.mode() == scenario::QUADCOPTER ? AgentMode::kQuadcopter : AgentMode::kParticle;
   resolve_numbers(s, rc);

@@ -20,7 +20,8 @@ std::string check_message(const StateMessage& m) {
       (m.rotors_radps.array() > 1e4).any()) {
     return "rotor speeds not finite or outside [0, 1e4] rad/s";
   }
-  if (!std::isfinite(m.stamp_s) || m.stamp_s < 0.0 || m.stamp_s > 1e7) return "stamp not finite";
+  if (!std::isfinite(m.stamp_s) || m.stamp_s < 0.0 || m.stamp_s > 1e7)
+    return "stamp not finite or outside [0, 1e7] s";
   if (m.mode != AgentMode::kParticle && m.mode != AgentMode::kQuadcopter) return "unknown mode";
   if (m.phase > Phase::kReady) return "unknown phase";
   if (m.strangers.size() > kMaxStrangers) return "too many strangers reported";

@@ -1,11 +1,7 @@
 #include "common/view/replay.hpp"
 
-#include <google/protobuf/io/coded_stream.h>
-#include <google/protobuf/io/zero_copy_stream_impl.h>
 #include <google/protobuf/util/json_util.h>
 
-#include <fcntl.h>
-#include <unistd.h>
 #include <algorithm>
 #include <cmath>
 #include <fstream>
@@ -13,18 +9,12 @@
 #include <sstream>
 
 #include "common/record/json_writer.hpp"
+#include "common/record/record_file.hpp"
 #include "common/record/run_dir.hpp"
 #include "common/scenario/scenario.hpp"
 #include "common/view/view_model.hpp"
 
 namespace qswarm {
-
-double record_time_s(const records::Record& r) {
-  if (r.has_sample()) return r.sample().stamp_s();
-  if (r.has_graph()) return r.graph().t_s();
-  if (r.has_event()) return r.event().t_s();
-  return 0.0;
-}
 
 ReplayRun load_replay(const std::filesystem::path& dir) {
   namespace fs = std::filesystem;
@@ -43,36 +33,31 @@ ReplayRun load_replay(const std::filesystem::path& dir) {
     throw ReplayError(scenario.string() + ": " + e.what());
   }
   const fs::path records = run_dir.records();
-  const int fd = ::open(records.c_str(), O_RDONLY | O_CLOEXEC);
-  if (fd < 0) throw ReplayError(records.string() + ": missing or unreadable");
-  {
-    google::protobuf::io::FileInputStream raw(fd);
-    raw.SetCloseOnDelete(true);
-    google::protobuf::io::CodedInputStream in(&raw);
-    in.SetTotalBytesLimit(std::numeric_limits<int>::max());
-    while (true) {
-      std::uint32_t size = 0;
-      if (!in.ReadVarint32(&size)) break;  // the end (or a torn length)
-      const auto limit = in.PushLimit(static_cast<int>(size));
-      records::Record r;
-      if (!r.ParseFromCodedStream(&in) || in.BytesUntilLimit() != 0) {
-        run.note = records.filename().string() + " ends in a partial record after " +
-                   std::to_string(run.records.size()) + " records";
+  try {
+    RecordFileReader in(records);
+    records::Record r;
+    for (RecordFileReader::Next got; (got = in.next(r)) != RecordFileReader::Next::kEnd;) {
+      if (got != RecordFileReader::Next::kRecord) {
+        run.note = in.problem();
         break;
       }
-      in.PopLimit(limit);
       run.records.push_back(std::move(r));
+      r.Clear();
       // A run's record is a file of its own: nothing else bounds it, so stop at 8 GiB of memory.
       if (run.records.size() >= 40'000'000) {
         run.note = records.filename().string() + " is cut at 40 million records";
         break;
       }
     }
+  } catch (const RecordFileError& e) {
+    throw ReplayError(e.what());
   }
   if (run.records.empty())
-    throw ReplayError(records.string() + ": no records (the run recorded nothing)");
+    throw ReplayError(records.string() + ": no records (the run recorded nothing)" +
+                      (run.note.empty() ? std::string() : "; " + run.note));
   const fs::path summary = run_dir.summary();
-  std::ifstream s(summary);
+  std::ifstream s;
+  if (fs::is_regular_file(summary, ec)) s.open(summary);  // never a FIFO: it would block
   if (s) {
     std::stringstream text;
     text << s.rdbuf();

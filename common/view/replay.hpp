@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "common/record/record_file.hpp"
 #include "common/view/view_server.hpp"
 
 namespace qswarm {
@@ -27,9 +28,6 @@ struct ReplayError : std::runtime_error {
 // Reads a run directory. Throws ReplayError naming the file and what is wrong with it (missing,
 // unreadable, no records).
 ReplayRun load_replay(const std::filesystem::path& dir);
-
-// The record's time of a record: a sample's stamp, a snapshot's or an event's time.
-double record_time_s(const records::Record& r);
 
 // Plays a recorded run into the view as if live, at `speed` simulated seconds per wall second,
 // from the first wall time it is asked about. A page may pause, play, seek and change the speed

@@ -44,11 +44,27 @@ std::string default_node_modules() {
   return env && *env ? env : QSWARM_NODE_MODULES;
 }
 
+namespace {
+// The address a view may listen on ("" and `addr` set), or why not: an IP address that is not a
+// multicast group. An IPv4 address written as IPv6 (::ffff:127.0.0.1) is that IPv4 address, so
+// that a loopback one keeps the Host check.
+std::string listen_address(const std::string& address, asio::ip::address& addr) {
+  beast::error_code ec;
+  addr = asio::ip::make_address(address, ec);
+  if (ec) return "'" + address + "' is not an IP address";
+  if (addr.is_v6() && addr.to_v6().is_v4_mapped())
+    addr = asio::ip::make_address_v4(asio::ip::v4_mapped, addr.to_v6());
+  if (addr.is_multicast())
+    return "'" + address + "' is a multicast group, not an address to listen on";
+  return "";
+}
+}  // namespace
+
 std::string probe_listen(const std::string& address, std::uint16_t port) {
   asio::io_context ioc;
   beast::error_code ec;
-  const asio::ip::address addr = asio::ip::make_address(address, ec);
-  if (ec) return "'" + address + "' is not an IP address";
+  asio::ip::address addr;
+  if (std::string why = listen_address(address, addr); !why.empty()) return why;
   tcp::acceptor a(ioc);
   const tcp::endpoint ep(addr, port);
   a.open(ep.protocol(), ec);
@@ -106,6 +122,7 @@ std::shared_ptr<const std::string> share(std::string s) {
 }
 
 struct Counters {
+// NOLINTNEXTLINE(bugprone-macro-parentheses): the argument is a member's name, not an expression
 #define QSWARM_VIEW_COUNT_ATOMIC(name) std::atomic<std::uint64_t> name{0};
   QSWARM_VIEW_COUNTERS(QSWARM_VIEW_COUNT_ATOMIC)
 #undef QSWARM_VIEW_COUNT_ATOMIC
@@ -182,6 +199,10 @@ class ViewServer::Impl {
     return model_.snapshot_json(playback_ ? playback_->state_json() : "null");
   }
   void accept();
+  // Closes the connection that matters least to make room for a new one at the limit: one waiting
+  // for an HTTP request (oldest first), else a WebSocket subscribed to nothing, else one whose
+  // queue is full. A session that subscribed and reads is never closed for another. False: none.
+  bool make_room();
   void tick();
   // Whether a request's Host header names this server: an IP address (any: a user who listens
   // elsewhere reaches it by address) or localhost, with or without a port. A server listening on
@@ -237,6 +258,7 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
       ++self->server_.counts_.sessions;
       ++self->server_.counts_.open_sessions;
       self->open_ = true;
+      self->opened_s_ = steady_s();
       self->send_text(server_info_json(self->server_.opts_.name, self->server_.session_id_));
       self->send_text(advertise_json(self->server_.channels_));
       self->read();
@@ -274,6 +296,15 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
   bool stale() const { return stale_; }
   bool has_room() const { return queue_.size() < server_.opts_.max_queue_frames / 2; }
   void fresh() { stale_ = false; }
+  // Subscribed to nothing (a session that has not finished its handshake yet, or that only holds
+  // a connection): seconds since it opened, or -1 for one that subscribed.
+  double unsubscribed_for_s(double now) const {
+    if (closed_) return -1.0;
+    if (!open_) return 0.0;
+    return proto_.subscriptions() == 0 ? now - opened_s_ : -1.0;
+  }
+  // Subscribed, but not reading what it is sent: its queue is full.
+  bool stuck() const { return open_ && !closed_ && stale_ && !has_room(); }
 
   void close_session() {
     if (closed_) return;
@@ -422,6 +453,7 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
   std::deque<Outgoing> queue_;
   std::size_t queued_bytes_ = 0;
   bool writing_ = false, open_ = false, closed_ = false, closing_ = false, stale_ = false;
+  double opened_s_ = 0.0;
   std::uint64_t dropped_ = 0;
   std::size_t strikes_ = 0;
   double tokens_, last_s_;
@@ -441,7 +473,11 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
     beast::error_code ec;
     stream_.socket().close(ec);
   }
+  // Waiting for a request (half-open, or kept alive between requests): the first to go when a new
+  // connection needs room.
+  bool idle() const { return awaiting_ && !upgraded_; }
   void read() {
+    awaiting_ = true;
     parser_.emplace();
     parser_->header_limit(8 * 1024);
     parser_->body_limit(0);  // GET only: a body is refused
@@ -453,6 +489,7 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
 
  private:
   void on_read(beast::error_code ec) {
+    awaiting_ = false;
     if (ec) {
       beast::error_code ignored;
       stream_.socket().shutdown(tcp::socket::shutdown_send, ignored);
@@ -529,12 +566,14 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
   beast::flat_buffer buffer_;
   std::optional<http::request_parser<http::empty_body>> parser_;
   bool upgraded_ = false;
+  bool awaiting_ = false;
 };
 
 void ViewServer::Impl::start() {
   beast::error_code ec;
-  const asio::ip::address addr = asio::ip::make_address(opts_.address, ec);
-  if (ec) throw ViewServerError("'" + opts_.address + "' is not an IP address");
+  asio::ip::address addr;
+  if (const std::string why = listen_address(opts_.address, addr); !why.empty())
+    throw ViewServerError(why);
   const tcp::endpoint ep(addr, opts_.port);
   acceptor_.emplace(ioc_);
   timer_.emplace(ioc_);
@@ -598,10 +637,11 @@ void ViewServer::Impl::accept() {
     if (ec == asio::error::operation_aborted || !acceptor_->is_open()) return;
     if (!ec) {
       ++counts_.connections;
-      if (open_connections_ >= opts_.max_connections) {
+      if (open_connections_ >= opts_.max_connections && !make_room()) {
         ++counts_.refused_connections;
         log_once("connections", "view: refused a connection over the limit of " +
-                                    std::to_string(opts_.max_connections));
+                                    std::to_string(opts_.max_connections) +
+                                    " (every one subscribed and reading)");
         beast::error_code ignored;
         socket.close(ignored);
       } else {
@@ -616,6 +656,37 @@ void ViewServer::Impl::accept() {
   });
 }
 
+bool ViewServer::Impl::make_room() {
+  for (const std::weak_ptr<HttpSession>& w : http_) {
+    const std::shared_ptr<HttpSession> h = w.lock();
+    if (!h || !h->idle()) continue;
+    h->shutdown();
+    ++counts_.evicted;
+    log_once("evicted", "view: at the limit of " + std::to_string(opts_.max_connections) +
+                            " connections, closed one that sent no request to make room");
+    return true;
+  }
+  const double now = steady_s();
+  std::shared_ptr<WsSession> quiet, stuck;
+  double longest = -1.0;
+  for (const auto& s : sessions_) {
+    const double quiet_s = s->unsubscribed_for_s(now);
+    if (quiet_s > longest) {
+      longest = quiet_s;
+      quiet = s;
+    }
+    if (!stuck && s->stuck()) stuck = s;
+  }
+  const std::shared_ptr<WsSession> gone = quiet ? quiet : stuck;
+  if (!gone) return false;
+  gone->close_session();
+  ++counts_.evicted;
+  log_once("evicted-ws", "view: at the limit of " + std::to_string(opts_.max_connections) +
+                             " connections, closed a WebSocket that " +
+                             (quiet ? "subscribed to nothing" : "read nothing") + " to make room");
+  return true;
+}
+
 void ViewServer::Impl::remove(WsSession* s) {
   // Deferred: the session may be inside its own handler.
   asio::post(ioc_, [this, s] {
@@ -625,6 +696,14 @@ void ViewServer::Impl::remove(WsSession* s) {
 
 void ViewServer::Impl::tick() {
   const double now = steady_s();
+  // A WebSocket that never subscribes only holds a connection: it goes after a while.
+  for (const auto& s : sessions_) {
+    if (s->unsubscribed_for_s(now) <= opts_.subscribe_within_s) continue;
+    ++counts_.idle_closed;
+    log_once("idle", "view: closed a WebSocket that subscribed to nothing for " +
+                         std::to_string(static_cast<int>(opts_.subscribe_within_s)) + " s");
+    s->close_session();
+  }
   bool reset = false;
   ViewBatch b = playback_ ? playback_->advance(now, reset) : feed_.take();
   if (reset) {

@@ -28,9 +28,13 @@ struct ViewServerOptions {
   std::string page_dir = default_page_dir();  // index.html, view.js, view.css
   std::string node_modules = default_node_modules();  // three, uplot (npm, tools/setup.sh)
   std::string name = "quadswarm";
-  double frame_period_s = 0.05;               // 20 frames a second
-  std::size_t max_connections = 64;           // HTTP and WebSocket together
-  std::size_t max_queue_frames = 64;          // per client, before its frames are dropped
+  double frame_period_s = 0.05;  // 20 frames a second
+  // HTTP and WebSocket together. At the limit a new connection takes the place of one that
+  // matters less (an HTTP connection waiting for a request, a WebSocket subscribed to nothing or
+  // reading nothing), so a few held sockets never keep a viewer out.
+  std::size_t max_connections = 64;
+  double subscribe_within_s = 120.0;  // a WebSocket subscribed to nothing after this is closed
+  std::size_t max_queue_frames = 64;  // per client, before its frames are dropped
   std::size_t max_queue_bytes = 16u << 20;    // per client
   std::size_t max_message_bytes = 64u << 10;  // a client frame above this ends its session
   double client_messages_per_s = 20.0;        // sustained; bursts of 5 s worth pass
@@ -57,7 +61,9 @@ struct ViewServerOptions {
   X(flooded)        /* client frames beyond the rate */                         \
   X(refused_ops)    /* ops we do not serve, bad subscriptions, binary frames */ \
   X(closed_for_abuse)                                                           \
-  X(refused_hosts) /* a Host header that names another site (DNS rebinding) */
+  X(refused_hosts) /* a Host header that names another site (DNS rebinding) */  \
+  X(evicted)       /* closed to make room for a new connection at the limit */  \
+  X(idle_closed)   /* WebSockets closed for subscribing to nothing */
 
 struct ViewCounts {
 #define QSWARM_VIEW_COUNT_FIELD(name) std::uint64_t name = 0;

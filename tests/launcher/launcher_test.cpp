@@ -115,6 +115,38 @@ TEST(Launcher, StartsNoAgentWhenTheSupervisorNeverListens) {
   EXPECT_EQ(procs.children().size(), 1u);
 }
 
+// A supervisor that exits 2 before it listens refused its input (a --view port another program
+// took since swarm run looked): the run is refused as bad input, not a failed run, and no agent is
+// started.
+TEST(Launcher, ASupervisorThatRefusesItsInputRefusesTheRun) {
+  FakeProcesses procs;
+  ManualClock clock;
+  bool refused = false;
+  Launcher l(spec_for(""), procs, clock, [&] {
+    if (!refused) procs.exit_child("supervisor", 0, exited(2));
+    refused = true;
+    return false;
+  });
+  EXPECT_THROW(l.start(), SupervisorRefused);
+  EXPECT_EQ(procs.spawned("agent", 1), 0);
+  // A supervisor that crashes is not bad input.
+  FakeProcesses crashing;
+  bool crashed = false;
+  Launcher c(spec_for(""), crashing, clock, [&] {
+    if (!crashed) crashing.exit_child("supervisor", 0, signalled(SIGSEGV));
+    crashed = true;
+    return false;
+  });
+  try {
+    c.start();
+    ADD_FAILURE() << "a crashed supervisor started a run";
+  } catch (const SupervisorRefused&) {
+    ADD_FAILURE() << "a crash was taken for bad input";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("did not come up"), std::string::npos) << e.what();
+  }
+}
+
 TEST(Launcher, ARunsOwnDiscoveryServerStartsFirstAndEveryParticipantIsToldItsAddress) {
   FakeProcesses procs;
   ManualClock clock;

@@ -81,6 +81,17 @@ TEST(Scenario, EveryBadFieldIsRefusedWithItsName) {
   }
 }
 
+// A name or description is text a viewer shows and the record keeps: bytes that are not UTF-8
+// are refused, naming the field; any UTF-8 passes.
+TEST(Scenario, ANameOrDescriptionThatIsNotUtf8IsRefusedNamingIt) {
+  const std::string agents = "agents { id: 1 } agents { id: 2 position { x: 1 } }\n";
+  EXPECT_NE(error_of(agents + "name: \"bad\\377\"").find("scenario field 'name'"),
+            std::string::npos);
+  EXPECT_NE(error_of(agents + "description: \"cut \\342\\202\"").find("'description'"),
+            std::string::npos);
+  EXPECT_EQ(error_of(agents + "name: \"caf\\303\\251 \\360\\237\\232\\201\""), "");
+}
+
 TEST(Scenario, AvoidanceIsOnForQuadcoptersOffForParticlesAndKeepsRandomStartsApart) {
   const RunConfig quad = resolve_scenario(parse_scenario_text(
       "mode: QUADCOPTER\nrandom_agents { count: 40 box_m: 6 }\nseed: 3\n", "s"));

@@ -136,6 +136,27 @@ TEST(RecordedMcap, ARecordsPbCutMidRecordIsExportedUpToItsLastWholeRecordAndSays
   EXPECT_EQ(g.records, 3u);
 }
 
+// A complete run.mcap is never replaced by an export of damaged records (zeros over the end of
+// records.pb): it stays byte for byte, and the result says why.
+TEST(RecordedMcap, ACompleteRunMcapIsNeverReplacedByAnExportOfDamagedRecords) {
+  const RunDir run = recorded_six();
+  ASSERT_TRUE(mcap::check_file(run.mcap()).complete);
+  const std::string before = slurp(run.mcap());
+  const std::string records = slurp(run.records());
+  write_bytes(run.records(), records.substr(0, records.size() / 2) + std::string(4096, '\0'));
+  const ExportResult r = export_mcap(run, run.mcap());
+  EXPECT_FALSE(r.partial.empty());
+  EXPECT_NE(r.kept.find("is complete: kept"), std::string::npos) << r.kept;
+  EXPECT_EQ(slurp(run.mcap()), before);
+  EXPECT_FALSE(fs::exists(run.mcap().string() + ".tmp"));
+  // From whole records it is rebuilt as before.
+  write_bytes(run.records(), records);
+  const ExportResult whole = export_mcap(run, run.mcap());
+  EXPECT_TRUE(whole.partial.empty()) << whole.partial;
+  EXPECT_TRUE(whole.kept.empty()) << whole.kept;
+  EXPECT_TRUE(mcap::check_file(run.mcap()).complete);
+}
+
 TEST(RecordedMcap, ExportRefusesWhatIsNotARunDirectoryNamingIt) {
   const fs::path nowhere = scratch("nowhere");
   EXPECT_THROW(

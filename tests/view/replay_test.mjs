@@ -32,6 +32,11 @@ fs.writeFileSync(path.join(empty, RECORDS), '');
 refused(['view', empty], ['no records'], `an empty ${RECORDS}`);
 for (const k of ['0', '-1', 'nan', 'inf', '1e9'])
   refused(['view', dir, '--speed', k], ['--speed'], `--speed ${k}`);
+refused(['view', dir, '--speed', '1000.0001'], ['--speed 1000.0001'], 'a speed just past 1000, said as given');
+refused(['run', '--agents', '2', '--domain', domain, '--view-listen', '127.0.0.1'],
+  ['--view-listen', '--view'], '--view-listen without --view');
+refused(['run', '--agents', '2', '--domain', domain, '--view', '0', '--view-listen', '239.1.2.3'],
+  ['--view', 'multicast'], 'a multicast --view-listen');
 refused(['view', dir, '--listen', 'nowhere'], ['--listen', 'not an IP address'], 'a listen address that is none');
 const blocker = net.createServer();
 await new Promise((r) => blocker.listen(0, '127.0.0.1', r));

@@ -4,6 +4,7 @@
 // says, so nothing depends on a swarm's timing.
 #include <google/protobuf/descriptor.pb.h>
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include <boost/asio.hpp>
 #include <boost/beast/core.hpp>
@@ -29,6 +30,7 @@
 #include "common/record/json_writer.hpp"
 #include "common/record/record_sinks.hpp"
 #include "common/record/run_dir.hpp"
+#include "common/transport/utf8.hpp"
 #include "common/view/foxglove_protocol.hpp"
 #include "common/view/replay.hpp"
 #include "common/view/view_channels.hpp"
@@ -92,6 +94,22 @@ TEST(JsonWriter, EscapesTextFromTheNetworkAndWritesNoNonFiniteNumber) {
   w.raw("[").str("a\"b\\c\n\x01").raw(",").num(std::nan("")).raw(",").num(1.5000).raw(",");
   w.num(-0.00001, 3).raw(",").sig(1e-9).raw(",").num(1e300).raw(",").num(-2.0).raw("]");
   EXPECT_EQ(out, "[\"a\\\"b\\\\c\\u000a\\u0001\",null,1.5,0,1e-09,1e+300,-2]");
+}
+
+// Text that reaches a viewer is UTF-8, whatever it was: a byte that is not (a scenario's name, a
+// run directory's path, a refusal cut at 40 bytes inside a character) becomes U+FFFD, and
+// well-formed text, multi-byte characters included, passes unchanged.
+TEST(JsonWriter, WritesValidUtf8WhateverItIsGiven) {
+  std::string out;
+  JsonWriter w(out);
+  const std::string cut = std::string("caf\xC3\xA9 ") + std::string("\xE2\x82\xAC").substr(0, 2);
+  w.str("bad\377").raw(",").str(cut).raw(",").str("\xED\xA0\x80").raw(",").str("\xC0\xAF");
+  w.raw(",").str("\xF0\x9F\x9A\x81 ok");
+  EXPECT_EQ(out,
+            "\"bad\xEF\xBF\xBD\",\"caf\xC3\xA9 \xEF\xBF\xBD\xEF\xBF\xBD\","
+            "\"\xEF\xBF\xBD\xEF\xBF\xBD\xEF\xBF\xBD\",\"\xEF\xBF\xBD\xEF\xBF\xBD\","
+            "\"\xF0\x9F\x9A\x81 ok\"");
+  EXPECT_TRUE(valid_utf8(out));
 }
 
 // ---- Foxglove's protocol ----
@@ -345,7 +363,7 @@ TEST_F(ReplayTest, RefusesBadControlsAndSaysWhatIsOddAboutTheRecord) {
   }
   const ReplayRun run = load_replay(dir_);
   EXPECT_EQ(run.records.size(), 101u * 3 + 2);
-  EXPECT_NE(run.note.find("partial record"), std::string::npos) << run.note;
+  EXPECT_NE(run.note.find("records.pb: cut inside a record"), std::string::npos) << run.note;
   ReplayPlayback p(run, 1.0);
   view::ClientOp op;
   op.set_action("seek");
@@ -361,6 +379,65 @@ TEST_F(ReplayTest, RefusesBadControlsAndSaysWhatIsOddAboutTheRecord) {
   }
   op.set_action("launch");
   EXPECT_NE(p.control(op, 0.0), "");
+}
+
+// A record appended to records.pb as the recorder frames it (a varint length, then the bytes).
+void append_record(const std::filesystem::path& file, const records::Record& r) {
+  std::string bytes = r.SerializeAsString(), framed;
+  for (std::size_t n = bytes.size();; n >>= 7) {
+    framed += static_cast<char>((n & 0x7f) | (n > 0x7f ? 0x80 : 0));
+    if (n <= 0x7f) break;
+  }
+  std::ofstream(file, std::ios::app | std::ios::binary) << framed << bytes;
+}
+
+// What a careless user or an attacker hands over as records.pb never becomes records: zeros stop
+// the reading at once (not four million empty records), a FIFO or /dev/zero is refused without
+// blocking, and a record whose time is not a run's ends what is played, said in the note.
+TEST_F(ReplayTest, ZerosAFifoDevZeroOrAnImpossibleTimeAreNeverPlayed) {
+  namespace fs = std::filesystem;
+  record(false);
+  const fs::path records = dir_ / "records.pb";
+  const std::string good = [&] {
+    std::ifstream in(records, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  }();
+  std::ofstream(records, std::ios::app | std::ios::binary) << std::string(4u << 20, '\0');
+  ReplayRun run = load_replay(dir_);
+  EXPECT_EQ(run.records.size(), 101u * 3 + 2);
+  EXPECT_NE(run.note.find("a record holds nothing"), std::string::npos) << run.note;
+  std::ofstream(records, std::ios::trunc | std::ios::binary) << std::string(4u << 20, '\0');
+  EXPECT_THROW(load_replay(dir_), ReplayError);
+  for (const bool fifo : {true, false}) {
+    fs::remove(records);
+    if (fifo)
+      ASSERT_EQ(::mkfifo(records.c_str(), 0600), 0);
+    else
+      fs::create_symlink("/dev/zero", records);
+    try {
+      load_replay(dir_);
+      ADD_FAILURE() << "a " << (fifo ? "FIFO" : "link to /dev/zero") << " was replayed";
+    } catch (const ReplayError& e) {
+      EXPECT_NE(std::string(e.what()).find("not a regular file"), std::string::npos) << e.what();
+    }
+  }
+  // A summary.json that is a FIFO is no summary (and is never opened).
+  fs::remove(records);
+  std::ofstream(records, std::ios::binary) << good;
+  ASSERT_EQ(::mkfifo((dir_ / "summary.json").c_str(), 0600), 0);
+  run = load_replay(dir_);
+  EXPECT_FALSE(run.summary.has_value());
+  for (const double t : {std::nan(""), 1e300, -100.0}) {
+    std::ofstream(records, std::ios::trunc | std::ios::binary) << good;
+    records::Record bad;
+    bad.mutable_event()->set_t_s(t);
+    bad.mutable_event()->set_kind("cut");
+    append_record(records, bad);
+    run = load_replay(dir_);
+    EXPECT_EQ(run.records.size(), 101u * 3 + 2) << t;
+    EXPECT_NE(run.note.find("a record's time is not a run's time"), std::string::npos) << run.note;
+    EXPECT_DOUBLE_EQ(ReplayPlayback(run, 1.0).duration_s(), 10.0) << t;
+  }
 }
 
 TEST_F(ReplayTest, RefusesADirectoryWithoutARecord) {
@@ -540,6 +617,20 @@ TEST_F(ViewServerTest, ServesThePageAndOnlyItsFilesOverHttp) {
     EXPECT_EQ(status, 403) << host;
   }
   EXPECT_EQ(server.counts().refused_hosts, 4u);
+  // Listening on loopback written as IPv6 (::ffff:127.0.0.1) keeps the Host check.
+  ViewServerOptions mapped = options();
+  mapped.address = "::ffff:127.0.0.1";
+  ViewServer other(mapped, feed, "{}", SceneSettings{});
+  other.start();
+  http_get(other.port(), "/", &status, "evil.example");
+  EXPECT_EQ(status, 403);
+  http_get(other.port(), "/", &status, "localhost");
+  EXPECT_EQ(status, 200);
+  // A multicast group is no address to listen on.
+  EXPECT_NE(probe_listen("239.1.2.3", 0).find("multicast"), std::string::npos);
+  ViewServerOptions group = options();
+  group.address = "ff02::1";
+  EXPECT_THROW(ViewServer(group, feed, "{}", SceneSettings{}).start(), ViewServerError);
 }
 
 TEST_F(ViewServerTest, APageGetsASnapshotThenFramesAndTheEnd) {
@@ -748,8 +839,10 @@ TEST_F(ViewServerTest, ManyConnectionsAreCappedAndTheServerStaysUsable) {
     held.emplace_back(ioc);
     held.back().connect(tcp::endpoint(asio::ip::make_address("127.0.0.1"), server.port()));
   }
-  EXPECT_TRUE(eventually([&] { return server.counts().refused_connections >= 24; }));
-  held.clear();  // they go; a page can connect again
+  // Past the limit each new connection takes the place of the oldest that sent no request.
+  EXPECT_TRUE(eventually([&] { return server.counts().evicted >= 24; }));
+  EXPECT_EQ(server.counts().refused_connections, 0u);
+  held.clear();
   EXPECT_TRUE(eventually([&] {
     try {
       return http_get(server.port(), "/").find("quadswarm") != std::string::npos;
@@ -757,6 +850,76 @@ TEST_F(ViewServerTest, ManyConnectionsAreCappedAndTheServerStaysUsable) {
       return false;
     }
   }));
+}
+
+// 64 WebSockets that subscribe to nothing and 200 connections that never send a request, all held
+// open from this host: a new viewer still gets the page, subscribes and gets its frames, and the
+// server says what it closed. Sessions that subscribed and read are never closed for another.
+TEST_F(ViewServerTest, HeldSocketsNeverKeepANewViewerOut) {
+  ViewFeed feed;
+  ViewServer server(options(), feed, "{}", SceneSettings{});
+  server.start();
+  std::vector<std::unique_ptr<Client>> idle;
+  for (int k = 0; k < 64; ++k) idle.push_back(std::make_unique<Client>(server.port()));
+  asio::io_context ioc;
+  std::vector<tcp::socket> half_open;
+  for (int k = 0; k < 200; ++k) {
+    half_open.emplace_back(ioc);
+    half_open.back().connect(tcp::endpoint(asio::ip::make_address("127.0.0.1"), server.port()));
+  }
+  EXPECT_TRUE(eventually([&] { return server.counts().evicted >= 200; }));
+  // A viewer: the page, then a session subscribed to the view channel, and frames.
+  int status = 0;
+  std::string page;
+  EXPECT_TRUE(eventually([&] {
+    try {
+      page = http_get(server.port(), "/", &status);
+      return status == 200;
+    } catch (const std::exception&) {
+      return false;
+    }
+  }));
+  EXPECT_NE(page.find("quadswarm live view"), std::string::npos);
+  Client viewer(server.port());
+  ASSERT_NE(viewer.read().find("serverInfo"), std::string::npos);
+  ASSERT_NE(viewer.read().find("advertise"), std::string::npos);
+  viewer.send(R"({"op":"subscribe","subscriptions":[{"id":7,"channelId":1}]})");
+  double t = 0.0;
+  EXPECT_TRUE(eventually([&] {
+    feed_swarm(feed, 3, t += 0.1);
+    return !viewer.await_view("\"lambda2\"", 0.2).empty();
+  }));
+  // Yet more held sockets: the subscribed viewer is never the one that goes.
+  for (int k = 0; k < 100; ++k) {
+    half_open.emplace_back(ioc);
+    half_open.back().connect(tcp::endpoint(asio::ip::make_address("127.0.0.1"), server.port()));
+  }
+  EXPECT_TRUE(eventually([&] { return server.counts().evicted >= 300; }));
+  EXPECT_TRUE(eventually([&] {
+    feed_swarm(feed, 3, t += 0.1);
+    return !viewer.await_view("\"lambda2\"", 0.2).empty();
+  }));
+  std::lock_guard<std::mutex> lock(log_mu_);
+  bool said = false;
+  for (const std::string& line : log_) said |= line.find("to make room") != std::string::npos;
+  EXPECT_TRUE(said);
+}
+
+// A refusal quotes at most 40 bytes of what it refuses: cut inside a character, it is still UTF-8
+// (a text frame that is not would end the sender's own session), and the session goes on.
+TEST_F(ViewServerTest, ARefusalCutInsideACharacterStillReachesTheClient) {
+  ViewFeed feed;
+  ViewServer server(options(), feed, "{}", SceneSettings{});
+  server.start();
+  Client c(server.port());
+  c.read();
+  c.read();
+  c.send(R"({"op":")" + std::string(39, 'x') + "\xC3\xA9" + R"("})");
+  const std::string status = c.read();
+  EXPECT_NE(status.find("\"op\":\"status\""), std::string::npos) << status;
+  EXPECT_TRUE(valid_utf8(status));
+  c.send(R"({"op":"subscribe","subscriptions":[{"id":1,"channelId":1}]})");
+  EXPECT_FALSE(c.await_view("\"type\":\"snapshot\"").empty());
 }
 
 TEST_F(ViewServerTest, APortInUseIsRefusedWithTheReason) {
