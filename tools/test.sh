@@ -25,6 +25,20 @@ if (($#)); then
 fi
 stage() { printf '\n== %s (%s) ==\n' "$*" "$(date +%T)"; }
 
+stage "the README's test counts against the registered tests"
+# Each label's row of the README's table (| `label` | count | what |) must say how many tests that
+# label registers: a test that vanishes (a source left out, a discovery that failed) fails here.
+counted=0
+while read -r label count; do
+  have=$(cd "$BUILD" && ctest -N -L "^$label\$" | sed -n 's/^Total Tests: //p')
+  if [[ $have != "$count" ]]; then
+    echo "README.md says label $label has $count tests; ctest registers ${have:-none}"
+    exit 1
+  fi
+  counted=$((counted + 1))
+done < <(sed -n 's/^| `\([a-z]*\)` | \([0-9][0-9]*\) |.*/\1 \2/p' README.md)
+((counted >= 10)) || { echo "README.md: the test counts table was not found ($counted rows)"; exit 1; }
+
 stage "the product configured alone (tests and benchmarks off), from the image's sources"
 # Catches a product target that only resolves because the test targets exist; what it compiles
 # was compiled with -Werror in step 1. Configured from the paths docker/Dockerfile's build stage
