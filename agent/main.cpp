@@ -45,6 +45,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "swarm-agent: transport.keystore: %s\n", e.what());
     return 2;
   }
+  if (!keystore_ready("swarm-agent", *rc, identity)) return 2;
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, f.ignore_sigterm ? SIG_IGN : on_signal);
   // A hangup (the terminal gone, or the launcher gone while this process was stopped) stops it

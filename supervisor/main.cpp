@@ -38,6 +38,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "swarm-supervisor: give --run-dir DIR or --new-run-in ROOT\n");
     return 2;
   }
+  if (!keystore_ready("swarm-supervisor", *rc, Keystore::kSupervisor)) return 2;
   RunDir dir(f.run_dir);
   try {
     if (!f.new_run_in.empty()) dir = new_run_dir(f.new_run_in, *rc);

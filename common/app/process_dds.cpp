@@ -46,22 +46,24 @@ DdsOptions dds_options(const RunConfig& rc, const std::string& participant_name,
   return d;
 }
 
+bool keystore_ready(const char* prog, const RunConfig& rc, const std::string& identity) {
+  if (rc.transport.keystore.empty()) return true;
+  try {
+    Keystore(rc.transport.keystore).check({identity});
+    return true;
+  } catch (const KeystoreError& e) {
+    std::fprintf(stderr, "%s: transport.keystore: %s\n", prog, e.what());
+    return false;
+  }
+}
+
 ProcessDds process_dds(const char* prog, const RunConfig& rc, const ProcessOptions& o,
                        const std::string& participant_name, const std::string& identity,
                        const std::atomic<bool>& stop, StoppedWaiting when_stopped,
                        const std::function<void(const std::string&)>& say) {
   ProcessDds d;
   d.options = dds_options(rc, participant_name, o);
-  if (!rc.transport.keystore.empty()) {
-    try {
-      Keystore(rc.transport.keystore).check({identity});
-    } catch (const KeystoreError& e) {
-      std::fprintf(stderr, "%s: transport.keystore: %s\n", prog, e.what());
-      d.exit_code = 2;
-      return d;
-    }
-    d.options.participant.identity = identity;
-  }
+  if (!rc.transport.keystore.empty()) d.options.participant.identity = identity;
   if (rc.plan.discovery != DiscoveryMode::kPeerHosts) return d;
   std::vector<std::string>& at = d.options.participant.unicast_peer_hosts;
   at = find_peer_hosts(o.peer_hosts, static_cast<std::size_t>(rc.plan.participants),

@@ -22,10 +22,15 @@ enum class StoppedWaiting {
   kRecord,  // the supervisor: a participant that reaches no one, so the run still ends recorded
 };
 
-// dds_options, made ready to fly: in a secure run the keystore checked for `identity` (the one
-// the process speaks as), and --peer-hosts resolved (waiting for the names as the plan says, and
-// saying what it found through `say`). `exit_code` >= 0: nothing to fly; exit with it (2: bad
-// input, named on stderr after `prog`; 0: stopped while waiting).
+// Whether a secure run's keystore holds what a process speaking as `identity` needs (Keystore::
+// check), first thing, before the process writes or waits for anything; if not, it says why on
+// stderr after `prog` (the caller exits 2). A plain run's: true.
+bool keystore_ready(const char* prog, const RunConfig& rc, const std::string& identity);
+
+// dds_options, made ready to fly: the identity it speaks as in a secure run (checked by
+// keystore_ready), and --peer-hosts resolved (waiting for the names as the plan says, and saying
+// what it found through `say`). `exit_code` >= 0: nothing to fly; exit with it (2: bad input,
+// named on stderr after `prog`; 0: stopped while waiting).
 struct ProcessDds {
   DdsOptions options;
   int exit_code = -1;

@@ -17,17 +17,19 @@ namespace {
 
 class PartitionsRoute final : public StateRoute {
  public:
-  explicit PartitionsRoute(StateEndpoints& e)
-      : e_(e),
-        subscriber_(e.make_subscriber({})),
-        reader_(e.make_reader(subscriber_, e.shared_topic())) {
-    if (e.opts().publish) writer_ = e.make_writer(e.shared_topic(), {}, e.opts().self);
+  // The writer first, as its readers' peers expect; whatever was made goes again if a later
+  // endpoint cannot be (a reader left behind would call into a bus that is gone).
+  explicit PartitionsRoute(StateEndpoints& e) : e_(e) {
+    try {
+      if (e.opts().publish) writer_ = e.make_writer(e.shared_topic(), {}, e.opts().self);
+      subscriber_ = e.make_subscriber({});
+      reader_ = e.make_reader(subscriber_, e.shared_topic());
+    } catch (...) {
+      close();
+      throw;
+    }
   }
-  ~PartitionsRoute() override {
-    e_.delete_reader(subscriber_, reader_);
-    e_.participant()->delete_subscriber(subscriber_);
-    e_.delete_writer(writer_);
-  }
+  ~PartitionsRoute() override { close(); }
   void set_interest(const Interest& interest) override {
     if (writer_.writer) e_.move_writer(writer_, interest.publish, e_.opts().self);
     // Names and cells are partitions of one topic: a sample heard by name passes whatever its
@@ -44,8 +46,16 @@ class PartitionsRoute final : public StateRoute {
   }
 
  private:
+  void close() {
+    if (subscriber_) {
+      e_.delete_reader(subscriber_, reader_);
+      e_.participant()->delete_subscriber(subscriber_);
+      subscriber_ = nullptr;
+    }
+    e_.delete_writer(writer_);
+  }
   StateEndpoints& e_;
-  dds::Subscriber* subscriber_;
+  dds::Subscriber* subscriber_ = nullptr;
   Reader reader_;
   Writer writer_;
 };

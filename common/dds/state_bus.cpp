@@ -72,6 +72,11 @@ struct DdsStateBus::Impl : public dds::DataReaderListener {
 
   // The state readers' settings: sized for the swarm, and on the run's multicast group if asked.
   dds::DataReaderQos reader_qos(DdsParticipant& participant);
+  // Deletes every endpoint and topic it made, before the participant is: the readers' listener is
+  // this object, and the filter's factory lives in it.
+  void close();
+  // Its endpoints: the record stream's writer or reader, and the state stream's route.
+  void open();
 
   void on_data_available(dds::DataReader* r) override {
     try {
@@ -190,15 +195,27 @@ DdsStateBus::DdsStateBus(DdsParticipant& participant, const StateBusOptions& opt
                                         dds::TOPIC_QOS_DEFAULT);
   d.record_topic = d.participant->create_topic(dds_names::kRecordTopic, d.type.get_type_name(),
                                                dds::TOPIC_QOS_DEFAULT);
-  if (!d.topic || !d.record_topic) throw std::runtime_error("dds: cannot create the state topics");
+  if (!d.topic || !d.record_topic) {
+    d.close();
+    throw std::runtime_error("dds: cannot create the state topics");
+  }
   std::memcpy(d.roster_factory.local.data(), d.own_prefix.data(), d.own_prefix.size());
   if (!opts.roster.empty())
     d.participant->register_content_filter_factory(RosterFilterFactory::kRosterFilterClass,
                                                    &d.roster_factory);
-  d.endpoints = std::make_unique<state_bus::StateEndpoints>(
-      d.participant, opts, d.type.get_type_name(), d.topic, &d, d.roster_factory,
-      d.reader_qos(participant));
-  state_bus::StateEndpoints& e = *d.endpoints;
+  try {
+    d.endpoints = std::make_unique<state_bus::StateEndpoints>(
+        d.participant, opts, d.type.get_type_name(), d.topic, &d, d.roster_factory,
+        d.reader_qos(participant));
+    d.open();
+  } catch (...) {
+    d.close();
+    throw;
+  }
+}
+
+void DdsStateBus::Impl::open() {
+  state_bus::StateEndpoints& e = *endpoints;
   if (opts.publish) {
     // Its records in the run's record partition and its agent's under it (which binds them).
     dds::PublisherQos q = dds::PUBLISHER_QOS_DEFAULT;
@@ -206,14 +223,14 @@ DdsStateBus::DdsStateBus(DdsParticipant& participant, const StateBusOptions& opt
     q.partition().push_back(records.c_str());
     if (opts.self != 0)
       q.partition().push_back(dds_names::bound_partition(records, opts.self).c_str());
-    d.record_writer.publisher = d.participant->create_publisher(q);
-    d.record_writer.listener = std::make_unique<state_bus::WriterListener>();
-    d.record_writer.writer = d.record_writer.publisher
-                                 ? d.record_writer.publisher->create_datawriter(
-                                       d.record_topic, state_bus::unfiltered(record_writer_qos()),
-                                       d.record_writer.listener.get())
-                                 : nullptr;
-    if (!d.record_writer.writer) throw std::runtime_error("dds: cannot create the record writer");
+    record_writer.publisher = participant->create_publisher(q);
+    record_writer.listener = std::make_unique<state_bus::WriterListener>();
+    record_writer.writer = record_writer.publisher
+                               ? record_writer.publisher->create_datawriter(
+                                     record_topic, state_bus::unfiltered(record_writer_qos()),
+                                     record_writer.listener.get())
+                               : nullptr;
+    if (!record_writer.writer) throw std::runtime_error("dds: cannot create the record writer");
   }
   if (opts.recorder) {
     dds::SubscriberQos q = dds::SUBSCRIBER_QOS_DEFAULT;
@@ -221,14 +238,14 @@ DdsStateBus::DdsStateBus(DdsParticipant& participant, const StateBusOptions& opt
                                  ? dds_names::any_run_partition(dds_names::kRecordStream)
                                  : dds_names::record_partition(opts.run_id);
     q.partition().push_back(part.c_str());
-    d.record_subscriber = d.participant->create_subscriber(q);
-    if (!d.record_subscriber) throw std::runtime_error("dds: cannot create the record subscriber");
-    d.record_reader = e.make_reader(d.record_subscriber, d.record_topic);
+    record_subscriber = participant->create_subscriber(q);
+    if (!record_subscriber) throw std::runtime_error("dds: cannot create the record subscriber");
+    record_reader = e.make_reader(record_subscriber, record_topic);
     return;
   }
-  d.route = opts.routing == Routing::kPartitions
-                ? state_bus::partitions_route(e)
-                : state_bus::named_route(e, opts.routing == Routing::kRegionTopics);
+  route = opts.routing == Routing::kPartitions
+              ? state_bus::partitions_route(e)
+              : state_bus::named_route(e, opts.routing == Routing::kRegionTopics);
 }
 
 dds::DataReaderQos DdsStateBus::Impl::reader_qos(DdsParticipant& p) {
@@ -269,20 +286,23 @@ dds::DataReaderQos DdsStateBus::Impl::reader_qos(DdsParticipant& p) {
 }
 
 DdsStateBus::~DdsStateBus() {
-  Impl& d = *impl_;
   set_listener(nullptr);
-  // Deleted here, not left to the participant: the readers' listener is this object, and the
-  // filter's factory lives in it.
-  d.route.reset();
-  if (d.record_subscriber) {
-    d.endpoints->delete_reader(d.record_subscriber, d.record_reader);
-    d.participant->delete_subscriber(d.record_subscriber);
+  impl_->close();
+}
+
+void DdsStateBus::Impl::close() {
+  route.reset();
+  if (record_subscriber) {
+    endpoints->delete_reader(record_subscriber, record_reader);
+    participant->delete_subscriber(record_subscriber);
+    record_subscriber = nullptr;
   }
-  if (d.endpoints) d.endpoints->delete_writer(d.record_writer);
-  if (!d.opts.roster.empty())
-    d.participant->unregister_content_filter_factory(RosterFilterFactory::kRosterFilterClass);
-  if (d.topic) d.participant->delete_topic(d.topic);
-  if (d.record_topic) d.participant->delete_topic(d.record_topic);
+  if (endpoints) endpoints->delete_writer(record_writer);
+  if (!opts.roster.empty())
+    participant->unregister_content_filter_factory(RosterFilterFactory::kRosterFilterClass);
+  if (topic) participant->delete_topic(topic);
+  if (record_topic) participant->delete_topic(record_topic);
+  topic = record_topic = nullptr;
 }
 
 void DdsStateBus::publish(const StateMessage& msg) {

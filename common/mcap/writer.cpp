@@ -53,7 +53,9 @@ bool Writer::emit(std::string_view bytes) {
 
 bool Writer::open(const std::filesystem::path& path) {
   path_ = path;
-  fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  // Never through a link, and never blocked by a FIFO where the file should be.
+  fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC | O_NOFOLLOW | O_NONBLOCK,
+               0644);
   if (fd_ < 0) {
     fail(std::string("cannot create (") + std::strerror(errno) + ")");
     return false;

@@ -36,6 +36,7 @@ ExportResult export_mcap(const RunDir& dir, const fs::path& out) {
 
   ExportResult result;
   const fs::path tmp = out.string() + ".tmp";
+  fs::remove(tmp, ec);  // whatever is there (a FIFO, a link) is no file of ours to write through
   McapSink sink(SceneSettings::of(rc));
   if (!sink.open(tmp)) {
     result.write_error = sink.error();

@@ -1,7 +1,11 @@
 #include "common/record/record_file.hpp"
 
+#include <unistd.h>
+
 #include <cmath>
-#include <system_error>
+#include <cstdint>
+
+#include "common/transport/regular_file.hpp"
 
 namespace qswarm {
 
@@ -15,15 +19,16 @@ double record_time_s(const records::Record& r) {
 }
 
 RecordFileReader::RecordFileReader(const fs::path& path) : path_(path) {
-  std::error_code ec;
-  const fs::file_status st = fs::status(path, ec);
-  if (ec && ec != std::errc::no_such_file_or_directory)
-    throw RecordFileError(path.string() + ": cannot be read (" + ec.message() + ")");
-  if (!fs::exists(st)) throw RecordFileError(path.string() + ": missing or unreadable");
-  if (!fs::is_regular_file(st))
+  const RegularFile f = open_regular_file(path, UINTMAX_MAX);
+  if (f.problem == RegularFile::Problem::kNotRegular)
     throw RecordFileError(path.string() + ": not a regular file (a run's records are a file)");
-  in_.open(path, std::ios::binary);
-  if (!in_) throw RecordFileError(path.string() + ": missing or unreadable");
+  if (f.problem != RegularFile::Problem::kNone)
+    throw RecordFileError(path.string() + ": missing or unreadable (" + f.why + ")");
+  in_.reset(::fdopen(f.fd, "rb"));
+  if (!in_) {
+    ::close(f.fd);
+    throw RecordFileError(path.string() + ": cannot be read");
+  }
 }
 
 RecordFileReader::Next RecordFileReader::stop(Next why, const std::string& what, std::uint64_t at) {
@@ -34,14 +39,15 @@ RecordFileReader::Next RecordFileReader::stop(Next why, const std::string& what,
 
 RecordFileReader::Next RecordFileReader::next(records::Record& r) {
   if (!problem_.empty()) return Next::kDamaged;
-  const auto at = static_cast<std::uint64_t>(in_.tellg());
+  const std::uint64_t at = at_;
   std::uint64_t len = 0;
   for (int shift = 0;; shift += 7) {
-    const int c = in_.get();
-    if (c == std::char_traits<char>::eof()) {
+    const int c = std::fgetc(in_.get());
+    if (c == EOF) {
       if (shift == 0) return Next::kEnd;
       return stop(Next::kCut, "cut inside a record's length", at);
     }
+    ++at_;
     len |= static_cast<std::uint64_t>(c & 0x7f) << shift;
     if (!(c & 0x80)) break;
     if (shift >= 28) return stop(Next::kDamaged, "a record's length is not a 32-bit varint", at);
@@ -50,11 +56,12 @@ RecordFileReader::Next RecordFileReader::next(records::Record& r) {
     return stop(Next::kDamaged,
                 "a record's length (" + std::to_string(len) + " bytes) is not plausible", at);
   bytes_.resize(len);
-  in_.read(bytes_.data(), static_cast<std::streamsize>(len));
-  if (static_cast<std::uint64_t>(in_.gcount()) != len)
+  const std::size_t got = std::fread(bytes_.data(), 1, len, in_.get());
+  at_ += got;
+  if (got != len)
     return stop(Next::kCut,
-                "cut inside a record (" + std::to_string(in_.gcount()) + " of its " +
-                    std::to_string(len) + " bytes)",
+                "cut inside a record (" + std::to_string(got) + " of its " + std::to_string(len) +
+                    " bytes)",
                 at);
   if (!r.ParseFromString(bytes_)) return stop(Next::kDamaged, "a record does not parse", at);
   if (!r.has_sample() && !r.has_graph() && !r.has_event())

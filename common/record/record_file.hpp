@@ -1,8 +1,9 @@
 #pragma once
 
 #include <cstdint>
+#include <cstdio>
 #include <filesystem>
-#include <fstream>
+#include <memory>
 #include <stdexcept>
 #include <string>
 
@@ -46,8 +47,12 @@ class RecordFileReader {
 
  private:
   Next stop(Next why, const std::string& what, std::uint64_t at);
+  struct Close {
+    void operator()(std::FILE* f) const { std::fclose(f); }
+  };
   std::filesystem::path path_;
-  std::ifstream in_;
+  std::unique_ptr<std::FILE, Close> in_;
+  std::uint64_t at_ = 0;  // bytes read so far
   std::string bytes_;
   std::uint64_t records_ = 0;
   std::string problem_;

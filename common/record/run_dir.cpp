@@ -42,7 +42,9 @@ bool try_claim(const fs::path& dir, const std::string& flag) {
   if (ec) throw RunDirError(flag + " " + dir.string() + ": cannot create (" + ec.message() + ")");
   if (!fs::is_directory(dir, ec) || ec)
     throw RunDirError(flag + " " + dir.string() + ": not a directory");
-  for (const auto& entry : fs::directory_iterator(dir, ec)) {
+  const fs::directory_iterator listing(dir, ec);
+  if (ec) throw RunDirError(flag + " " + dir.string() + ": cannot list (" + ec.message() + ")");
+  for (const auto& entry : listing) {
     if (entry.path().filename() == RunDir::kMarker) return false;
     std::string why = flag + " " + dir.string();
     why += ": expected a new or empty directory; it holds files (e.g. ";

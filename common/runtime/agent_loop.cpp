@@ -20,14 +20,6 @@ double tick_wall_s(const RunConfig& rc, const AgentLoopOptions& o) {
   return rc.agent.steps_per_tick() / (rc.agent.physics_hz * o.time_scale);
 }
 
-// The run's plan at this process's time scale (its wall periods and limits follow it).
-RunPlan plan_at(const RunConfig& rc, const AgentLoopOptions& o) {
-  if (rc.plan.hosts.time_scale == o.time_scale) return rc.plan;
-  Hosts hosts = rc.plan.hosts;
-  hosts.time_scale = o.time_scale;
-  return plan_run(rc, hosts);
-}
-
 LifecycleConfig lifecycle_config(const RunConfig& rc, AgentId id, const AgentLoopOptions& o,
                                  double tick_origin_s) {
   LifecycleConfig c;
@@ -44,7 +36,7 @@ LifecycleConfig lifecycle_config(const RunConfig& rc, AgentId id, const AgentLoo
     c.shared_origin_s = tick_origin_s;
   }
   c.time_scale = o.time_scale;
-  const RunPlan plan = plan_at(rc, o);
+  const RunPlan plan = plan_at(rc, o.time_scale);  // its wall periods follow the time scale
   c.start_timeout_s = o.start_timeout_s >= 0.0 ? o.start_timeout_s : plan.start_timeout_s;
   c.join_timeout_s = c.start_timeout_s + (plan.join_timeout_s - plan.start_timeout_s);
   c.announce_period_s = plan.barrier_announce_period_s;

@@ -86,10 +86,18 @@ DiscoveryMode discovery_of(const RunConfig& rc, const Hosts& h, bool secure) {
           "discovery by unicast to the peers, or through the server, not both");
     return DiscoveryMode::kPeerHosts;
   }
-  if (secure && (rc.transport.discovery == Discovery::kServer || !h.discovery_server.empty()))
+  if (secure && !h.discovery_server.empty())
+    refuse(
+        "--discovery-server (QSWARM_DISCOVERY_SERVER): a secure run cannot discover through a "
+        "Discovery Server (Fast DDS 2.9 has no secure one)");
+  if (secure && rc.transport.discovery == Discovery::kServer)
     refuse(
         "scenario field 'transport.discovery': expected SIMPLE with a keystore (Fast DDS 2.9 has "
         "no secure Discovery Server), got SERVER");
+  if (h.unicast_block && !h.discovery_server.empty())
+    refuse(
+        "--unicast-peers and --discovery-server (QSWARM_DISCOVERY_SERVER): discovery by unicast "
+        "to a block, or through the server, not both");
   if (!h.discovery_server.empty()) return DiscoveryMode::kServer;
   if (h.unicast_block) return DiscoveryMode::kUnicastBlock;
   if (!h.launcher) return DiscoveryMode::kMulticast;
@@ -206,6 +214,13 @@ RunPlan plan_run(const RunConfig& rc, const Hosts& hosts) {
   p.run_partition = dds_names::run_partition(rc.transport.run_id);
   p.record_partition = dds_names::record_partition(rc.transport.run_id);
   return p;
+}
+
+RunPlan plan_at(const RunConfig& rc, double time_scale) {
+  if (rc.plan.hosts.time_scale == time_scale) return rc.plan;
+  Hosts hosts = rc.plan.hosts;
+  hosts.time_scale = time_scale;
+  return plan_run(rc, hosts);
 }
 
 void replan(RunConfig& rc, const Hosts& hosts) {

@@ -114,6 +114,8 @@ struct RunPlan {
 RunPlan plan_run(const RunConfig& rc, const Hosts& hosts);
 // rc.plan made anew for these hosts, its decisions written into the scenario as run.
 void replan(RunConfig& rc, const Hosts& hosts);
+// rc.plan on the same hosts at another time scale (its wall periods and limits follow it).
+RunPlan plan_at(const RunConfig& rc, double time_scale);
 
 // The plan as the run directory keeps it (plan.txtpb) and `swarm inspect` prints it, with the
 // launcher's block of participant ids from `participant_base` (-1: none chosen).

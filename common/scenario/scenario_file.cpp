@@ -2,10 +2,8 @@
 #include <google/protobuf/io/tokenizer.h>
 #include <google/protobuf/text_format.h>
 
-#include <filesystem>
-#include <fstream>
-
 #include "common/scenario/scenario.hpp"
+#include "common/transport/regular_file.hpp"
 
 namespace qswarm {
 namespace {
@@ -43,22 +41,22 @@ scenario::Scenario parse_scenario_text(const std::string& text, const std::strin
 
 scenario::Scenario read_scenario_file(const std::string& path) {
   // A FIFO, a device or a huge file is refused before reading: /dev/zero would never end.
-  std::error_code ec;
-  const auto status = std::filesystem::status(path, ec);
-  if (ec || !std::filesystem::exists(status)) throw ScenarioError(path + ": no such scenario file");
-  if (!std::filesystem::is_regular_file(status))
-    throw ScenarioError(path + ": expected a regular file (a scenario in Protobuf text format)");
-  const auto size = std::filesystem::file_size(path, ec);
-  if (ec || size > kMaxScenarioBytes) {
-    throw ScenarioError(path + ": expected a scenario of at most " +
-                        std::to_string(kMaxScenarioBytes / 1024) + " KiB");
+  RegularFile f;
+  const std::string text = read_regular_file(path, kMaxScenarioBytes, f);
+  switch (f.problem) {
+    case RegularFile::Problem::kNone:
+      return parse_scenario_text(text, path);
+    case RegularFile::Problem::kMissing:
+      throw ScenarioError(path + ": no such scenario file");
+    case RegularFile::Problem::kNotRegular:
+      throw ScenarioError(path + ": expected a regular file (a scenario in Protobuf text format)");
+    case RegularFile::Problem::kTooLarge:
+      throw ScenarioError(path + ": expected a scenario of at most " +
+                          std::to_string(kMaxScenarioBytes / 1024) + " KiB");
+    case RegularFile::Problem::kUnreadable:
+      break;
   }
-  std::ifstream in(path);
-  if (!in) throw ScenarioError(path + ": cannot open scenario file");
-  std::string text(static_cast<std::size_t>(size), '\0');
-  in.read(text.data(), static_cast<std::streamsize>(size));
-  text.resize(static_cast<std::size_t>(in.gcount()));
-  return parse_scenario_text(text, path);
+  throw ScenarioError(path + ": " + f.why);
 }
 
 std::string to_text(const scenario::Scenario& s) {

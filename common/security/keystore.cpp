@@ -15,14 +15,13 @@
 #include <cstdio>
 #include <cstring>
 #include <ctime>
-#include <fstream>
 #include <memory>
-#include <sstream>
 
 #include "common/security/openssl_handles.hpp"
 #include "common/transport/dds_names.hpp"
 #include "common/transport/interest.hpp"
 #include "common/transport/port_plan.hpp"
+#include "common/transport/regular_file.hpp"
 
 namespace qswarm {
 
@@ -39,6 +38,17 @@ constexpr std::uintmax_t kMaxFileBytes = 1u << 20;
 [[noreturn]] void fail(const fs::path& file, const std::string& what) {
   ERR_clear_error();
   throw KeystoreError(file.string() + ": " + what);
+}
+
+// A private key readable by anyone but its owner is no longer private.
+void check_private(const fs::path& file) {
+  struct stat s {};
+  if (::stat(file.c_str(), &s) == 0 && (s.st_mode & 077) != 0) {
+    char mode[8];
+    std::snprintf(mode, sizeof mode, "%04o", s.st_mode & 07777);
+    fail(file, std::string("a private key readable by others than its owner (mode ") + mode +
+                   "): chmod 600 it");
+  }
 }
 
 Bio memory(const std::string& text) {
@@ -72,31 +82,15 @@ void check_directory(const fs::path& dir) {
 // A file of the keystore, read whole: it must be a regular file inside the keystore (no link out
 // of it, no FIFO, no device), not too large, and a private key readable by its owner alone.
 std::string read_file(const fs::path& file, const fs::path& root, bool secret) {
+  RegularFile f;
+  std::string text = read_regular_file(file, kMaxFileBytes, f);
+  if (f.problem == RegularFile::Problem::kMissing) fail(file, std::string("missing") + kMakeOne);
+  if (f.problem != RegularFile::Problem::kNone) fail(file, f.why);
   std::error_code ec;
-  const fs::file_status st = fs::status(file, ec);
-  if (ec && ec != std::errc::no_such_file_or_directory)
-    fail(file, "cannot be read (" + ec.message() + ")");
-  if (!fs::exists(st)) fail(file, std::string("missing") + kMakeOne);
-  if (!fs::is_regular_file(st)) fail(file, "not a regular file");
-  const fs::path real = fs::canonical(file, ec);
-  const fs::path rel = ec ? fs::path("..") : real.lexically_relative(root);
-  if (rel.empty() || *rel.begin() == "..") fail(file, "a link out of the keystore");
-  const std::uintmax_t size = fs::file_size(file, ec);
-  if (ec || size > kMaxFileBytes) fail(file, "too large for a keystore's file");
-  if (secret) {
-    struct stat s {};
-    if (::stat(file.c_str(), &s) == 0 && (s.st_mode & 077) != 0) {
-      char mode[8];
-      std::snprintf(mode, sizeof mode, "%04o", s.st_mode & 07777);
-      fail(file, std::string("a private key readable by others than its owner (mode ") + mode +
-                     "): chmod 600 it");
-    }
-  }
-  std::ifstream in(file, std::ios::binary);
-  std::ostringstream text;
-  text << in.rdbuf();
-  if (!in && !in.eof()) fail(file, std::string("cannot be read (") + std::strerror(errno) + ")");
-  return text.str();
+  const fs::path rel = fs::canonical(file, ec).lexically_relative(root);
+  if (ec || rel.empty() || *rel.begin() == "..") fail(file, "a link out of the keystore");
+  if (secret) check_private(file);
+  return text;
 }
 
 Cert load_certificate(const fs::path& file, const fs::path& root) {
@@ -137,7 +131,18 @@ Store store_of(X509* ca) {
 
 }  // namespace
 
-std::string Keystore::agent_identity(AgentId id) { return "agent-" + std::to_string(id); }
+namespace {
+constexpr const char* kAgentPrefix = "agent-";
+}  // namespace
+
+std::string Keystore::agent_identity(AgentId id) { return kAgentPrefix + std::to_string(id); }
+
+std::optional<AgentId> Keystore::agent_of_identity(const std::string& identity) {
+  const std::string prefix = kAgentPrefix;
+  if (identity.rfind(prefix, 0) != 0) return std::nullopt;
+  // The id as agent partitions spell it (digits, no leading zero): the same parser.
+  return agent_of_partition("a" + identity.substr(prefix.size()));
+}
 
 bool Keystore::compose() const {
   std::error_code ec;
@@ -168,8 +173,9 @@ void Keystore::check(const std::vector<std::string>& identities) const {
   check_directory(dir_);
   std::error_code ec;
   if (fs::exists(dir_ / "private", ec)) {
+    // The authority's key: only its mode (no process that flies reads it).
     check_directory(dir_ / "private");
-    if (fs::exists(ca_key(), ec)) read_file(ca_key(), root, true);
+    if (fs::exists(ca_key(), ec)) check_private(ca_key());
   }
   const Cert ca = load_certificate(ca_certificate(), root);
   const Store store = store_of(ca.get());
@@ -198,10 +204,9 @@ void Keystore::check(const std::vector<std::string>& identities) const {
       fail(permissions(identity), "permissions granted to another identity than " + identity);
     // An agent's permissions must bind its id to its own partition: without that, readers would
     // bind its writers to nothing, or (older keystores) any agent's key.
-    const std::string prefix = "agent-";
-    if (identity.rfind(prefix, 0) == 0) {
+    if (const std::optional<AgentId> id = agent_of_identity(identity)) {
       const std::string mine =
-          dds_names::one_run_pattern(dds_names::kRunStream) + "/a" + identity.substr(prefix.size());
+          dds_names::bound_partition(dds_names::one_run_pattern(dds_names::kRunStream), *id);
       if (grant.find("<partition>" + mine + "</partition>") == std::string::npos)
         fail(permissions(identity), "permissions that do not bind " + identity +
                                         " to its own partition (made by an older swarm keys?): "

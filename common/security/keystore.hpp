@@ -1,6 +1,7 @@
 #pragma once
 
 #include <filesystem>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -41,6 +42,8 @@ class Keystore {
   static constexpr const char* kSupervisor = "supervisor";
   static constexpr const char* kMember = "member";
   static std::string agent_identity(AgentId id);  // "agent-3"
+  // The agent an identity is ("agent-3" -> 3); nothing for the supervisor or the member.
+  static std::optional<AgentId> agent_of_identity(const std::string& identity);
   // Whether it holds the member identity (swarm keys --compose).
   bool compose() const;
   // Who agent `id` speaks as here: its own identity, or the member in a compose keystore. A

@@ -182,10 +182,11 @@ std::string grants(const std::string& identity) {
                       rule("subscribe", {kStateTopic, kClaimTopic}, {any_run}));
   // agent-ID: state only into the run's partition, its own, and partitions that name no agent
   // (agent partitions start with 'a'); records only into the record partition and its own.
-  const std::string mine = "a" + identity.substr(std::string("agent-").size());
-  return allow_rule(rule("publish", {kStateTopic}, {run, run + "/" + mine, run + "/[!a]*"}) +
-                    rule("subscribe", {kStateTopic, kClaimTopic}, {any_run})) +
-         allow_rule(rule("publish", {kRecordTopic}, {record, record + "/" + mine})) +
+  const AgentId id = Keystore::agent_of_identity(identity).value_or(0);
+  return allow_rule(
+             rule("publish", {kStateTopic}, {run, bound_partition(run, id), run + "/[!a]*"}) +
+             rule("subscribe", {kStateTopic, kClaimTopic}, {any_run})) +
+         allow_rule(rule("publish", {kRecordTopic}, {record, bound_partition(record, id)})) +
          allow_rule(rule("publish", {kClaimTopic}, {run}));
 }
 
@@ -234,7 +235,10 @@ Keystore Keystore::write(const fs::path& out, const std::vector<AgentId>& ids, i
                           ": exists and is not an empty directory (a keystore is never "
                           "overwritten)");
   }
-  const fs::path parent = fs::absolute(out, ec).parent_path();
+  // "keys/" and "keys" are one directory: its parent is where the keystore is made.
+  fs::path whole = fs::absolute(out, ec).lexically_normal();
+  if (!whole.has_filename()) whole = whole.parent_path();
+  const fs::path parent = whole.parent_path();
   fs::create_directories(parent, ec);
   if (ec) throw KeystoreError(parent.string() + ": cannot create (" + ec.message() + ")");
   std::string work_name = (parent / ".keys-XXXXXX").string();
@@ -242,7 +246,7 @@ Keystore Keystore::write(const fs::path& out, const std::vector<AgentId>& ids, i
     throw KeystoreError(parent.string() + ": cannot write (" + std::strerror(errno) + ")");
   const fs::path work = work_name;
   try {
-    ::chmod(work.c_str(), 0755);
+    ::chmod(work.c_str(), 0700);  // as every identity's: only its owner lists it
     const auto dir = [&](const fs::path& d, mode_t mode) {
       if (::mkdir(d.c_str(), mode) != 0 || ::chmod(d.c_str(), mode) != 0)
         cannot(d, std::string("cannot create (") + std::strerror(errno) + ")");
@@ -274,8 +278,8 @@ Keystore Keystore::write(const fs::path& out, const std::vector<AgentId>& ids, i
       write_new(d / "permissions.xml", perm, 0644);
       write_new(d / "permissions.p7s", signed_by(ca.get(), ca_key.get(), perm, d), 0644);
     }
-    if (type == fs::file_type::directory) fs::remove(out, ec);  // empty, checked above
-    fs::rename(work, out, ec);
+    if (type == fs::file_type::directory) fs::remove(whole, ec);  // empty, checked above
+    fs::rename(work, whole, ec);
     if (ec) throw KeystoreError(out.string() + ": cannot write (" + ec.message() + ")");
   } catch (...) {
     fs::remove_all(work, ec);

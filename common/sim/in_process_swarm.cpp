@@ -10,9 +10,7 @@ namespace qswarm {
 namespace {
 // The run planned for one process on this host at the swarm's time scale.
 RunConfig planned(RunConfig rc, double time_scale) {
-  Hosts hosts = rc.plan.hosts;
-  hosts.time_scale = time_scale;
-  replan(rc, hosts);
+  rc.plan = plan_at(rc, time_scale);
   return rc;
 }
 }  // namespace

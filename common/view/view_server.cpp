@@ -258,7 +258,7 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
       ++self->server_.counts_.sessions;
       ++self->server_.counts_.open_sessions;
       self->open_ = true;
-      self->opened_s_ = steady_s();
+      self->quiet_since_s_ = steady_s();
       self->send_text(server_info_json(self->server_.opts_.name, self->server_.session_id_));
       self->send_text(advertise_json(self->server_.channels_));
       self->read();
@@ -301,7 +301,7 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
   double unsubscribed_for_s(double now) const {
     if (closed_) return -1.0;
     if (!open_) return 0.0;
-    return proto_.subscriptions() == 0 ? now - opened_s_ : -1.0;
+    return proto_.subscriptions() == 0 ? now - quiet_since_s_ : -1.0;
   }
   // Subscribed, but not reading what it is sent: its queue is full.
   bool stuck() const { return open_ && !closed_ && stale_ && !has_room(); }
@@ -376,7 +376,10 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
       read();
       return;
     }
+    const bool subscribed_before = proto_.subscriptions() > 0;
     FoxgloveSession::Outcome o = proto_.handle_text(text);
+    // Quiet from the moment it stops listening to anything, not from when it connected.
+    if (subscribed_before && proto_.subscriptions() == 0) quiet_since_s_ = steady_s();
     if (o.malformed) {
       ++server_.counts_.malformed;
       server_.log_once("malformed", "view: a client sent a frame that is not a JSON op; refused");
@@ -453,7 +456,7 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
   std::deque<Outgoing> queue_;
   std::size_t queued_bytes_ = 0;
   bool writing_ = false, open_ = false, closed_ = false, closing_ = false, stale_ = false;
-  double opened_s_ = 0.0;
+  double quiet_since_s_ = 0.0;  // when it opened, or last dropped its last subscription
   std::uint64_t dropped_ = 0;
   std::size_t strikes_ = 0;
   double tokens_, last_s_;

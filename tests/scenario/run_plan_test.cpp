@@ -166,8 +166,12 @@ TEST(RunPlan, TheHostsDecideHowProcessesFindEachOther) {
     test::plan_for(4, true, given);
     ADD_FAILURE() << "a secure run through a Discovery Server was planned";
   } catch (const ScenarioError& e) {
-    EXPECT_NE(std::string(e.what()).find("transport.discovery"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("--discovery-server"), std::string::npos) << e.what();
   }
+  // A block to discover by unicast and a server beside it: one or the other.
+  Hosts both = given;
+  both.unicast_block = std::pair{10, 4};
+  EXPECT_THROW(test::plan_for(4, false, both), ScenarioError);
   // A secure swarm in a container (every interface) has no block of one address: multicast.
   Hosts container;
   container.interface.clear();
