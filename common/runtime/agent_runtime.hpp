@@ -32,10 +32,10 @@ struct AgentStart {
   double start_time_s = 0.0;
   // Restarted: recover the flows it owned from the neighbours' copies before its first tick.
   bool recover_flows = false;
-  // Every how many samples one also goes to the recorder (RunConfig::record_every).
+  // Every how many samples one also goes to the recorder (RunPlan::record_every).
   std::uint32_t record_every = 1;
   // Which one of every record_every ticks it records: the same for every agent, or by its id
-  // (kSpreadRecordsAbove).
+  // (RunPlan::spread_records).
   bool spread_records = false;
   // Whether the samples its neighbours hear carry its links. Only a place filter reads them
   // (delivery REACH: a bond lets a sample through); the recorder's samples always carry its
