@@ -35,8 +35,9 @@ class SwarmResilienceTest(unittest.TestCase):
     def setUpClass(cls):
         cls.tmp = tempfile.TemporaryDirectory(prefix="swarm-resilience-test-")
         cls.out = os.path.join(cls.tmp.name, "a")
-        # From the repository root, with the defaults: scenarios/insider_seven.txtpb, agent 7.
-        cls.first = swarm("resilience", "--out", cls.out)
+        # With the defaults (scenarios/insider_seven.txtpb, agent 7), from outside the repository:
+        # the defaults are the source tree's wherever the command runs.
+        cls.first = swarm("resilience", "--out", cls.out, cwd=cls.tmp.name)
 
     @classmethod
     def tearDownClass(cls):
