@@ -5,6 +5,7 @@
 #include <cstdlib>
 
 #include "agent/stats.hpp"
+#include "common/app/process_dds.hpp"
 #include "common/app/process_life.hpp"
 #include "common/record/run_dir.hpp"
 
@@ -46,6 +47,7 @@ int fly(const RunConfig& rc, AgentId id, AgentFlags& f, DdsBus& bus, SteadyClock
   f.loop.time_scale = f.process.time_scale;
   f.loop.incarnation = clock.wall_ns();
   f.loop.tick_phase = rc.plan.tick_phase(rc.ids(), id);
+  f.loop.host = host_label(rc.plan.hosts.interface);
   AgentLoop loop(rc, id, f.loop, bus, clock);
   log->info("agent {} up: domain {}, {} law, time scale {}", id, rc.transport.domain_id,
             to_string(rc.agent.law.kind), f.process.time_scale);

@@ -5,8 +5,11 @@
 #include <cstdio>
 #include <thread>
 
+#include <unistd.h>
+
 #include "common/security/keystore.hpp"
 #include "common/transport/port_plan.hpp"
+#include "common/transport/state_message.hpp"
 
 namespace qswarm {
 
@@ -44,6 +47,26 @@ DdsOptions dds_options(const RunConfig& rc, const std::string& participant_name,
   s.multicast_group = plan.multicast_group;
   d.claims_kept = plan.claim_capacity;
   return d;
+}
+
+std::string host_label(const std::string& interface) {
+  char name[256] = {};
+  if (::gethostname(name, sizeof name - 1) != 0) std::snprintf(name, sizeof name, "unknown");
+  std::string address = interface;
+  if (address.empty()) {
+    for (const std::string& a : local_ipv4_addresses())
+      if (a.rfind("127.", 0) != 0) {
+        address = a;
+        break;
+      }
+    if (address.empty()) address = "127.0.0.1";
+  }
+  std::string label = std::string(name) + "/" + address;
+  for (char& c : label)
+    if (c < 0x20 || c > 0x7e || c == ',' || c == '"') c = '_';
+  if (label.size() > kMaxHostBytes)
+    label.erase(0, label.size() - kMaxHostBytes);  // keep the address
+  return label;
 }
 
 bool keystore_ready(const char* prog, const RunConfig& rc, const std::string& identity) {

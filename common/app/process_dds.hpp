@@ -16,6 +16,11 @@ namespace qswarm {
 DdsOptions dds_options(const RunConfig& rc, const std::string& participant_name,
                        const ProcessOptions& o);
 
+// Where this process flies, as its samples tell the recorder (StateMessage::host): "NAME/ADDRESS",
+// its host name and the address its DDS traffic binds to (where it binds to every interface, as
+// in a pod, the first one that is not loopback), cut to the wire's bound.
+std::string host_label(const std::string& interface);
+
 // What a process does when a signal stops it while it waits for its peer hosts' names.
 enum class StoppedWaiting {
   kExit,    // an agent: a stop, not a failure (exit 0)

@@ -99,6 +99,9 @@ void to_idl(const StateMessage& m, qswarm_msgs::AgentState& s) {
   s.barrier_known(m.barrier_known);
   s.barrier_ready(m.barrier_ready);
   s.barrier_ready_at_s(m.barrier_ready_at_s);
+  if (m.host.size() > kMaxHostBytes)
+    throw std::length_error("a host is at most " + std::to_string(kMaxHostBytes) + " bytes");
+  s.host(m.host);
 }
 
 StateMessage from_idl(const qswarm_msgs::AgentState& s) {
@@ -148,6 +151,7 @@ void from_idl(const qswarm_msgs::AgentState& s, StateMessage& m) {
   m.barrier_known.assign(s.barrier_known().begin(), s.barrier_known().end());
   m.barrier_ready.assign(s.barrier_ready().begin(), s.barrier_ready().end());
   m.barrier_ready_at_s = s.barrier_ready_at_s();
+  m.host = s.host();
   m.view.link_distance_m = NeighborView{}.link_distance_m;  // not on the wire
   m.view.current = NeighborView{}.current;
 }

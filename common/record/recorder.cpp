@@ -98,6 +98,21 @@ void Recorder::on_sample(const StateMessage& m, std::int64_t recv_wall_ns) {
       break;
   }
   tally_.fault_counts[{id, m.incarnation}] = m.faults;
+  if (!m.host.empty()) {
+    std::vector<std::string>& hosts = tally_.hosts[id];
+    // A host it flew on before counts again (a restart back on it); a sender whose host changes
+    // more often than restarts do is told once and not followed.
+    if (hosts.empty() || hosts.back() != m.host) {
+      if (hosts.size() < kMaxHostsPerAgent) {
+        hosts.push_back(m.host);
+        event("host", id, "flies on " + m.host);
+      } else if (hosts_capped_.insert(id).second) {
+        event("host", id,
+              "on more than " + std::to_string(kMaxHostsPerAgent) +
+                  " hosts: those after are not recorded");
+      }
+    }
+  }
   // What the agent's transport found forged: the recorder does not hear the agents' stream.
   if (!m.suspects.empty()) {
     std::map<AgentId, std::uint8_t> suspects;

@@ -27,6 +27,8 @@ namespace qswarm {
 // arrives, so departures are judged in the same time domain as the agents judge them.
 class Recorder {
  public:
+  // Hosts recorded per agent (restarts elsewhere), beyond which a changing host is not followed.
+  static constexpr std::size_t kMaxHostsPerAgent = 16;
   Recorder(RunConfig rc, RunDir dir, double time_scale);
 
   void on_sample(const StateMessage& m, std::int64_t recv_wall_ns);
@@ -104,6 +106,7 @@ class Recorder {
   std::map<AgentId, double> killed_at_;  // planned kill time, until the departure is seen
   std::set<std::uint64_t> foreign_runs_;
   std::set<AgentId> implausible_;
+  std::set<AgentId> hosts_capped_;  // on kMaxHostsPerAgent hosts already: no more followed
   std::vector<std::string> notes_;
   // W-MSR's condition: the graph robustness was last decided for (ids, and edges as id pairs),
   // and what the condition was at the last snapshot.

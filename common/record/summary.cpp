@@ -104,6 +104,8 @@ records::Summary build_summary(const RunConfig& rc, const Presence& presence,
     as->set_seq_gaps(count32(a.gaps));
     as->set_dropped_by_agent(count32(a.last.dropped));
     as->set_trimmed(a.last.trimmed);
+    if (const auto h = tally.hosts.find(id); h != tally.hosts.end())
+      for (const std::string& host : h->second) as->add_hosts(host);
     const double span = a.last.stamp_s - a.first.stamp_s;
     if (span > 0.0) {
       as->set_rate_hz(static_cast<double>(a.samples - 1) / (span / end.time_scale));
@@ -261,6 +263,21 @@ std::string summary_text(const records::Summary& s, const RunConfig& rc, const s
     h << "BEHIND: " << msg.unrecorded()
       << " samples arrived while the supervisor's inbox was full and were not recorded\n";
   h << "joins " << s.joins() << ", departures " << s.departures() << "\n";
+  std::map<std::string, int> per_host;  // agents last seen on each host
+  for (const records::AgentSummary& as : s.agents())
+    if (as.hosts_size() > 0) ++per_host[as.hosts(as.hosts_size() - 1)];
+  if (!per_host.empty()) {
+    h << "hosts " << per_host.size() << ":";
+    int shown = 0;
+    for (const auto& [host, n] : per_host) {
+      if (++shown > 4) {
+        h << " and " << per_host.size() - 4 << " more";
+        break;
+      }
+      h << (shown > 1 ? "," : "") << " " << host << " (" << n << (n == 1 ? " agent)" : " agents)");
+    }
+    h << "\n";
+  }
   if (s.has_agreed_elsewhere_m() && rc.agent.law.kind == LawKind::kWmsr) {
     h << "MOVED: the agents agreed " << fmt("%.3g", s.agreed_elsewhere_m())
       << " m outside their initial bounding box, which W-MSR keeps with at most F = "

@@ -44,6 +44,8 @@ struct RunTally {
   std::vector<AgentId> impersonated() const;
   // Law W_MSR: its condition over the run (trimmed is summed from the agents' last samples).
   std::optional<records::ResilienceOverTime> resilience;
+  // The hosts each agent flew on, in order (StateMessage::host).
+  std::map<AgentId, std::vector<std::string>> hosts;
 };
 
 struct RunEnd {

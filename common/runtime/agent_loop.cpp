@@ -64,6 +64,7 @@ AgentParams params_for(const RunConfig& rc, AgentId id, const AgentLoopOptions& 
   p.start.record_every = rc.plan.record_every;
   p.start.spread_records = rc.plan.spread_records;
   p.start.links_to_neighbours = rc.plan.delivery == Delivery::kReach;
+  p.start.host = o.host;
   if (join_time(rc, id, o)) {
     p.start.expected_peers = 0;  // joins a running swarm: no first-tick wait
     p.start.recover_flows = o.restarted;

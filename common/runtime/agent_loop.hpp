@@ -28,6 +28,7 @@ struct AgentLoopOptions {
   // Where in each tick period of the host's shared grid this agent ticks, as a fraction of the
   // period (RunPlan::tick_phase; the in-process swarm ticks every agent at 0).
   double tick_phase = 0.0;
+  std::string host;  // where this process flies, "NAME/ADDRESS" (StateMessage::host)
 };
 
 // One agent as the product runs it: its lifecycle (join wait, barrier, paced ticks, planned kills)

@@ -86,6 +86,7 @@ bool AgentRuntime::publish(Phase phase, bool record) {
   if (record || (m.seq % k == 0 && !(first_tick && k > 1)) || phase == Phase::kStopping) {
     if (!p_.start.links_to_neighbours) add_links();
     m.initial_links = initial_links_;
+    m.host = p_.start.host;
     m.wall_ns = wall_now_ns();  // handed over after the state sample
     bus_.record(m);
     return true;

@@ -42,6 +42,8 @@ struct AgentStart {
   // links and initial links (graph.csv), and no neighbour reads the initial ones. Without them a
   // sample's size follows the edges still settling, not twice the degree more.
   bool links_to_neighbours = true;
+  // Where it flies (StateMessage::host), told the recorder; empty in the in-process swarm.
+  std::string host;
 };
 
 // One agent: who it is and where it starts (its spec), what every agent of the run flies with (the

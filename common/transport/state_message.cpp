@@ -30,6 +30,10 @@ std::string check_message(const StateMessage& m) {
     return "start barrier bitset too long";
   if (!std::isfinite(m.barrier_ready_at_s) || std::abs(m.barrier_ready_at_s) > 1e12)
     return "start barrier instant not finite or absurd";
+  if (m.host.size() > kMaxHostBytes || std::any_of(m.host.begin(), m.host.end(), [](char c) {
+        return c < 0x20 || c > 0x7e || c == ',' || c == '"';
+      }))
+    return "host too long or not printable";
   for (const Suspect& s : m.suspects)
     if (s.id == 0 || s.kinds == 0 || (s.kinds & ~kAllSuspectKinds) != 0) return "suspect invalid";
   for (const auto* links : {&m.links, &m.initial_links}) {

@@ -59,6 +59,8 @@ struct Suspect {
 };
 // How many suspects a sample reports (the wire's bound).
 inline constexpr std::size_t kMaxSuspects = 16;
+// The longest host a sample names (the wire's bound).
+inline constexpr std::size_t kMaxHostBytes = 64;
 // The name of one kind in the record ("two_writers") and what it means for people.
 const char* suspect_name(SuspectKind k);
 const char* suspect_text(SuspectKind k);
@@ -96,6 +98,10 @@ struct StateMessage {
   // (kMaxBarrierBytes): the agents the sender knows start with it (its start peers and theirs,
   // transitively), and those it knows are ready. AgentLifecycle says how the start uses them.
   std::vector<std::uint8_t> barrier_known, barrier_ready;
+  // Where the sender flies, "NAME/ADDRESS" (its host name, the address its DDS traffic uses): in
+  // the recorder's samples only (empty in its neighbours'), so the record says which host each
+  // agent flew on, a restart on another host included. Printable ASCII without ',' or '"'.
+  std::string host;
   // With them: the latest instant, on the host's shared time line, at which an agent in
   // barrier_ready turned ready.
   double barrier_ready_at_s = 0.0;

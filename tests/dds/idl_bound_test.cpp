@@ -47,6 +47,7 @@ TEST(WireBound, DecodingIntoAReusedMessageLeavesNothingOfTheOneBefore) {
   big.barrier_known = {1, 2, 3};
   big.barrier_ready = {1};
   big.barrier_ready_at_s = 12.5;
+  big.host = "node-7/10.1.2.3";
   big.view.link_distance_m = 2.5;  // set by a receiver, never on the wire
   big.view.current = false;
   StateMessage small = with_entries(2);
@@ -76,6 +77,26 @@ TEST(WireBound, DecodingIntoAReusedMessageLeavesNothingOfTheOneBefore) {
   EXPECT_TRUE(reused.suspects.empty());
   EXPECT_TRUE(reused.barrier_known.empty());
   EXPECT_EQ(reused.barrier_ready_at_s, 0.0);
+  EXPECT_EQ(reused.host, "");
+}
+
+TEST(WireBound, AHostIsCarriedUpToItsBoundAndANetworkOneThatIsNotPrintableIsRefused) {
+  StateMessage m = with_entries(1);
+  m.host = std::string(kMaxHostBytes - 9, 'n') + "/10.0.0.1";
+  qswarm_msgs::AgentState s;
+  to_idl(m, s);
+  EXPECT_EQ(from_idl(s).host, m.host);
+  EXPECT_EQ(check_message(m), "");
+  m.host += "0";  // one byte over: refused, never cut
+  EXPECT_THROW(to_idl(m, s), std::length_error);
+  EXPECT_EQ(check_message(m), "host too long or not printable");
+  // What a forger may put on the wire: a line break or a quote for events.csv, bytes that are
+  // not text for the live view.
+  for (const std::string& bad : {std::string("a\nb"), std::string("a,b"), std::string("a\"b"),
+                                 std::string("a\377b"), std::string("a\0b", 3)}) {
+    m.host = bad;
+    EXPECT_EQ(check_message(m), "host too long or not printable") << bad;
+  }
 }
 
 TEST(WireBound, TheStartBarriersBitsetsCoverTheLargestSwarm) {

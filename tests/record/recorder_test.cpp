@@ -354,6 +354,47 @@ TEST(Recorder, FedWithMessagesWritesTheRunRecordAndASummary) {
   std::filesystem::remove_all(dir);
 }
 
+TEST(Recorder, TheHostsEachAgentFlewOnAreRecordedInOrderAndAFlappingOneIsNotFollowed) {
+  const RunConfig rc = resolve_scenario(parse_scenario_text(
+      "name: \"hosts\"\nagents { id: 1 position { x: 0 } }\nagents { id: 2 position { x: 2 } }\n"
+      "weight { policy: UNWEIGHTED }\n",
+      "hosts"));
+  const std::filesystem::path dir = fresh_dir("qswarm-hosts");
+  std::string text;
+  records::Summary s;
+  {
+    Recorder rec(rc, RunDir(dir), 1.0);
+    std::int64_t wall = 1'000'000'000;
+    for (int k = 0; k < 60; ++k) {
+      StateMessage a = sample(1, k + 1, 0.02 * k, Vec3(0, 0, 0)),
+                   b = sample(2, k + 1, 0.02 * k, Vec3(2, 0, 0));
+      // Agent 1 moves from host a to host b at its 20th sample (a restart elsewhere); agent 2's
+      // host changes at every sample, as no restart does.
+      a.host = k < 20 ? "a/10.0.0.1" : "b/10.0.0.2";
+      b.host = "h" + std::to_string(k) + "/10.0.1." + std::to_string(k);
+      rec.on_sample(a, wall);
+      rec.on_sample(b, wall);
+      rec.tick(wall);
+      wall += 20'000'000;
+    }
+    text = rec.finish("duration", 1.2);
+    s = rec.summary();
+  }
+  ASSERT_EQ(s.agents_size(), 2);
+  EXPECT_EQ(std::vector<std::string>(s.agents(0).hosts().begin(), s.agents(0).hosts().end()),
+            (std::vector<std::string>{"a/10.0.0.1", "b/10.0.0.2"}));
+  EXPECT_EQ(s.agents(1).hosts_size(), static_cast<int>(Recorder::kMaxHostsPerAgent));
+  std::ifstream ev(dir / "events.csv");
+  std::stringstream all;
+  all << ev.rdbuf();
+  EXPECT_NE(all.str().find(",host,1,\"flies on b/10.0.0.2\""), std::string::npos) << all.str();
+  const std::string capped = "on more than 16 hosts";
+  ASSERT_NE(all.str().find(capped), std::string::npos) << all.str();
+  EXPECT_EQ(all.str().find(capped, all.str().find(capped) + 1), std::string::npos) << "said twice";
+  EXPECT_NE(text.find("hosts 2: b/10.0.0.2 (1 agent)"), std::string::npos) << text;
+  std::filesystem::remove_all(dir);
+}
+
 TEST(Recorder, AnAgentHeardOnlyAtItsStartBarrierIsNamedAsNeverRan) {
   // Given a run whose duration runs out while agent 2 still waits at its start barrier
   const RunConfig rc = resolve_scenario(parse_scenario_text(

@@ -16,6 +16,7 @@
 #include "common/scenario/scenario.hpp"
 #include "tests/swarm/domain_lease.hpp"
 #include "tests/swarm/harness.hpp"
+#include "tests/swarm/net_hosts.hpp"
 
 namespace qswarm::test {
 namespace {
@@ -171,89 +172,14 @@ TEST(Faults, LossBelowTheApplicationThroughFastDdsTestTransport) {
 
 // --- Multi-host: agents in separate network namespaces, links cut with iptables -------------
 
-std::string find_tool(const std::string& name) {
-  for (const char* dir : {"/usr/sbin/", "/sbin/", "/usr/bin/", "/bin/"}) {
-    std::string p = std::string(dir) + name;
-    if (access(p.c_str(), X_OK) == 0) return p;
-  }
-  return "";
-}
-
-class Hosts {
- public:
-  explicit Hosts(int n) : prefix_("qsw" + std::to_string(getpid()) + "-") {
-    ip_ = find_tool("ip");
-    sh("ip netns add " + ns("hub"));
-    sh("ip -n " + ns("hub") + " link add br0 type bridge");
-    sh("ip -n " + ns("hub") + " link set br0 up");
-    for (int i = 0; i < n; ++i) {
-      const std::string h = ns(std::to_string(i));
-      sh("ip netns add " + h);
-      sh("ip -n " + h + " link add eth0 type veth peer name p" + std::to_string(i) + " netns " +
-         ns("hub"));
-      sh("ip -n " + h + " addr add " + address(i) + "/24 dev eth0");
-      sh("ip -n " + h + " link set lo up");
-      sh("ip -n " + h + " link set eth0 up");
-      sh("ip -n " + h + " route add 224.0.0.0/4 dev eth0");
-      sh("ip -n " + ns("hub") + " link set p" + std::to_string(i) + " master br0");
-      sh("ip -n " + ns("hub") + " link set p" + std::to_string(i) + " up");
-      hosts_.push_back(h);
-    }
-  }
-  ~Hosts() {
-    for (const std::string& h : hosts_) std::system(("ip netns del " + h + " 2>/dev/null").c_str());
-    std::system(("ip netns del " + ns("hub") + " 2>/dev/null").c_str());
-  }
-  std::string ns(const std::string& s) const { return prefix_ + s; }
-  static std::string address(int i) { return "10.77.0." + std::to_string(10 + i); }
-  std::vector<std::string> exec(int i, std::vector<std::string> argv) const {
-    std::vector<std::string> out = {ip_, "netns", "exec", ns(std::to_string(i))};
-    out.insert(out.end(), argv.begin(), argv.end());
-    return out;
-  }
-  void sh(const std::string& cmd) const {
-    if (std::system(cmd.c_str()) != 0) throw std::runtime_error("failed: " + cmd);
-  }
-  // Packets a host's INPUT rules have dropped.
-  long dropped(int i) const {
-    const std::string out = "/tmp/" + prefix_ + "ipt.txt";
-    std::system(("ip netns exec " + ns(std::to_string(i)) + " iptables -L INPUT -v -n -x > " + out)
-                    .c_str());
-    std::ifstream in(out);
-    std::string line;
-    long total = 0;
-    while (std::getline(in, line)) {
-      if (line.find("DROP") == std::string::npos) continue;
-      std::istringstream fields(line);
-      long pkts = 0;
-      fields >> pkts;
-      total += pkts;
-    }
-    std::remove(out.c_str());
-    return total;
-  }
-
- private:
-  std::string prefix_, ip_;
-  std::vector<std::string> hosts_;
-};
-
 TEST(Faults, NamespacesWithIptablesCutAndRandomLossTheDdsPathSurvives) {
-  if (geteuid() != 0) GTEST_SKIP() << "needs root to create network namespaces and iptables rules";
-  if (find_tool("ip").empty() || find_tool("iptables").empty())
-    GTEST_SKIP() << "needs ip and iptables";
-  if (std::system("ip netns add qsw-probe >/dev/null 2>&1 && ip netns del qsw-probe") != 0) {
-    GTEST_SKIP() << "network namespaces are not available here";
-  }
+  if (const std::string why = net_hosts_unavailable(); !why.empty()) GTEST_SKIP() << why;
   // Host 0: supervisor; hosts 1-4: agents, each its own address on a bridge. Cut 1 <-> 2 both
   // ways with targeted DROP rules, and drop 30% of everything arriving at host 3.
-  Hosts hosts(5);
-  const auto nsx = [&](int i, const std::string& cmd) {
-    hosts.sh("ip netns exec " + hosts.ns(std::to_string(i)) + " " + cmd);
-  };
-  nsx(1, "iptables -A INPUT -s " + Hosts::address(2) + " -j DROP");
-  nsx(2, "iptables -A INPUT -s " + Hosts::address(1) + " -j DROP");
-  nsx(3, "iptables -A INPUT -m statistic --mode random --probability 0.3 -j DROP");
+  NetHosts hosts(5, NetHosts::Layout::kBridge);
+  hosts.on(1, "iptables -A INPUT -s " + hosts.address(2) + " -j DROP");
+  hosts.on(2, "iptables -A INPUT -s " + hosts.address(1) + " -j DROP");
+  hosts.on(3, "iptables -A INPUT -m statistic --mode random --probability 0.3 -j DROP");
 
   const auto dir = fresh_dir("netns");
   std::filesystem::create_directories(dir);
@@ -271,13 +197,13 @@ seed: 5
 transport { domain_id: 7 }
 )";
   Child sup(hosts.exec(0, {bin("swarm-supervisor"), "--scenario", scen.string(), "--run-dir",
-                           dir.string(), "--interface", Hosts::address(0), "--time-scale", "2"}),
+                           dir.string(), "--interface", hosts.address(0), "--time-scale", "2"}),
             dir / "supervisor.out");
   std::vector<std::unique_ptr<Child>> agents;
   for (int i = 1; i <= 4; ++i) {
     agents.push_back(std::make_unique<Child>(
         hosts.exec(i, {bin("swarm-agent"), "--scenario", scen.string(), "--id", std::to_string(i),
-                       "--run-dir", dir.string(), "--interface", Hosts::address(i), "--time-scale",
+                       "--run-dir", dir.string(), "--interface", hosts.address(i), "--time-scale",
                        "2", "--start-timeout", "3"}),
         dir / ("agent-" + std::to_string(i) + ".out")));
   }
