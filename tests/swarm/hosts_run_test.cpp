@@ -122,6 +122,14 @@ transport { domain_id: 3 }
       if (!have.count(id)) return false;
     return true;
   }
+  // Waits until every agent joined and the swarm flew 2 s; "" or what did not happen.
+  std::string flying() const {
+    std::set<int> all;
+    for (int id = 1; id <= kAgents; ++id) all.insert(id);
+    if (!wait_for([&] { return all_in("join", all); }, 120.0)) return "not every agent joined";
+    if (!wait_for([&] { return swarm_clock() >= 2.0; }, 120.0)) return "the swarm never flew";
+    return "";
+  }
   std::set<int> agents_on(int host) const {
     std::set<int> out;
     for (int id = 1; id <= kAgents; ++id)
@@ -173,10 +181,7 @@ TEST(Hosts, AHostCutOffIsNamedMissingTheOthersKeepTheAverageAndItRejoins) {
   REQUIRE_NET_HOSTS();
   RoutedSwarm w("hosts-cut", 0.05);
   w.start();
-  std::set<int> all;
-  for (int id = 1; id <= kAgents; ++id) all.insert(id);
-  ASSERT_TRUE(wait_for([&] { return w.all_in("join", all); }, 120.0)) << "not every agent joined";
-  ASSERT_TRUE(wait_for([&] { return w.swarm_clock() >= 2.0; }, 120.0)) << "the swarm never flew";
+  ASSERT_EQ(w.flying(), "");
   // Host 2 cut off from the others (the hub forwards nothing to or from it) until each of its
   // agents is named departed, and for a window after.
   const std::set<int> cut = w.agents_on(2);
@@ -206,10 +211,7 @@ TEST(Hosts, AnAgentRestartedOnAnotherHostRejoinsUnderItsIdAtItsNewAddress) {
   REQUIRE_NET_HOSTS();
   RoutedSwarm w("hosts-restart", 0.05);
   w.start();
-  std::set<int> all;
-  for (int id = 1; id <= kAgents; ++id) all.insert(id);
-  ASSERT_TRUE(wait_for([&] { return w.all_in("join", all); }, 120.0)) << "not every agent joined";
-  ASSERT_TRUE(wait_for([&] { return w.swarm_clock() >= 2.0; }, 120.0)) << "the swarm never flew";
+  ASSERT_EQ(w.flying(), "");
   // Agent 20 (host 2) dies without a word, as its machine would; it comes back on host 0 with a
   // new address and recovers the flows it owned from its neighbours.
   constexpr int kMoved = 20;
