@@ -10,10 +10,13 @@
 #include <fstream>
 #include <string>
 #include <thread>
+#include <utility>
+#include <vector>
 
 #include <unistd.h>
 
 #include "common/dds/discovery_server.hpp"
+#include "common/dds/participant.hpp"
 #include "common/transport/port_plan.hpp"
 
 namespace {
@@ -27,9 +30,21 @@ int main(int argc, char** argv) {
   unsigned port = 11811;
   unsigned domain = 0;
   int participant_id = -1;
-  app.add_option("--listen", listen,
-                 "IPv4 address or host name to listen on (default: this host's name)");
-  app.add_option("--port", port, "UDP port")->check(CLI::Range(1, 65535));
+  std::string servers;
+  int index = 0;
+  auto* listen_opt = app.add_option(
+      "--listen", listen, "IPv4 address or host name to listen on (default: this host's name)");
+  auto* port_opt = app.add_option("--port", port, "UDP port")->check(CLI::Range(1, 65535));
+  auto* servers_opt =
+      app.add_option("--servers", servers,
+                     "HOST:PORT,HOST:PORT: the swarm's servers, listed as its processes' "
+                     "--discovery-server lists them; this one is the entry at --index, and knows "
+                     "the others")
+          ->excludes(listen_opt)
+          ->excludes(port_opt);
+  app.add_option("--index", index, "this server's place in --servers, from 0")
+      ->check(CLI::Range(0, static_cast<int>(qswarm::kMaxDiscoveryServers) - 1))
+      ->needs(servers_opt);
   app.add_option("--domain", domain, "DDS domain id")
       ->check(CLI::Range(0, static_cast<int>(qswarm::PortPlan::kMaxDomain)));
   std::string ready_file;
@@ -44,6 +59,22 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     return app.exit(e) == 0 ? 0 : 2;
   }
+  std::vector<std::pair<std::string, std::uint16_t>> list;
+  if (!servers.empty()) {
+    try {
+      list = qswarm::resolve_discovery_servers(servers);
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "swarm-discovery: --servers: %s\n", e.what());
+      return 2;
+    }
+    if (index >= static_cast<int>(list.size())) {
+      std::fprintf(stderr, "swarm-discovery: --index %d: --servers lists %zu servers\n", index,
+                   list.size());
+      return 2;
+    }
+    listen = list[index].first;
+    port = list[index].second;
+  }
   if (listen.empty()) {
     char host[256] = {};
     gethostname(host, sizeof host - 1);
@@ -52,8 +83,8 @@ int main(int argc, char** argv) {
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
   try {
-    qswarm::DiscoveryServer server(domain, listen, static_cast<std::uint16_t>(port),
-                                   participant_id);
+    qswarm::DiscoveryServer server(domain, listen, static_cast<std::uint16_t>(port), participant_id,
+                                   index, list);
     std::printf("swarm-discovery: serving domain %u on %s:%u\n", domain, server.address().c_str(),
                 port);
     std::fflush(stdout);

@@ -40,8 +40,9 @@ void add_process_options(CLI::App& app, ProcessOptions& o) {
       ->envname("QSWARM_AGENTS")
       ->check(CLI::Range(1, static_cast<int>(kMaxSwarmAgents)));
   app.add_option("--discovery-server", o.discovery_server,
-                 "discover through the Fast DDS Discovery Server at HOST:PORT (containers); "
-                 "\"none\" or empty: simple discovery")
+                 "discover through the Fast DDS Discovery Server at HOST:PORT (containers, hosts "
+                 "without multicast), or the servers HOST:PORT,HOST:PORT (swarm-discovery "
+                 "--servers, listed alike everywhere); \"none\" or empty: simple discovery")
       ->envname("QSWARM_DISCOVERY_SERVER")
       ->transform([](const std::string& v) { return v == "none" ? std::string() : v; });
   app.add_option("--participant-id", o.participant_id,
@@ -109,7 +110,7 @@ std::optional<RunConfig> load_for_process(const char* prog, const ProcessOptions
     replan(rc, hosts_of(rc, opts));
     // Checked (and resolved, with retries while a container network's DNS catches up) before
     // anything is created, so that a bad address is bad input: exit 2.
-    if (!opts.discovery_server.empty()) resolve_discovery_server(opts.discovery_server);
+    if (!opts.discovery_server.empty()) resolve_discovery_servers(opts.discovery_server);
     const std::string problem =
         interface_problem(opts.interface.empty() ? rc.transport.interface : opts.interface);
     if (!problem.empty()) {

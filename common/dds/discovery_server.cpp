@@ -31,7 +31,8 @@ struct DiscoveryServer::Impl : public dds::DomainParticipantListener {
 };
 
 DiscoveryServer::DiscoveryServer(std::uint32_t domain_id, const std::string& listen,
-                                 std::uint16_t port, int participant_id)
+                                 std::uint16_t port, int participant_id, int index,
+                                 const std::vector<std::pair<std::string, std::uint16_t>>& servers)
     : impl_(std::make_unique<Impl>()) {
   address_ = resolve_discovery_server(listen + ":" + std::to_string(port)).first;
   dds::DomainParticipantQos pqos;
@@ -72,7 +73,8 @@ DiscoveryServer::DiscoveryServer(std::uint32_t domain_id, const std::string& lis
   // matched (docs/fast-dds-workarounds.md, W3).
   disc.initial_announcements.count = 0;
   disc.leaseDuration_announcementperiod = eprosima::fastrtps::Duration_t(kNeverSeconds, 0);
-  rtps::get_server_client_default_guidPrefix(0, pqos.wire_protocol().prefix);
+  rtps::get_server_client_default_guidPrefix(index, pqos.wire_protocol().prefix);
+  add_discovery_servers(servers, index, disc.m_DiscoveryServers);
   eprosima::fastrtps::rtps::Locator_t loc;
   eprosima::fastrtps::rtps::IPLocator::setIPv4(loc, address_);
   loc.port = port;

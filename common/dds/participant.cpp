@@ -134,15 +134,9 @@ DdsParticipant::DdsParticipant(const ParticipantOptions& opts) : opts_(opts) {
     }
   }
   if (!opts.discovery_server.empty()) {
-    const auto [ip, port] = resolve_discovery_server(opts.discovery_server);
     discovery.discoveryProtocol = eprosima::fastrtps::rtps::DiscoveryProtocol_t::CLIENT;
-    rtps::RemoteServerAttributes server;
-    rtps::get_server_client_default_guidPrefix(0, server.guidPrefix);
-    eprosima::fastrtps::rtps::Locator_t loc;
-    eprosima::fastrtps::rtps::IPLocator::setIPv4(loc, ip);
-    loc.port = port;
-    server.metatrafficUnicastLocatorList.push_back(loc);
-    discovery.m_DiscoveryServers.push_back(server);
+    add_discovery_servers(resolve_discovery_servers(opts.discovery_server), -1,
+                          discovery.m_DiscoveryServers);
   }
   // A process given its id (the launcher's plan) takes exactly that one. One without (a lone
   // agent, a tool, a test's participant) takes one of the highest free ids, away from the blocks
@@ -269,6 +263,37 @@ std::vector<std::string> ipv4_addresses(const std::string& host, int& error) {
   freeaddrinfo(res);
   if (out.empty()) error = EAI_NODATA;
   return out;
+}
+
+std::vector<std::pair<std::string, std::uint16_t>> resolve_discovery_servers(
+    const std::string& list) {
+  std::vector<std::pair<std::string, std::uint16_t>> out;
+  std::size_t from = 0;
+  while (true) {
+    const std::size_t comma = list.find(',', from);
+    out.push_back(resolve_discovery_server(list.substr(from, comma - from)));
+    if (comma == std::string::npos) break;
+    from = comma + 1;
+  }
+  if (out.size() > kMaxDiscoveryServers)
+    throw std::invalid_argument("discovery servers \"" + list + "\": at most " +
+                                std::to_string(kMaxDiscoveryServers));
+  return out;
+}
+
+void add_discovery_servers(const std::vector<std::pair<std::string, std::uint16_t>>& servers,
+                           int except, eprosima::fastdds::rtps::RemoteServerList_t& out) {
+  for (std::size_t i = 0; i < servers.size(); ++i) {
+    if (static_cast<int>(i) == except) continue;
+    eprosima::fastdds::rtps::RemoteServerAttributes server;
+    eprosima::fastdds::rtps::get_server_client_default_guidPrefix(static_cast<int>(i),
+                                                                  server.guidPrefix);
+    eprosima::fastrtps::rtps::Locator_t loc;
+    eprosima::fastrtps::rtps::IPLocator::setIPv4(loc, servers[i].first);
+    loc.port = servers[i].second;
+    server.metatrafficUnicastLocatorList.push_back(loc);
+    out.push_back(server);
+  }
 }
 
 std::pair<std::string, std::uint16_t> resolve_discovery_server(const std::string& host_port) {

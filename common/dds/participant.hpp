@@ -6,6 +6,8 @@
 #include <utility>
 #include <vector>
 
+#include <fastdds/rtps/attributes/ServerAttributes.h>
+
 #include "common/dds/writer_registry.hpp"
 
 namespace eprosima::fastdds::dds {
@@ -30,8 +32,9 @@ struct ParticipantOptions {
   // its peers never learn its writers while it learns their readers, a lost discovery message
   // made permanent (tests of a one-sided match).
   bool test_drop_writer_announcements = false;
-  // Fast DDS Discovery Server "HOST:PORT" (HOST a name or an IPv4 address): discover through it as
-  // a client instead of by multicast (container networks). Empty: the standard simple discovery.
+  // Fast DDS Discovery Servers "HOST:PORT[,HOST:PORT...]" (HOST a name or an IPv4 address):
+  // discover through them as a client instead of by multicast (container networks, hosts without
+  // multicast); with two, either one alone keeps discovery going. Empty: simple discovery.
   std::string discovery_server;
   // Its participant id in the port plan (PortPlan): a given id whose ports are taken is an error;
   // -1 takes the highest id whose ports are free (runs reserve their blocks from 0 up).
@@ -109,6 +112,17 @@ void disable_writer_liveliness(eprosima::fastdds::dds::DomainParticipantQos& qos
 // (with retries for ~15 s while a container network's DNS catches up). Throws
 // std::invalid_argument naming what is wrong.
 std::pair<std::string, std::uint16_t> resolve_discovery_server(const std::string& host_port);
+// A list of servers, "HOST:PORT[,HOST:PORT...]" (at most kMaxDiscoveryServers), each resolved as
+// above. A server's place in the list is its index: the GUID prefix a client expects of it
+// (Fast DDS's default prefix for server i), so every process must list the servers in one order.
+inline constexpr std::size_t kMaxDiscoveryServers = 4;
+std::vector<std::pair<std::string, std::uint16_t>> resolve_discovery_servers(
+    const std::string& list);
+
+// The servers of that list as Fast DDS's remote servers, each with its index's prefix, but the one
+// at `except` (a server itself: -1 for none).
+void add_discovery_servers(const std::vector<std::pair<std::string, std::uint16_t>>& servers,
+                           int except, eprosima::fastdds::rtps::RemoteServerList_t& out);
 
 // Every IPv4 address `host` resolves to now (a numeric address: itself), in the resolver's order
 // without repeats; empty, with `error` set to getaddrinfo's code, when it does not resolve.

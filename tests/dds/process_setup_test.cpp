@@ -11,6 +11,7 @@
 
 #include "common/app/process_dds.hpp"
 #include "common/app/process_life.hpp"
+#include "common/dds/participant.hpp"
 
 namespace qswarm {
 namespace {
@@ -50,6 +51,30 @@ TEST(ProcessSetup, AMainsLastCatchNamesRunningOutOfThreadsOrMemory) {
             "join: Invalid argument");
   EXPECT_EQ(describe_exception(std::runtime_error("dds: cannot create the state topic")),
             "dds: cannot create the state topic");
+}
+
+TEST(ProcessSetup, AListOfDiscoveryServersIsReadInOrderAndABadOneIsNamed) {
+  const auto two = resolve_discovery_servers("10.0.1.2:11811,10.0.2.2:11812");
+  ASSERT_EQ(two.size(), 2u);
+  EXPECT_EQ(two[0], std::make_pair(std::string("10.0.1.2"), std::uint16_t{11811}));
+  EXPECT_EQ(two[1], std::make_pair(std::string("10.0.2.2"), std::uint16_t{11812}));
+  // Each entry's place is its GUID prefix on the wire: the clients' list and the servers' agree.
+  eprosima::fastdds::rtps::RemoteServerList_t clients, server1;
+  add_discovery_servers(two, -1, clients);
+  add_discovery_servers(two, 1, server1);
+  ASSERT_EQ(clients.size(), 2u);
+  ASSERT_EQ(server1.size(), 1u);
+  EXPECT_EQ(server1.front().guidPrefix, clients.front().guidPrefix);
+  EXPECT_NE(clients.front().guidPrefix, clients.back().guidPrefix);
+  for (const char* bad : {"10.0.1.2:11811,", ",10.0.1.2:11811", "10.0.1.2", "1.1.1.1:1,b:2:x",
+                          "1.1.1.1:1,1.1.1.2:1,1.1.1.3:1,1.1.1.4:1,1.1.1.5:1", "1.2.3.4:0"}) {
+    try {
+      resolve_discovery_servers(bad);
+      ADD_FAILURE() << bad << " was accepted";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("discovery server"), std::string::npos) << e.what();
+    }
+  }
 }
 
 }  // namespace

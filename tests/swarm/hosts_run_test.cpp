@@ -39,11 +39,12 @@ constexpr const char* kServerPort = "11811";
 int host_of(int agent) { return (agent - 1) / kPerHost; }
 
 // One swarm of 24 agents over the routed hosts. `gain` slows the agreement down so that a fault
-// lands before it is reached (1: about a second; 0.05: about 15 s).
+// lands before it is reached (1: about a second; 0.05: about 15 s). `servers`: 1, on host 1, or 2,
+// on hosts 1 and 2, every process listing both. `extra`: more of the scenario.
 class RoutedSwarm {
  public:
-  RoutedSwarm(const std::string& name, double gain)
-      : hosts_(kHosts, NetHosts::Layout::kRouted), dir_(fresh_dir(name)) {
+  RoutedSwarm(const std::string& name, double gain, int servers = 1, const std::string& extra = "")
+      : hosts_(kHosts, NetHosts::Layout::kRouted), dir_(fresh_dir(name)), servers_(servers) {
     std::filesystem::create_directories(dir_);
     scen_ = dir_ / "hosts.txtpb";
     std::ofstream f(scen_);
@@ -58,41 +59,51 @@ convergence { tolerance_m: 1e-6 hold_s: 1 }
 duration_s: 90
 seed: 5
 transport { domain_id: 3 }
-)";
+)" << extra;
   }
   ~RoutedSwarm() {
     for (auto& a : agents_)
       if (a) a->signal(SIGTERM);
     for (auto& a : agents_)
       if (a) a->wait(15.0);
-    if (server_) {
-      server_->signal(SIGTERM);
-      server_->wait(15.0);
+    for (auto& server : servers_up_) {
+      server->signal(SIGTERM);
+      server->wait(15.0);
     }
   }
-  std::string server() const { return hosts_.address(1) + ":" + kServerPort; }
+  std::string server() const {
+    std::string list;
+    for (int k = 0; k < servers_; ++k)
+      list += (k ? "," : "") + hosts_.address(1 + k) + ":" + kServerPort;
+    return list;
+  }
   std::vector<std::string> agent_argv(int id, int host) const {
     return hosts_.exec(host, {bin("swarm-agent"), "--scenario", scen_.string(), "--id",
                               std::to_string(id), "--run-dir", dir_.string(), "--interface",
                               hosts_.address(host), "--discovery-server", server()});
   }
-  // The server first, listening, then the rest: as swarm run orders its own.
-  void start() {
-    const auto ready = dir_ / "discovery.ready";
-    server_ = std::make_unique<Child>(
-        hosts_.exec(1, {bin("swarm-discovery"), "--listen", hosts_.address(1), "--port",
-                        kServerPort, "--domain", "3", "--ready-file", ready.string()}),
-        dir_ / "discovery.out");
-    if (!wait_for([&] { return std::filesystem::exists(ready); }, 30.0))
-      throw std::runtime_error("the Discovery Server never listened");
+  // The servers first, listening, then the rest (but `skip`, started later by the test): as swarm
+  // run orders its own.
+  void start(int skip = 0) {
+    for (int k = 0; k < servers_; ++k) {
+      const auto ready = dir_ / ("discovery-" + std::to_string(k) + ".ready");
+      servers_up_.push_back(std::make_unique<Child>(
+          hosts_.exec(1 + k, {bin("swarm-discovery"), "--servers", server(), "--index",
+                              std::to_string(k), "--domain", "3", "--ready-file", ready.string()}),
+          dir_ / ("discovery-" + std::to_string(k) + ".out")));
+      if (!wait_for([&] { return std::filesystem::exists(ready); }, 30.0))
+        throw std::runtime_error("Discovery Server " + std::to_string(k) + " never listened");
+    }
     sup_ = std::make_unique<Child>(
         hosts_.exec(
             0, {bin("swarm-supervisor"), "--scenario", scen_.string(), "--run-dir", dir_.string(),
                 "--interface", hosts_.address(0), "--discovery-server", server()}),
         dir_ / "supervisor.out");
+    agents_.resize(kAgents);
     for (int id = 1; id <= kAgents; ++id)
-      agents_.push_back(std::make_unique<Child>(agent_argv(id, host_of(id)),
-                                                dir_ / ("agent-" + std::to_string(id) + ".out")));
+      if (id != skip)
+        agents_[id - 1] = std::make_unique<Child>(agent_argv(id, host_of(id)),
+                                                  dir_ / ("agent-" + std::to_string(id) + ".out"));
   }
   // The agents events.csv names with this kind of event.
   std::set<int> with_event(const std::string& kind) const {
@@ -122,10 +133,11 @@ transport { domain_id: 3 }
       if (!have.count(id)) return false;
     return true;
   }
-  // Waits until every agent joined and the swarm flew 2 s; "" or what did not happen.
-  std::string flying() const {
+  // Waits until every agent (but `skip`) joined and the swarm flew 2 s; "" or what did not happen.
+  std::string flying(int skip = 0) const {
     std::set<int> all;
-    for (int id = 1; id <= kAgents; ++id) all.insert(id);
+    for (int id = 1; id <= kAgents; ++id)
+      if (id != skip) all.insert(id);
     if (!wait_for([&] { return all_in("join", all); }, 120.0)) return "not every agent joined";
     if (!wait_for([&] { return swarm_clock() >= 2.0; }, 120.0)) return "the swarm never flew";
     return "";
@@ -139,7 +151,9 @@ transport { domain_id: 3 }
 
   NetHosts hosts_;
   std::filesystem::path dir_, scen_;
-  std::unique_ptr<Child> server_, sup_;
+  int servers_;
+  std::vector<std::unique_ptr<Child>> servers_up_;
+  std::unique_ptr<Child> sup_;
   std::vector<std::unique_ptr<Child>> agents_;  // by id - 1
 };
 
@@ -236,6 +250,31 @@ TEST(Hosts, AnAgentRestartedOnAnotherHostRejoinsUnderItsIdAtItsNewAddress) {
     EXPECT_NE(a.hosts(0).find("/" + w.hosts_.address(2)), std::string::npos) << a.hosts(0);
     EXPECT_NE(a.hosts(1).find("/" + w.hosts_.address(0)), std::string::npos) << a.hosts(1);
   }
+}
+
+TEST(Hosts, WithOneOfTwoDiscoveryServersKilledALateJoinerIsStillFound) {
+  REQUIRE_NET_HOSTS();
+  // Agent 24 is not awaited at the start; its process starts only once server 0 is dead, so it
+  // can find the swarm through server 1 alone.
+  constexpr int kLate = 24;
+  RoutedSwarm w("hosts-server-killed", 0.05, 2, "faults { late_join { agent: 24 at_s: 3 } }\n");
+  w.start(kLate);
+  ASSERT_EQ(w.flying(kLate), "");
+  w.servers_up_[0]->signal(SIGKILL);
+  w.servers_up_[0]->wait(10.0);
+  w.agents_[kLate - 1] =
+      std::make_unique<Child>(w.agent_argv(kLate, host_of(kLate)), w.dir_ / "agent-24.out");
+  EXPECT_TRUE(wait_for([&] { return w.with_event("join").count(kLate) > 0; }, 60.0))
+      << "the late joiner was never heard";
+  const Result r = w.sup_->wait(180.0);
+  ASSERT_EQ(r.code, 0) << r.output;
+  const records::Summary s = read_summary(w.dir_);
+  EXPECT_TRUE(s.converged());
+  EXPECT_EQ(s.agents_expected(), static_cast<unsigned>(kAgents));
+  EXPECT_EQ(s.missing_agents_size(), 0);
+  // Its start is in the average everyone met at.
+  EXPECT_LT(s.average_relative_error(), 1e-9);
+  EXPECT_EQ(s.departures(), 0u);
 }
 
 }  // namespace
