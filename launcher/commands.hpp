@@ -22,6 +22,7 @@ Command add_view_command(CLI::App& app);        // view_command.cpp: `swarm view
 Command add_plot_command(CLI::App& app);        // python_commands.cpp: `swarm plot`
 Command add_paper_command(CLI::App& app);       // ... `swarm paper`
 Command add_resilience_command(CLI::App& app);  // ... `swarm resilience`
+Command add_deploy_command(CLI::App& app);      // deploy_command.cpp: `swarm deploy k8s`
 
 // Where this executable is, with swarm-agent, swarm-supervisor and the Python package beside it.
 std::filesystem::path bin_dir();

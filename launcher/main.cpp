@@ -20,10 +20,10 @@ int main(int argc, char** argv) {
     unsetenv(v);
   CLI::App app{"swarm: a quadcopter swarm that agrees over DDS"};
   app.require_subcommand(1);
-  const std::vector<Command> commands = {add_run_command(app),     add_view_command(app),
-                                         add_inspect_command(app), add_keys_command(app),
-                                         add_plot_command(app),    add_export_command(app),
-                                         add_paper_command(app),   add_resilience_command(app)};
+  const std::vector<Command> commands = {
+      add_run_command(app),   add_view_command(app),       add_inspect_command(app),
+      add_keys_command(app),  add_plot_command(app),       add_export_command(app),
+      add_paper_command(app), add_resilience_command(app), add_deploy_command(app)};
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -52,6 +52,8 @@ TEST(HostilePaths, EveryPathFlagAndFieldRefusesALoopAFifoADirectoryDevZeroAndAMi
       {{bin("swarm"), "inspect", "@"}, {}, {}},
       {{bin("swarm"), "keys", "@", "--out", (root / "ks-unused").string()}, {}, {}},
       {{bin("swarm"), "keys", demo, "--out", "@"}, {}, {"dir", "missing"}},
+      {{bin("swarm"), "deploy", "k8s", "@", "--out", (root / "deploy-unused").string()}, {}, {}},
+      {{bin("swarm"), "deploy", "k8s", demo, "--out", "@"}, {}, {"dir", "missing"}},
       {{bin("swarm"), "export", "--mcap", "@"}, {}, {}},
       {{bin("swarm"), "export", "--mcap", run.string(), "--out", "@"}, {}, {}},
       {{bin("swarm"), "view", "@", "--port", "0"}, {}, {}},

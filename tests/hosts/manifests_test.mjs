@@ -1,0 +1,130 @@
+// ctest label `hosts`: the manifests `swarm deploy k8s` writes validate against the Kubernetes
+// JSON schema (npm's kubernetes-models), and say what the swarm needs: a StatefulSet of N agents
+// behind a headless Service, two Discovery Servers each behind its own Service and listed by
+// every process in one order, a Job for the supervisor writing onto a PersistentVolumeClaim, and
+// the size typed once. A manifest broken on purpose fails the same validation, so it can fail.
+//
+// Usage: node manifests_test.mjs (QSWARM_BIN_DIR, QSWARM_NODE_MODULES, QSWARM_SOURCE_DIR set by
+// ctest). Exit 77 when npm's packages are missing, unless CI is set (then 1).
+import { execFileSync } from "node:child_process";
+import { mkdtempSync, readFileSync, rmSync, writeFileSync } from "node:fs";
+import { createRequire } from "node:module";
+import { tmpdir } from "node:os";
+import path from "node:path";
+
+const bin = process.env.QSWARM_BIN_DIR;
+const modules = process.env.QSWARM_NODE_MODULES;
+const require = createRequire(path.join(modules, "noop.js"));
+let YAML, models;
+try {
+  YAML = require("yaml");
+  models = {
+    v1: require("kubernetes-models/v1"),
+    "apps/v1": require("kubernetes-models/apps/v1"),
+    "batch/v1": require("kubernetes-models/batch/v1"),
+  };
+} catch (e) {
+  console.log(`${process.env.CI ? "FAIL (CI)" : "SKIPPED"}: npm packages missing (${e.message})`);
+  process.exit(process.env.CI ? 1 : 77);
+}
+
+let failed = 0;
+const check = (what, ok, got = "") => {
+  console.log(`${ok ? "ok" : "FAIL"}: ${what}${got === "" ? "" : ` (${got})`}`);
+  if (!ok) failed = 1;
+};
+// Every document against its kind's schema: the list of problems ("" when none).
+const problems = (docs) => {
+  const out = [];
+  for (const doc of docs) {
+    const Kind = models[doc.apiVersion]?.[doc.kind];
+    if (!Kind) {
+      out.push(`${doc.apiVersion} ${doc.kind}: no such kind`);
+      continue;
+    }
+    try {
+      new Kind(doc).validate();
+    } catch (e) {
+      out.push(`${doc.kind} ${doc.metadata?.name}: ${e.message.split("\n")[0]}`);
+    }
+  }
+  return out;
+};
+
+const work = mkdtempSync(path.join(tmpdir(), "qswarm-manifests-"));
+try {
+  const scenario = path.join(work, "s.txtpb");
+  writeFileSync(scenario, 'name: "k"\nweight { policy: UNWEIGHTED }\n' +
+    "topology { policy: PROXIMITY threshold_m: 50 }\nseed: 4\ntransport { domain_id: 7 }\n");
+  for (const [n, extra] of [[40, ["--agents", "40"]], [4, []]]) {
+    const file = n === 4 ? path.join(process.env.QSWARM_SOURCE_DIR, "scenarios", "demo.txtpb")
+                         : scenario;
+    const out = path.join(work, `d${n}`);
+    execFileSync(path.join(bin, "swarm"), ["deploy", "k8s", file, ...extra, "--out", out]);
+    for (const name of ["quadswarm.yaml", "podman.yaml"]) {
+      const docs = YAML.parseAllDocuments(readFileSync(path.join(out, name), "utf8"))
+        .map((d) => d.toJS());
+      const bad = problems(docs);
+      check(`${n} agents: ${name}'s ${docs.length} documents validate`, bad.length === 0,
+            bad.join("; "));
+      const byKind = (k) => docs.filter((d) => d.kind === k);
+      const containers = docs.flatMap((d) =>
+        (d.spec?.template?.spec ?? d.spec)?.containers ?? []);
+      const servers = new Set(containers.map((c) =>
+        c.env.find((e) => e.name === "QSWARM_DISCOVERY_SERVER")?.value));
+      check(`${n} agents: ${name}: every process lists the same two servers`,
+            servers.size === 1 && [...servers][0].split(",").length === 2, [...servers].join(" "));
+      if (name === "quadswarm.yaml") {
+        const sts = byKind("StatefulSet");
+        check(`${n} agents: one StatefulSet of ${n}`, sts.length === 1 && sts[0].spec.replicas === n,
+              sts[0]?.spec.replicas);
+        const headless = byKind("Service").find((s) => s.metadata.name === sts[0].spec.serviceName);
+        check(`${n} agents: its headless Service`, headless?.spec.clusterIP === "None" &&
+              headless.spec.publishNotReadyAddresses === true);
+        check(`${n} agents: two Discovery Server Deployments, each behind a Service`,
+              byKind("Deployment").length === 2 &&
+              byKind("Service").filter((s) => s.spec.clusterIP !== "None").length === 2);
+        const job = byKind("Job")[0];
+        check(`${n} agents: the supervisor is a Job that never retries, on the claim`,
+              job?.spec.backoffLimit === 0 &&
+              job.spec.template.spec.volumes.some((v) => v.persistentVolumeClaim) &&
+              byKind("PersistentVolumeClaim").length === 1);
+      } else {
+        check(`${n} agents: podman.yaml has a Pod per process`,
+              byKind("Pod").length === n + 3, byKind("Pod").length);
+      }
+      // The size is typed once: what every process reads says n, nowhere another number.
+      const sizes = new Set(containers.flatMap((c) => c.env)
+        .filter((e) => e.name === "QSWARM_AGENTS").map((e) => e.value));
+      check(`${n} agents: ${name}: the size reaches the processes once`,
+            n === 4 ? sizes.size === 0 : sizes.size === 1 && sizes.has("40"), [...sizes]);
+    }
+  }
+  // The validator can fail: a StatefulSet whose replicas is text, and a Pod without containers.
+  const docs = YAML.parseAllDocuments(readFileSync(path.join(work, "d4", "quadswarm.yaml"), "utf8"))
+    .map((d) => d.toJS());
+  const sts = docs.find((d) => d.kind === "StatefulSet");
+  sts.spec.replicas = "four";
+  check("a StatefulSet with replicas: \"four\" fails", problems([sts]).length === 1);
+  check("a Pod without containers fails",
+        problems([{ apiVersion: "v1", kind: "Pod", metadata: { name: "p" }, spec: {} }]).length === 1);
+  // Bad input from a person: exit 2, naming it.
+  const out = ["--out", path.join(work, "bad")];
+  for (const args of [["--agents", "0", ...out], ["--name", "Bad_Name", ...out],
+                      ["--out", "/proc/forbidden/x", "--agents", "3"],
+                      ["--out", scenario, "--agents", "3"]]) {
+    let code = 0, err = "";
+    try {
+      execFileSync(path.join(bin, "swarm"), ["deploy", "k8s", scenario, ...args],
+                   { stdio: "pipe" });
+    } catch (e) {
+      code = e.status;
+      err = e.stderr.toString();
+    }
+    check(`swarm deploy k8s ${args.slice(0, 2).join(" ")} exits 2 naming it`,
+          code === 2 && err.includes(args[0]), `${code}: ${err.trim().split("\n")[0]}`);
+  }
+} finally {
+  rmSync(work, { recursive: true, force: true });
+}
+process.exit(failed);
