@@ -89,8 +89,8 @@ ProcessDds process_dds(const char* prog, const RunConfig& rc, const ProcessOptio
   if (!rc.transport.keystore.empty()) d.options.participant.identity = identity;
   if (rc.plan.discovery != DiscoveryMode::kPeerHosts) return d;
   std::vector<std::string>& at = d.options.participant.unicast_peer_hosts;
-  at = find_peer_hosts(o.peer_hosts, static_cast<std::size_t>(rc.plan.participants),
-                       rc.plan.peer_hosts_wait_s, stop, say);
+  at = find_peer_hosts(o.peer_hosts, rc.plan.peer_host_addresses, rc.plan.peer_hosts_wait_s, stop,
+                       say);
   if (stop && when_stopped == StoppedWaiting::kExit) {
     d.exit_code = 0;
   } else if (at.empty() && stop) {

@@ -93,6 +93,9 @@ Hosts hosts_of(const RunConfig& rc, const ProcessOptions& o) {
   if (h.interface == "any") h.interface.clear();
   h.discovery_server = o.discovery_server;
   h.peer_hosts = !o.peer_hosts.empty();
+  if (h.peer_hosts)
+    h.peer_host_names =
+        1 + static_cast<std::size_t>(std::count(o.peer_hosts.begin(), o.peer_hosts.end(), ','));
   std::string why;
   if (const auto block = parse_unicast_peers(o.unicast_peers, why)) h.unicast_block = *block;
   h.time_scale = o.time_scale;

@@ -175,6 +175,9 @@ RunPlan plan_run(const RunConfig& rc, const Hosts& hosts) {
   p.participants = static_cast<int>(n) + 1 + (p.own_server ? 1 : 0);
   p.participant_announce_period_s = std::max(1.0, size / kAnnouncingParticipantsPerS);
   p.peer_hosts_wait_s = hosts.peer_hosts ? kPeerHostsWaitS : 0.0;
+  if (hosts.peer_hosts)
+    p.peer_host_addresses =
+        hosts.unicast_block ? hosts.peer_host_names : static_cast<std::size_t>(p.participants);
   p.dds_threads_nice = p.secure ? 0 : kDdsThreadsNice;
 
   p.tick_phases = n > kTickPhasesAbove ? 2 : 1;
@@ -257,6 +260,7 @@ plan::RunPlan to_proto(const RunPlan& p, int participant_base) {
   o.set_participants(p.participants);
   o.set_participant_announce_period_s(p.participant_announce_period_s);
   o.set_peer_hosts_wait_s(p.peer_hosts_wait_s);
+  o.set_peer_host_addresses(static_cast<std::uint32_t>(p.peer_host_addresses));
   o.set_dds_threads_nice(p.dds_threads_nice);
   o.set_tick_phases(p.tick_phases);
   o.set_record_hz(p.record_hz);

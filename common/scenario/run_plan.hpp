@@ -41,6 +41,7 @@ struct Hosts {
   std::string interface = "127.0.0.1";  // where DDS binds ("": every interface, a container)
   std::string discovery_server;         // HOST:PORT of a server given to the process
   bool peer_hosts = false;              // --peer-hosts: one participant per host, found by name
+  std::size_t peer_host_names = 0;      // how many names --peer-hosts lists
   // An explicit block of participant ids to discover by unicast (--unicast-peers FIRST:COUNT).
   std::optional<std::pair<int, int>> unicast_block;
   double time_scale = 1.0;  // simulated seconds per wall second
@@ -72,6 +73,9 @@ struct RunPlan {
   int participants = 0;
   double participant_announce_period_s = 1.0;  // wall: a participant's announcements
   double peer_hosts_wait_s = 0.0;              // wall: how long a process waits for peer names
+  // The addresses it waits for: one per participant (one per container, found by service name),
+  // or, with a block of ids per host (--unicast-peers), one per name (each a host).
+  std::size_t peer_host_addresses = 0;
   int dds_threads_nice = 0;  // how much nicer an agent's Fast DDS threads run than its tick
 
   // Ticks and the record.

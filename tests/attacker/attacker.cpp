@@ -62,6 +62,8 @@ struct Flags {
   std::string report;
   std::string streams = "both";
   std::string unicast_peers;  // FIRST:COUNT: a secure run discovers by unicast within its block
+  std::string interface = "127.0.0.1";  // where its participant binds
+  std::string peer_hosts;  // A,B,...: the hosts whose --unicast-peers ids it announces to
 };
 
 using qswarm::AgentId;
@@ -192,6 +194,10 @@ int main(int argc, char** argv) {
   app.add_option("--unicast-peers", f.unicast_peers,
                  "FIRST:COUNT: announce to these participant ids of the port plan, as a secure "
                  "run's own processes do (they hear no multicast)");
+  app.add_option("--interface", f.interface, "IPv4 address its participant binds to");
+  app.add_option("--peer-hosts", f.peer_hosts,
+                 "A,B,...: IPv4 addresses of the hosts whose --unicast-peers ids it announces to "
+                 "(default: its own interface)");
   app.add_option("--streams", f.streams, "state, record or both")
       ->check(CLI::IsMember({"state", "record", "both"}));
   try {
@@ -213,6 +219,13 @@ int main(int argc, char** argv) {
   part.keystore = f.keystore;
   part.identity = f.identity;
   part.name = "qswarm-attacker-ear";
+  part.interface = f.interface;
+  for (std::size_t from = 0; !f.peer_hosts.empty();) {
+    const std::size_t comma = f.peer_hosts.find(',', from);
+    part.unicast_peer_hosts.push_back(f.peer_hosts.substr(from, comma - from));
+    if (comma == std::string::npos) break;
+    from = comma + 1;
+  }
   if (!f.unicast_peers.empty()) {
     std::string why;
     const auto peers = qswarm::parse_unicast_peers(f.unicast_peers, why);

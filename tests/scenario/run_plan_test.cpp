@@ -153,6 +153,12 @@ TEST(RunPlan, TheHostsDecideHowProcessesFindEachOther) {
   const RunPlan found = test::plan_for(4, true, peers);
   EXPECT_EQ(found.discovery, DiscoveryMode::kPeerHosts);
   EXPECT_DOUBLE_EQ(found.peer_hosts_wait_s, 120.0);
+  EXPECT_EQ(found.peer_host_addresses, 5u);  // a container per participant
+  // Hosts running a block of ids each: one address per name listed.
+  Hosts blocks = peers;
+  blocks.peer_host_names = 3;
+  blocks.unicast_block = std::make_pair(0, 9);
+  EXPECT_EQ(test::plan_for(24, true, blocks).peer_host_addresses, 3u);
   EXPECT_EQ(found.multicast_group, "");
   // Peers beside a server, or a secure run through one, are refused naming what was asked.
   peers.discovery_server = "discovery:11811";

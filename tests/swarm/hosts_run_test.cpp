@@ -11,6 +11,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <memory>
 #include <set>
 #include <sstream>
@@ -40,11 +41,12 @@ int host_of(int agent) { return (agent - 1) / kPerHost; }
 
 // One swarm of 24 agents over the routed hosts. `gain` slows the agreement down so that a fault
 // lands before it is reached (1: about a second; 0.05: about 15 s). `servers`: 1, on host 1, or 2,
-// on hosts 1 and 2, every process listing both. `extra`: more of the scenario.
+// on hosts 1 and 2, every process listing both; 0: a secure swarm (below). `extra`: more of the
+// scenario. A fourth host, which flies nothing, is there for a stranger.
 class RoutedSwarm {
  public:
   RoutedSwarm(const std::string& name, double gain, int servers = 1, const std::string& extra = "")
-      : hosts_(kHosts, NetHosts::Layout::kRouted), dir_(fresh_dir(name)), servers_(servers) {
+      : hosts_(kHosts + 1, NetHosts::Layout::kRouted), dir_(fresh_dir(name)), servers_(servers) {
     std::filesystem::create_directories(dir_);
     scen_ = dir_ / "hosts.txtpb";
     std::ofstream f(scen_);
@@ -77,10 +79,27 @@ transport { domain_id: 3 }
       list += (k ? "," : "") + hosts_.address(1 + k) + ":" + kServerPort;
     return list;
   }
+  // How a process on `host` discovers: through the servers; or, secure (no secure Discovery Server
+  // in Fast DDS 2.9), by unicast to participant ids 0..8 of the port plan on each host (the
+  // agents of a host take 0..7, the supervisor 8), with the keystore.
+  std::vector<std::string> discovery(int host, int participant_id) const {
+    if (servers_ > 0) return {"--interface", hosts_.address(host), "--discovery-server", server()};
+    std::string peers;
+    for (int h = 0; h < kHosts; ++h) peers += (h ? "," : "") + hosts_.address(h);
+    return {"--interface",      hosts_.address(host),
+            "--keystore",       keystore().string(),
+            "--peer-hosts",     peers,
+            "--unicast-peers",  kSecureBlock,
+            "--participant-id", std::to_string(participant_id)};
+  }
+  static constexpr const char* kSecureBlock = "0:9";
+  std::filesystem::path keystore() const { return dir_ / "keys"; }
   std::vector<std::string> agent_argv(int id, int host) const {
-    return hosts_.exec(host, {bin("swarm-agent"), "--scenario", scen_.string(), "--id",
-                              std::to_string(id), "--run-dir", dir_.string(), "--interface",
-                              hosts_.address(host), "--discovery-server", server()});
+    std::vector<std::string> argv = {bin("swarm-agent"), "--scenario", scen_.string(), "--id",
+                                     std::to_string(id), "--run-dir",  dir_.string()};
+    const auto d = discovery(host, (id - 1) % kPerHost);
+    argv.insert(argv.end(), d.begin(), d.end());
+    return hosts_.exec(host, argv);
   }
   // The servers first, listening, then the rest (but `skip`, started later by the test): as swarm
   // run orders its own.
@@ -94,11 +113,15 @@ transport { domain_id: 3 }
       if (!wait_for([&] { return std::filesystem::exists(ready); }, 30.0))
         throw std::runtime_error("Discovery Server " + std::to_string(k) + " never listened");
     }
-    sup_ = std::make_unique<Child>(
-        hosts_.exec(
-            0, {bin("swarm-supervisor"), "--scenario", scen_.string(), "--run-dir", dir_.string(),
-                "--interface", hosts_.address(0), "--discovery-server", server()}),
-        dir_ / "supervisor.out");
+    if (servers_ == 0) {
+      const Result k = run({bin("swarm"), "keys", scen_.string(), "--out", keystore().string()});
+      if (k.code != 0) throw std::runtime_error("swarm keys: " + k.output);
+    }
+    std::vector<std::string> sup = {bin("swarm-supervisor"), "--scenario", scen_.string(),
+                                    "--run-dir", dir_.string()};
+    const auto d = discovery(0, kPerHost);
+    sup.insert(sup.end(), d.begin(), d.end());
+    sup_ = std::make_unique<Child>(hosts_.exec(0, sup), dir_ / "supervisor.out");
     agents_.resize(kAgents);
     for (int id = 1; id <= kAgents; ++id)
       if (id != skip)
@@ -275,6 +298,43 @@ TEST(Hosts, WithOneOfTwoDiscoveryServersKilledALateJoinerIsStillFound) {
   // Its start is in the average everyone met at.
   EXPECT_LT(s.average_relative_error(), 1e-9);
   EXPECT_EQ(s.departures(), 0u);
+}
+
+TEST(Hosts, ASecureSwarmAcrossHostsConvergesAndAStrangerOnAFourthHostReachesNoOne) {
+  REQUIRE_NET_HOSTS();
+  // Secure: by unicast to each host's block of participant ids, with a keystore; a stranger on host
+  // 3 (which flies nothing) announces to the same ids on every host and forges agent 3 at 200 Hz,
+  // told the run id, as one who scanned the ports and read the wire would.
+  RoutedSwarm w("hosts-secure", 0.3, 0);
+  w.start();
+  std::string peers;
+  for (int h = 0; h < kHosts; ++h) peers += (h ? "," : "") + w.hosts_.address(h);
+  const auto report = w.dir_ / "stranger.txt";
+  Child stranger(
+      w.hosts_.exec(kHosts, {bin("qswarm-attacker"), "--domain", "3", "--mode", "impersonate",
+                             "--victim", "3", "--rate", "200", "--run-id", "0", "--interface",
+                             w.hosts_.address(kHosts), "--peer-hosts", peers, "--unicast-peers",
+                             RoutedSwarm::kSecureBlock, "--report", report.string()}),
+      w.dir_ / "stranger.out");
+  const Result r = w.sup_->wait(240.0);
+  stranger.signal(SIGTERM);
+  stranger.wait(20.0);
+  ASSERT_EQ(r.code, 0) << r.output;
+  const records::Summary s = read_summary(w.dir_);
+  EXPECT_TRUE(s.secure());
+  EXPECT_TRUE(s.converged());
+  EXPECT_EQ(s.agents_expected(), static_cast<unsigned>(kAgents));
+  EXPECT_LT(s.average_relative_error(), 1e-9);
+  EXPECT_EQ(s.forgeries_size(), 0);
+  EXPECT_EQ(s.foreign_samples(), 0u);
+  std::map<std::string, std::string> said;
+  std::ifstream in(report);
+  for (std::string line; std::getline(in, line);)
+    if (const auto eq = line.find('='); eq != std::string::npos)
+      said[line.substr(0, eq)] = line.substr(eq + 1);
+  EXPECT_EQ(said["heard"], "0") << read_file(w.dir_ / "stranger.out");
+  EXPECT_GT(std::stoull(said["published"].empty() ? "0" : said["published"]), 500u)
+      << read_file(w.dir_ / "stranger.out");
 }
 
 }  // namespace
