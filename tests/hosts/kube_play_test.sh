@@ -119,7 +119,14 @@ vol=$(play d1 1)
 code=$(verdict)
 fail=0
 [[ $code == 0 ]] && echo "ok: the supervisor exits 0" || { echo "FAIL: the supervisor exited $code"; fail=1; }
-record_checks "$vol" "$N" "$NAME" -1 || fail=1
+if ! record_checks "$vol" "$N" "$NAME" -1; then
+  fail=1
+  # What the agents said about what they dropped or lost, for whoever reads the failure.
+  for k in $(seq 0 $((N - 1))); do
+    podman logs "$NAME-agent-$k-agent" 2>&1 | grep -iE "drop|refus|warn|lost|stale" | head -3 |
+      sed "s/^/  agent pod $k: /"
+  done
+fi
 down "$WORK/d1/podman.yaml"
 
 echo "kube play test: run 2, pod $NAME-agent-$REMOVED removed mid-run"
