@@ -40,7 +40,8 @@ SUBNET="10.89.$((150 + $$ % 50)).0/24"
 WORK=$(mktemp -d /tmp/qswarm-kube.XXXXXX)
 down() {
   [[ -f $1 ]] && podman kube down "$1" >/dev/null 2>&1 || true
-  podman volume rm -f "$NAME-runs" >/dev/null 2>&1 || true
+  # kube down leaves the volumes of the claim and of the ConfigMap.
+  podman volume rm -f "$NAME-runs" "$NAME-scenario" >/dev/null 2>&1 || true
 }
 cleanup() {
   down "$WORK/d1/podman.yaml"
