@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "common/record/json_writer.hpp"
 #include "common/scenario/scenario.hpp"
 #include "common/transport/regular_file.hpp"
 #include "launcher/commands.hpp"
@@ -27,13 +28,12 @@ constexpr int kServers = 2;
 constexpr int kServerPort = 11811;
 constexpr const char* kUid = "10001";  // the image's user (docker/Dockerfile)
 
+// A YAML double-quoted scalar: a JSON string is one (YAML 1.2 reads JSON's escapes), so the
+// project's JSON writer escapes quotes, backslashes and control characters alike.
 std::string quoted(const std::string& s) {
-  std::string out = "\"";
-  for (const char c : s) {
-    if (c == '"' || c == '\\') out += '\\';
-    out += c;
-  }
-  return out + "\"";
+  std::string out;
+  JsonWriter(out).str(s);
+  return out;
 }
 
 std::string indented(const std::string& text, int spaces) {
@@ -109,7 +109,9 @@ struct Deploy {
   }
   std::string config_map() const {
     return "apiVersion: v1\nkind: ConfigMap\nmetadata:\n  name: " + name +
-           "-scenario\ndata:\n  scenario.txtpb: |\n" + indented(scenario_text, 4);
+           // Its indentation said (2 past the key's): a scenario whose first line is indented
+           // would otherwise set it.
+           "-scenario\ndata:\n  scenario.txtpb: |2\n" + indented(scenario_text, 4);
   }
   std::string claim() const {
     return "apiVersion: v1\nkind: PersistentVolumeClaim\nmetadata:\n  name: " + name +

@@ -100,6 +100,22 @@ try {
             n === 4 ? sizes.size === 0 : sizes.size === 1 && sizes.has("40"), [...sizes]);
     }
   }
+  // What the pods read is the scenario as written, whatever its first line's indentation, and
+  // text given on the command line stays what it was (a quote, a line break).
+  const odd = path.join(work, "odd.txtpb");
+  const oddText = '  # indented first line\nname: "odd"\nagents { id: 1 }\n';
+  writeFileSync(odd, oddText);
+  execFileSync(path.join(bin, "swarm"), ["deploy", "k8s", odd, "--out", path.join(work, "odd"),
+                                         "--image", 'img\n"x']);
+  const oddDocs = YAML.parseAllDocuments(
+    readFileSync(path.join(work, "odd", "quadswarm.yaml"), "utf8"));
+  check("an indented first line: the manifest parses",
+        oddDocs.every((d) => d.errors.length === 0), oddDocs.flatMap((d) => d.errors).join("; "));
+  const oddJs = oddDocs.map((d) => d.toJS());
+  check("the ConfigMap holds the scenario byte for byte",
+        oddJs[0].data["scenario.txtpb"] === oddText, JSON.stringify(oddJs[0].data));
+  check("an --image with a quote and a line break is carried as given",
+        oddJs.find((d) => d.kind === "Job").spec.template.spec.containers[0].image === 'img\n"x');
   // The validator can fail: a StatefulSet whose replicas is text, and a Pod without containers.
   const docs = YAML.parseAllDocuments(readFileSync(path.join(work, "d4", "quadswarm.yaml"), "utf8"))
     .map((d) => d.toJS());
