@@ -12,19 +12,6 @@
 
 namespace qswarm {
 
-// "a,b,,c" -> {"a", "b", "", "c"}; "" -> {}.
-std::vector<std::string> split_names(const std::string& text) {
-  std::vector<std::string> out;
-  if (text.empty()) return out;
-  std::size_t from = 0;
-  for (;;) {
-    const std::size_t comma = text.find(',', from);
-    out.push_back(text.substr(from, comma == std::string::npos ? std::string::npos : comma - from));
-    if (comma == std::string::npos) return out;
-    from = comma + 1;
-  }
-}
-
 void add_process_options(CLI::App& app, ProcessOptions& o) {
   app.add_option("--scenario", o.scenario, "scenario file (Protobuf text format)")->required();
   app.add_option("--time-scale", o.time_scale, "simulated seconds per wall second")
@@ -93,9 +80,7 @@ Hosts hosts_of(const RunConfig& rc, const ProcessOptions& o) {
   if (h.interface == "any") h.interface.clear();
   h.discovery_server = o.discovery_server;
   h.peer_hosts = !o.peer_hosts.empty();
-  if (h.peer_hosts)
-    h.peer_host_names =
-        1 + static_cast<std::size_t>(std::count(o.peer_hosts.begin(), o.peer_hosts.end(), ','));
+  h.peer_host_names = split_names(o.peer_hosts).size();
   std::string why;
   if (const auto block = parse_unicast_peers(o.unicast_peers, why)) h.unicast_block = *block;
   h.time_scale = o.time_scale;

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "common/scenario/scenario.hpp"
+#include "common/transport/name_list.hpp"
 
 namespace CLI {
 class App;
@@ -43,8 +44,5 @@ Hosts hosts_of(const RunConfig& rc, const ProcessOptions& o);
 // flags say (rc.plan); on bad input prints "PROG: message" to stderr and returns nothing (the
 // caller exits 2).
 std::optional<RunConfig> load_for_process(const char* prog, const ProcessOptions& o);
-
-// "a,b,,c" -> {"a", "b", "", "c"}; "" -> {}.
-std::vector<std::string> split_names(const std::string& text);
 
 }  // namespace qswarm

@@ -1,6 +1,7 @@
 #include "common/dds/participant.hpp"
 
 #include "common/security/keystore.hpp"
+#include "common/transport/name_list.hpp"
 #include "common/transport/port_plan.hpp"
 
 #include <arpa/inet.h>
@@ -268,13 +269,9 @@ std::vector<std::string> ipv4_addresses(const std::string& host, int& error) {
 std::vector<std::pair<std::string, std::uint16_t>> resolve_discovery_servers(
     const std::string& list) {
   std::vector<std::pair<std::string, std::uint16_t>> out;
-  std::size_t from = 0;
-  while (true) {
-    const std::size_t comma = list.find(',', from);
-    out.push_back(resolve_discovery_server(list.substr(from, comma - from)));
-    if (comma == std::string::npos) break;
-    from = comma + 1;
-  }
+  for (const std::string& server : split_names(list))
+    out.push_back(resolve_discovery_server(server));
+  if (out.empty()) out.push_back(resolve_discovery_server(list));  // "": refused, named
   if (out.size() > kMaxDiscoveryServers)
     throw std::invalid_argument("discovery servers \"" + list + "\": at most " +
                                 std::to_string(kMaxDiscoveryServers));

@@ -37,6 +37,7 @@
 #include "common/dds/dds_bus.hpp"
 #include "common/dds/idl_convert.hpp"
 #include "common/dds/qos.hpp"
+#include "common/transport/name_list.hpp"
 #include "common/transport/port_plan.hpp"
 
 #include "swarm_statePubSubTypes.h"
@@ -220,12 +221,7 @@ int main(int argc, char** argv) {
   part.identity = f.identity;
   part.name = "qswarm-attacker-ear";
   part.interface = f.interface;
-  for (std::size_t from = 0; !f.peer_hosts.empty();) {
-    const std::size_t comma = f.peer_hosts.find(',', from);
-    part.unicast_peer_hosts.push_back(f.peer_hosts.substr(from, comma - from));
-    if (comma == std::string::npos) break;
-    from = comma + 1;
-  }
+  part.unicast_peer_hosts = qswarm::split_names(f.peer_hosts);
   if (!f.unicast_peers.empty()) {
     std::string why;
     const auto peers = qswarm::parse_unicast_peers(f.unicast_peers, why);
