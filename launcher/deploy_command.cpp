@@ -7,10 +7,19 @@
 // own, listed by every process in one order (a client must know each server's GUID prefix, so
 // replicas behind one Service cannot work in Fast DDS 2.9; docs/hosts.md). Supervisor: a Job whose
 // exit code is the run's, recording onto a PersistentVolumeClaim.
+//
+// Secure (--keystore): no Discovery Server (Fast DDS 2.9 has none secure); every process finds the
+// others by unicast at the addresses of the headless Service, which names the agents and the
+// supervisor. The keystore's shared files are one Secret, each identity's certificate, key and
+// permissions another, and a pod mounts only its own: a StatefulSet's pods share one template, so
+// each agent is a StatefulSet of one. An init container copies the files into the pod's memory
+// (an emptyDir) as the keystore check wants them: regular files, the key readable by its owner
+// only.
 #include <CLI/CLI.hpp>
 
 #include <fstream>
 #include <iostream>
+#include <map>
 #include <memory>
 #include <sstream>
 #include <string>
@@ -18,7 +27,9 @@
 
 #include "common/record/json_writer.hpp"
 #include "common/scenario/scenario.hpp"
+#include "common/security/keystore.hpp"
 #include "common/transport/regular_file.hpp"
+#include "common/view/foxglove_protocol.hpp"
 #include "launcher/commands.hpp"
 
 namespace qswarm {
@@ -43,12 +54,25 @@ std::string indented(const std::string& text, int spaces) {
   return out;
 }
 
+constexpr const char* kKeysDir = "/keys/store";  // where a pod's keystore is copied to
+
+// A keystore file, as a pod needs it: its name there and its bytes.
+struct KeyFile {
+  std::string path, bytes;
+};
+
 struct Deploy {
   std::string name = "quadswarm", image, scenario_text;
   int agents = 0;
   std::vector<AgentId> ids;
   bool random_agents = false;
   std::uint32_t domain = 0;
+  // Secure: the shared files (under "") and each identity's, by identity.
+  std::map<std::string, std::vector<KeyFile>> keys;
+  bool secure() const { return !keys.empty(); }
+  // podman.yaml: podman kube play runs no Service, so the peers are the pods' names; and podman
+  // 4.3 cannot mount a Secret (it panics), so the same files travel as ConfigMaps there.
+  bool podman_pods = false;
 
   std::string server_name(int i) const { return name + "-discovery-" + std::to_string(i); }
   std::string servers() const {
@@ -56,6 +80,21 @@ struct Deploy {
     for (int i = 0; i < kServers; ++i)
       list += (i ? "," : "") + server_name(i) + ":" + std::to_string(kServerPort);
     return list;
+  }
+  std::string agent_pod(int k) const { return name + "-agent-" + std::to_string(k); }
+  std::string key_object(const std::string& identity) const {
+    return name + (identity.empty() ? "-trust" : "-key-" + identity);
+  }
+  // How a process finds the others: through the servers, or (secure) by unicast at the addresses
+  // of the headless Service (on podman, of every pod's name).
+  std::string discovery_flags() const {
+    if (!secure()) return "";
+    std::string peers = name + "-agents";
+    if (podman_pods) {
+      peers = name + "-supervisor";
+      for (int k = 0; k < agents; ++k) peers += "," + agent_pod(k);
+    }
+    return std::string(" --keystore ") + kKeysDir + " --peer-hosts " + peers;
   }
   // One container, as every manifest runs it: `command` is a shell line (the agents read their
   // ordinal from the pod's name).
@@ -65,26 +104,77 @@ struct Deploy {
     c << "- name: " << role << "\n"
       << "  image: " << quoted(image) << "\n"
       << "  imagePullPolicy: IfNotPresent\n"
-      << "  command: [\"/bin/sh\", \"-c\", " << quoted(command) << "]\n"
-      << "  env:\n"
-      << "  - name: QSWARM_DISCOVERY_SERVER\n"
-      << "    value: " << quoted(servers()) << "\n";
+      << "  command: [\"/bin/sh\", \"-c\", " << quoted(command) << "]\n";
+    if (!secure() || random_agents) c << "  env:\n";
+    if (!secure())
+      c << "  - name: QSWARM_DISCOVERY_SERVER\n    value: " << quoted(servers()) << "\n";
     if (random_agents)
       c << "  - name: QSWARM_AGENTS\n    value: " << quoted(std::to_string(agents)) << "\n";
     c << "  volumeMounts:\n"
       << "  - name: scenario\n    mountPath: /etc/quadswarm\n    readOnly: true\n";
     if (runs_volume) c << "  - name: runs\n    mountPath: /runs\n";
+    if (secure() && role != "discovery") c << "  - name: keys\n    mountPath: /keys\n";
     return indented(c.str(), indent);
   }
-  std::string volumes(int indent, bool runs_volume) const {
+  // Secure: the container that copies `identity`'s files and the shared ones into the pod's
+  // keystore before the process starts.
+  std::string key_copier(const std::string& identity, int indent) const {
+    std::string copy = std::string("umask 077 && mkdir -p ") + kKeysDir + "/" + identity;
+    for (const auto& [who, files] : keys) {
+      if (!who.empty() && who != identity) continue;
+      for (const KeyFile& f : files)
+        copy += " && cp -L /etc/quadswarm-" + std::string(who.empty() ? "trust" : "key") + "/" +
+                file_key(f.path) + " " + kKeysDir + "/" + f.path;
+    }
+    std::ostringstream c;
+    c << "initContainers:\n- name: keys\n  image: " << quoted(image)
+      << "\n  imagePullPolicy: IfNotPresent\n  command: [\"/bin/sh\", \"-c\", " << quoted(copy)
+      << "]\n  volumeMounts:\n"
+      << "  - name: trust\n    mountPath: /etc/quadswarm-trust\n    readOnly: true\n"
+      << "  - name: key\n    mountPath: /etc/quadswarm-key\n    readOnly: true\n"
+      << "  - name: keys\n    mountPath: /keys\n";
+    return indented(c.str(), indent);
+  }
+  // A keystore file's key in its Secret ("agent-3/cert.pem" -> "cert.pem").
+  static std::string file_key(const std::string& path) {
+    return path.substr(path.find('/') == std::string::npos ? 0 : path.find('/') + 1);
+  }
+  std::string key_volume(const std::string& volume, const std::string& object) const {
+    // Readable by the pod's group (fsGroup) only, for the init container to copy.
+    return podman_pods ? "- name: " + volume + "\n  configMap:\n    name: " + object +
+                             "\n    defaultMode: 0440\n"
+                       : "- name: " + volume + "\n  secret:\n    secretName: " + object +
+                             "\n    defaultMode: 0440\n";
+  }
+  std::string volumes(int indent, bool runs_volume, const std::string& identity = "") const {
     std::ostringstream v;
     v << "volumes:\n"
       << "- name: scenario\n  configMap:\n    name: " << name << "-scenario\n";
     if (runs_volume)
       v << "- name: runs\n  persistentVolumeClaim:\n    claimName: " << name << "-runs\n";
+    if (!identity.empty())
+      v << key_volume("trust", key_object("")) << key_volume("key", key_object(identity))
+        << "- name: keys\n  emptyDir:\n    medium: Memory\n";
     return indented(v.str(), indent);
   }
-  std::string agent_command() const {
+  // The Secrets (on podman, ConfigMaps) of the keystore: the shared files, then one per identity.
+  std::string key_objects() const {
+    std::ostringstream y;
+    for (const auto& [who, files] : keys) {
+      y << "---\napiVersion: v1\nkind: " << (podman_pods ? "ConfigMap" : "Secret")
+        << "\nmetadata:\n  name: " << key_object(who) << "\n"
+        << (podman_pods ? "" : "type: Opaque\n") << "data:\n";
+      for (const KeyFile& f : files)
+        y << "  " << file_key(f.path) << ": "
+          << (podman_pods ? quoted(f.bytes) : base64_encode(f.bytes)) << "\n";
+    }
+    return y.str();
+  }
+  std::string agent_command(int k) const {
+    if (secure())
+      return "exec swarm-agent --scenario /etc/quadswarm/scenario.txtpb --interface any --id " +
+             std::to_string(ids[static_cast<std::size_t>(k)]) +
+             " --wait-supervisor --start-timeout 600" + discovery_flags();
     std::string list;
     for (const AgentId id : ids) list += (list.empty() ? "" : " ") + std::to_string(id);
     // Pod NAME-K flies the K-th agent of the scenario (a StatefulSet's ordinal; podman's pods are
@@ -100,7 +190,8 @@ struct Deploy {
   }
   std::string supervisor_command() const {
     return "exec swarm-supervisor --scenario /etc/quadswarm/scenario.txtpb --interface any "
-           "--new-run-in /runs --start-timeout 300";
+           "--new-run-in /runs --start-timeout 300" +
+           discovery_flags();
   }
   std::string pod_security(int indent) const {
     return indented(std::string("securityContext:\n  runAsUser: ") + kUid +
@@ -118,18 +209,32 @@ struct Deploy {
            "-runs\nspec:\n  accessModes: [\"ReadWriteOnce\"]\n  resources:\n    requests:\n"
            "      storage: 1Gi\n";
   }
-  std::string labels(const std::string& component, int indent) const {
-    return indented("labels:\n  app: " + name + "\n  component: " + component + "\n", indent);
+  // `extra`: more labels, one "key: value\n" each.
+  std::string labels(const std::string& component, int indent,
+                     const std::string& extra = "") const {
+    return indented(
+        "labels:\n  app: " + name + "\n  component: " + component + "\n" + indented(extra, 2),
+        indent);
   }
+  // What a process's pod spec holds after its security context: the key copier (secure), the
+  // container, the volumes.
+  std::string pod_spec(const std::string& identity, const std::string& role,
+                       const std::string& command, bool runs_volume, int indent) const {
+    const std::string own = secure() && role != "discovery" ? identity : "";
+    return (own.empty() ? "" : key_copier(own, indent)) + indented("containers:\n", indent) +
+           container(role, command, indent, runs_volume) + volumes(indent, runs_volume, own);
+  }
+  // Secure: the agents and the supervisor, whom the headless Service names for discovery.
+  std::string peer_label() const { return secure() ? "peer: dds\n" : ""; }
 
   std::string kubernetes() const {
     std::ostringstream y;
-    y << "# " << name << ": " << agents
-      << " agents (swarm deploy k8s). kubectl apply -f this file;\n"
+    y << "# " << name << ": " << agents << (secure() ? " agents, secure" : " agents")
+      << " (swarm deploy k8s). kubectl apply -f this file;\n"
       << "# the Job " << name << "-supervisor ends with the run's verdict, its record on the claim "
       << name << "-runs.\n";
-    y << config_map() << "---\n" << claim();
-    for (int i = 0; i < kServers; ++i) {
+    y << config_map() << "---\n" << claim() << key_objects();
+    for (int i = 0; i < (secure() ? 0 : kServers); ++i) {
       const std::string s = server_name(i);
       y << "---\napiVersion: v1\nkind: Service\nmetadata:\n  name: " << s << "\nspec:\n"
         << "  selector:\n    app: " << name << "\n    component: " << s << "\n"
@@ -138,52 +243,100 @@ struct Deploy {
         << "  replicas: 1\n  selector:\n    matchLabels:\n      app: " << name
         << "\n      component: " << s << "\n  template:\n    metadata:\n"
         << labels(s, 6) << "    spec:\n"
-        << pod_security(6) << "      containers:\n"
-        << container("discovery", server_command(i), 6, false) << volumes(6, false);
+        << pod_security(6) << pod_spec("", "discovery", server_command(i), false, 6);
     }
     y << "---\napiVersion: v1\nkind: Service\nmetadata:\n  name: " << name << "-agents\nspec:\n"
       << "  clusterIP: None\n  publishNotReadyAddresses: true\n"
-      << "  selector:\n    app: " << name << "\n    component: agent\n";
-    y << "---\napiVersion: apps/v1\nkind: StatefulSet\nmetadata:\n  name: " << name
-      << "-agent\nspec:\n  serviceName: " << name << "-agents\n  replicas: " << agents
-      << "\n  podManagementPolicy: Parallel\n  selector:\n    matchLabels:\n      app: " << name
-      << "\n      component: agent\n  template:\n    metadata:\n"
-      << labels("agent", 6) << "    spec:\n"
-      << pod_security(6) << "      containers:\n"
-      << container("agent", agent_command(), 6, false) << volumes(6, false);
+      << "  selector:\n    app: " << name << "\n"
+      << (secure() ? "    peer: dds\n" : "    component: agent\n");
+    // Plain: one StatefulSet, the ordinal the agent. Secure: one per agent, each pod holding its
+    // own key.
+    for (int k = 0; k < (secure() ? agents : 1); ++k) {
+      const std::string set = secure() ? agent_pod(k) : name + "-agent";
+      const std::string ordinal = secure() ? "ordinal: \"" + std::to_string(k) + "\"\n" : "";
+      y << "---\napiVersion: apps/v1\nkind: StatefulSet\nmetadata:\n  name: " << set
+        << "\nspec:\n  serviceName: " << name << "-agents\n  replicas: " << (secure() ? 1 : agents)
+        << "\n  podManagementPolicy: Parallel\n  selector:\n    matchLabels:\n      app: " << name
+        << "\n      component: agent\n"
+        << indented(ordinal, 6) << "  template:\n    metadata:\n"
+        << labels("agent", 6, ordinal + peer_label()) << "    spec:\n"
+        << pod_security(6) << pod_spec(identity_of(k), "agent", agent_command(k), false, 6);
+    }
     y << "---\napiVersion: batch/v1\nkind: Job\nmetadata:\n  name: " << name
       << "-supervisor\nspec:\n  backoffLimit: 0\n  template:\n    metadata:\n"
-      << labels("supervisor", 6) << "    spec:\n      restartPolicy: Never\n"
-      << pod_security(6) << "      containers:\n"
-      << container("supervisor", supervisor_command(), 6, true) << volumes(6, true);
+      << labels("supervisor", 6, peer_label()) << "    spec:\n      restartPolicy: Never\n"
+      << pod_security(6)
+      << pod_spec(Keystore::kSupervisor, "supervisor", supervisor_command(), true, 6);
     return y.str();
+  }
+  std::string identity_of(int k) const {
+    return Keystore::agent_identity(ids[static_cast<std::size_t>(k)]);
   }
 
   std::string pod(const std::string& pod_name, const std::string& component,
-                  const std::string& role, const std::string& command, bool runs_volume) const {
+                  const std::string& role, const std::string& command, bool runs_volume,
+                  const std::string& identity = "") const {
     return "---\napiVersion: v1\nkind: Pod\nmetadata:\n  name: " + pod_name + "\n" +
            labels(component, 2) + "spec:\n  restartPolicy: Never\n" + pod_security(2) +
-           "  containers:\n" + container(role, command, 2, runs_volume) + volumes(2, runs_volume);
+           pod_spec(identity, role, command, runs_volume, 2);
   }
   std::string podman() const {
+    Deploy p = *this;
+    p.podman_pods = true;
     std::ostringstream y;
     y << "# " << name << ": the containers of quadswarm.yaml as one Pod per process, for\n"
-      << "# podman kube play (it runs no StatefulSet, Service or Job).\n";
-    y << config_map() << "---\n" << claim();
-    for (int i = 0; i < kServers; ++i)
-      y << pod(server_name(i), server_name(i), "discovery", server_command(i), false);
-    y << pod(name + "-supervisor", "supervisor", "supervisor", supervisor_command(), true);
+      << "# podman kube play (it runs no StatefulSet, Service or Job"
+      << (secure() ? "; the keystore's Secrets are\n# ConfigMaps: podman 4.3 cannot mount a Secret"
+                   : "")
+      << ").\n";
+    y << p.config_map() << "---\n" << p.claim() << p.key_objects();
+    for (int i = 0; i < (secure() ? 0 : kServers); ++i)
+      y << p.pod(server_name(i), server_name(i), "discovery", server_command(i), false);
+    y << p.pod(name + "-supervisor", "supervisor", "supervisor", p.supervisor_command(), true,
+               Keystore::kSupervisor);
     for (int k = 0; k < agents; ++k)
-      y << pod(name + "-agent-" + std::to_string(k), "agent", "agent", agent_command(), false);
+      y << p.pod(agent_pod(k), "agent", "agent", p.agent_command(k), false, identity_of(k));
     return y.str();
   }
 };
+
+// The files every pod of a secure swarm needs, checked as the processes will check them (one
+// identity per agent and the supervisor's; not a compose keystore, whose member key speaks for
+// any agent). False, having said why, when the keystore will not do.
+bool read_keystore(const std::string& dir, Deploy& d) {
+  const Keystore ks(dir);
+  std::vector<std::string> identities = {Keystore::kSupervisor};
+  for (const AgentId id : d.ids) identities.push_back(Keystore::agent_identity(id));
+  try {
+    ks.check_run(d.ids);
+  } catch (const KeystoreError& e) {
+    std::cerr << "swarm deploy k8s: --keystore: " << e.what() << "\n";
+    return false;
+  }
+  const auto add = [&](const std::string& who, const std::filesystem::path& file) {
+    RegularFile f;
+    std::string bytes = read_regular_file(file.string(), 1 << 20, f);
+    if (f.problem != RegularFile::Problem::kNone) {
+      std::cerr << "swarm deploy k8s: --keystore: " << f.why << "\n";
+      return false;
+    }
+    const std::string name = file.filename().string();
+    d.keys[who].push_back({who.empty() ? name : who + "/" + name, std::move(bytes)});
+    return true;
+  };
+  if (!add("", ks.ca_certificate()) || !add("", ks.governance())) return false;
+  for (const std::string& who : identities)
+    if (!add(who, ks.certificate(who)) || !add(who, ks.private_key(who)) ||
+        !add(who, ks.permissions(who)))
+      return false;
+  return true;
+}
 
 }  // namespace
 
 Command add_deploy_command(CLI::App& app) {
   struct Options {
-    std::string scenario, out, image = "localhost/qswarm:latest", name = "quadswarm";
+    std::string scenario, out, image = "localhost/qswarm:latest", name = "quadswarm", keystore;
     int agents = -1;
   };
   auto o = std::make_shared<Options>();
@@ -198,6 +351,9 @@ Command add_deploy_command(CLI::App& app) {
       ->check(CLI::Range(1, static_cast<int>(kMaxSwarmAgents)));
   k8s->add_option("--out", o->out, "directory to write the manifests into (created)")->required();
   k8s->add_option("--image", o->image, "the swarm's image (docker/Dockerfile)");
+  k8s->add_option("--keystore", o->keystore,
+                  "a secure swarm: the keystore (`swarm keys SCENARIO --out DIR`) as Secrets, each "
+                  "pod holding only its own identity (default: the scenario's transport.keystore)");
   k8s->add_option("--name", o->name, "prefix of every object's name (default quadswarm)")
       ->check([](const std::string& v) -> std::string {
         const bool ok =
@@ -213,16 +369,13 @@ Command add_deploy_command(CLI::App& app) {
       ScenarioOverrides ov;
       ov.agents = o->agents;
       const RunConfig rc = load_scenario(o->scenario, ov);
-      if (!rc.transport.keystore.empty()) {
-        std::cerr << "swarm deploy k8s: scenario field 'transport.keystore': secure swarms are "
-                     "not deployed yet (docs/hosts.md)\n";
-        return 2;
-      }
       RegularFile file;
       d.scenario_text = read_regular_file(o->scenario, 1 << 20, file);
       if (file.problem != RegularFile::Problem::kNone) throw std::runtime_error(file.why);
       for (const AgentSpec& a : rc.agents) d.ids.push_back(a.id);
       d.domain = rc.transport.domain_id;
+      const std::string keystore = o->keystore.empty() ? rc.transport.keystore : o->keystore;
+      if (!keystore.empty() && !read_keystore(keystore, d)) return 2;
     } catch (const ScenarioError& e) {
       std::cerr << "swarm deploy k8s: " << e.what() << "\n";
       return 2;
@@ -263,9 +416,10 @@ Command add_deploy_command(CLI::App& app) {
         return 2;
       }
     }
-    std::cout << "swarm deploy k8s: " << d.agents << " agents, 2 Discovery Servers and the "
-              << "supervisor in " << o->out << "/quadswarm.yaml (kubectl apply -f) and " << o->out
-              << "/podman.yaml (podman kube play)\n";
+    std::cout << "swarm deploy k8s: " << d.agents << " agents, "
+              << (d.secure() ? "secure (discovery by unicast)" : "2 Discovery Servers")
+              << " and the supervisor in " << o->out << "/quadswarm.yaml (kubectl apply -f) and "
+              << o->out << "/podman.yaml (podman kube play)\n";
     return 0;
   };
 }

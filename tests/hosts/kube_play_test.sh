@@ -5,7 +5,10 @@
 # no IPv4 multicast or broadcast between pods (an nftables rule this test adds and removes), as on
 # most cluster networks. Run 1: the 12 converge on the exact initial average, each agent's record
 # names its pod. Run 2: once the swarm flies, one agent's pod is removed: the supervisor names it
-# missing and exits 1.
+# missing and exits 1. Run 3, secure (`--keystore`): the keystore's files as ConfigMaps (podman
+# 4.3 cannot mount the Secrets quadswarm.yaml uses), each pod given only its own identity, copied
+# into its keystore by an init container; discovery by unicast at every pod's name, no server:
+# the 12 converge on the exact average with DDS-Security on.
 #
 # Usage: kube_play_test.sh [BIN_DIR]. Exit 77 (skipped) without podman, root or nftables, unless CI
 # is set (then 1: CI must fly it).
@@ -40,12 +43,20 @@ SUBNET="10.89.$((150 + $$ % 50)).0/24"
 WORK=$(mktemp -d /tmp/qswarm-kube.XXXXXX)
 down() {
   [[ -f $1 ]] && podman kube down "$1" >/dev/null 2>&1 || true
-  # kube down leaves the volumes of the claim and of the ConfigMap.
-  podman volume rm -f "$NAME-runs" "$NAME-scenario" >/dev/null 2>&1 || true
+  # kube down stops at a pod removed before it (run 2's), and leaves the volumes of the claim and
+  # of the ConfigMaps.
+  local v
+  for v in $(podman pod ls --format '{{.Name}}' | grep "^$NAME-" || true); do
+    podman pod rm -f "$v" >/dev/null 2>&1 || true
+  done
+  for v in $(podman volume ls -q | grep "^$NAME-" || true); do
+    podman volume rm -f "$v" >/dev/null 2>&1 || true
+  done
 }
 cleanup() {
   down "$WORK/d1/podman.yaml"
   down "$WORK/d2/podman.yaml"
+  down "$WORK/d3/podman.yaml"
   podman network rm -f "$NET" >/dev/null 2>&1 || true
   nft delete table bridge "$NAME" 2>/dev/null || true
   rm -rf "$WORK"
@@ -63,9 +74,17 @@ table bridge $NAME {
 EOF
 
 sup="$NAME-supervisor-supervisor"
-# Writes scenario $1 with gain $2, deploys it into $WORK/$1, plays it; echoes the record's volume.
+# Writes scenario $1 with gain $2, deploys it into $WORK/$1 (secure, with a keystore made for it,
+# if $3 is "secure"), plays it; echoes the record's volume.
 play() {
-  cat >"$WORK/$1.txtpb" <<EOF
+  local size=(--agents "$N") keys=()
+  if [[ ${3:-} == secure ]]; then
+    echo "random_agents { count: $N box_m: 20 }" >"$WORK/$1.txtpb"
+    size=()
+  else
+    : >"$WORK/$1.txtpb"
+  fi
+  cat >>"$WORK/$1.txtpb" <<EOF
 name: "kube-$1"
 gain: $2
 weight { policy: UNWEIGHTED }
@@ -74,7 +93,12 @@ convergence { tolerance_m: 1e-6 hold_s: 1 }
 duration_s: 60
 seed: 3
 EOF
-  "$BIN/swarm" deploy k8s "$WORK/$1.txtpb" --agents "$N" --out "$WORK/$1" --name "$NAME" >/dev/null
+  if [[ ${3:-} == secure ]]; then
+    "$BIN/swarm" keys "$WORK/$1.txtpb" --out "$WORK/$1.keys" >/dev/null
+    keys=(--keystore "$WORK/$1.keys")
+  fi
+  "$BIN/swarm" deploy k8s "$WORK/$1.txtpb" "${size[@]}" "${keys[@]}" --out "$WORK/$1" \
+    --name "$NAME" >/dev/null
   podman "${RUNTIME[@]}" kube play --network "$NET" "$WORK/$1/podman.yaml" >"$WORK/$1.play" 2>&1 || {
     cat "$WORK/$1.play"; echo "FAIL: kube play"; exit 1; }
   podman volume inspect "$NAME-runs" --format '{{.Mountpoint}}'
@@ -92,6 +116,7 @@ record_checks() {
 import glob, json, os, sys
 from qswarm import run_dir as names
 volume, n, name, removed = sys.argv[1], int(sys.argv[2]), sys.argv[3], int(sys.argv[4])
+secure = len(sys.argv) > 5
 runs = sorted(glob.glob(os.path.join(volume, "*")))
 s = json.load(open(os.path.join(runs[-1], names.SUMMARY)))
 bad = []
@@ -101,6 +126,7 @@ def check(what, ok, got):
 hosts = {a["id"]: a.get("hosts", []) for a in s["agents"]}
 if removed < 0:
     check("converged", s.get("converged") is True, s.get("end_reason"))
+    check("DDS-Security " + ("on" if secure else "off"), s.get("secure") is secure, s.get("secure"))
     err = s.get("average_relative_error", 1.0)
     check("agreed value = initial average to < 1e-9", err < 1e-9, err)
     check(f"all {n} agents", sorted(hosts) == list(range(1, n + 1)), sorted(hosts))
@@ -143,5 +169,12 @@ podman pod rm -f "$NAME-agent-$REMOVED" >/dev/null
 code=$(verdict)
 [[ $code == 1 ]] && echo "ok: the supervisor exits 1" || { echo "FAIL: the supervisor exited $code"; fail=1; }
 record_checks "$vol" "$N" "$NAME" "$REMOVED" || fail=1
+down "$WORK/d2/podman.yaml"
+
+echo "kube play test: run 3, secure, $N agent pods"
+vol=$(play d3 1 secure)
+code=$(verdict)
+[[ $code == 0 ]] && echo "ok: the supervisor exits 0" || { echo "FAIL: the supervisor exited $code"; fail=1; }
+record_checks "$vol" "$N" "$NAME" -1 secure || fail=1
 echo "multicast and broadcast between pods dropped by the bridge: $(nft list table bridge "$NAME" | grep -o 'packets [0-9]*')"
 exit "$fail"

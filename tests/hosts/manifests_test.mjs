@@ -2,7 +2,8 @@
 // JSON schema (npm's kubernetes-models), and say what the swarm needs: a StatefulSet of N agents
 // behind a headless Service, two Discovery Servers each behind its own Service and listed by
 // every process in one order, a Job for the supervisor writing onto a PersistentVolumeClaim, and
-// the size typed once. A manifest broken on purpose fails the same validation, so it can fail.
+// the size typed once; secure, each pod holding only its own identity. A manifest broken on
+// purpose fails the same validation, so it can fail.
 //
 // Usage: node manifests_test.mjs (QSWARM_BIN_DIR, QSWARM_NODE_MODULES, QSWARM_SOURCE_DIR set by
 // ctest). Exit 77 when npm's packages are missing, unless CI is set (then 1).
@@ -116,6 +117,61 @@ try {
         oddJs[0].data["scenario.txtpb"] === oddText, JSON.stringify(oddJs[0].data));
   check("an --image with a quote and a line break is carried as given",
         oddJs.find((d) => d.kind === "Job").spec.template.spec.containers[0].image === 'img\n"x');
+  // Secure: the keystore as Secrets, each agent pod (a StatefulSet of one) mounting only its own
+  // identity and the shared files; no server; the headless Service names agents and supervisor.
+  const demo = path.join(process.env.QSWARM_SOURCE_DIR, "scenarios", "demo.txtpb");
+  const keys = path.join(work, "keys");
+  execFileSync(path.join(bin, "swarm"), ["keys", demo, "--out", keys]);
+  execFileSync(path.join(bin, "swarm"), ["deploy", "k8s", demo, "--keystore", keys,
+                                         "--out", path.join(work, "secure")]);
+  for (const name of ["quadswarm.yaml", "podman.yaml"]) {
+    const docs = YAML.parseAllDocuments(readFileSync(path.join(work, "secure", name), "utf8"))
+      .map((d) => d.toJS());
+    const bad = problems(docs);
+    check(`secure: ${name}'s ${docs.length} documents validate`, bad.length === 0, bad.join("; "));
+    const podman = name === "podman.yaml";
+    const holder = podman ? "ConfigMap" : "Secret";
+    const keyObjects = docs.filter((d) => d.kind === holder && d.metadata.name !== "quadswarm-scenario");
+    const text = (d, k) => (podman ? d.data[k] : Buffer.from(d.data[k], "base64").toString());
+    const identities = ["agent-1", "agent-2", "agent-3", "agent-4", "supervisor"];
+    check(`secure: ${name}: the shared files and one ${holder} per identity`,
+          keyObjects.length === 6 && identities.every((i) => {
+            const o = keyObjects.find((d) => d.metadata.name === `quadswarm-key-${i}`);
+            return o && Object.keys(o.data).sort().join() === "cert.pem,key.pem,permissions.p7s" &&
+              text(o, "key.pem") === readFileSync(path.join(keys, i, "key.pem"), "utf8");
+          }), keyObjects.map((d) => d.metadata.name).join(" "));
+    const trust = keyObjects.find((d) => d.metadata.name === "quadswarm-trust");
+    check(`secure: ${name}: the authority's key stays home`,
+          trust && Object.keys(trust.data).sort().join() === "ca.cert.pem,governance.p7s" &&
+          !readFileSync(path.join(work, "secure", name), "utf8").includes(
+            readFileSync(path.join(keys, "private", "ca.key.pem"), "utf8").split("\n")[1]));
+    const specs = docs.filter((d) => ["StatefulSet", "Job", "Pod"].includes(d.kind))
+      .map((d) => ({ name: d.metadata.name, spec: d.spec.template?.spec ?? d.spec }));
+    const own = specs.map(({ name: n, spec }) => {
+      const mounted = spec.volumes.map((v) => v.secret?.secretName ?? v.configMap?.name)
+        .filter((v) => v && v !== "quadswarm-scenario").sort().join();
+      const who = n.endsWith("supervisor") ? "supervisor"
+                                           : `agent-${Number(n.split("-").slice(-1)[0]) + 1}`;
+      return mounted === `quadswarm-key-${who},quadswarm-trust` ? "" : `${n}: ${mounted}`;
+    }).filter((x) => x);
+    check(`secure: ${name}: each pod mounts only its own identity`, specs.length === 5 && !own.length,
+          own.join("; "));
+    const env = specs.flatMap(({ spec }) => spec.containers.flatMap((c) => c.env ?? []));
+    check(`secure: ${name}: no Discovery Server`,
+          !docs.some((d) => d.metadata.name.includes("discovery")) &&
+          !env.some((e) => e.name === "QSWARM_DISCOVERY_SERVER"));
+    if (!podman) {
+      const sts = docs.filter((d) => d.kind === "StatefulSet");
+      check("secure: a StatefulSet of one per agent",
+            sts.length === 4 && sts.every((d) => d.spec.replicas === 1));
+      const headless = docs.find((d) => d.kind === "Service");
+      const peers = specs.filter(({ spec }) => spec.containers[0].command[2].includes(
+        `--peer-hosts ${headless.metadata.name}`));
+      check("secure: every process finds the others at the headless Service, which selects them",
+            peers.length === 5 && headless.spec.selector.peer === "dds" &&
+            docs.filter((d) => d.spec?.template?.metadata?.labels?.peer === "dds").length === 5);
+    }
+  }
   // The validator can fail: a StatefulSet whose replicas is text, and a Pod without containers.
   const docs = YAML.parseAllDocuments(readFileSync(path.join(work, "d4", "quadswarm.yaml"), "utf8"))
     .map((d) => d.toJS());
@@ -128,7 +184,9 @@ try {
   const out = ["--out", path.join(work, "bad")];
   for (const args of [["--agents", "0", ...out], ["--name", "Bad_Name", ...out],
                       ["--out", "/proc/forbidden/x", "--agents", "3"],
-                      ["--out", scenario, "--agents", "3"]]) {
+                      ["--out", scenario, "--agents", "3"],
+                      ["--keystore", path.join(work, "none"), "--agents", "3", ...out],
+                      ["--keystore", keys, "--agents", "5", ...out]]) {
     let code = 0, err = "";
     try {
       execFileSync(path.join(bin, "swarm"), ["deploy", "k8s", scenario, ...args],
