@@ -155,14 +155,23 @@ LifecycleStep AgentLifecycle::barrier(double now, const std::vector<PeerStatus>&
   LifecycleStep s;
   std::size_t heard = 0, ready = 0;
   bool peer_running = false, learnt = false;
+  double swarm_t = -1.0;
   for (const PeerStatus& p : peers) {
     learnt = merge(p, now) || learnt;
     // Any agent of the run that runs: a running agent sends no bitsets, so one that started the
     // moment its go came due passes on no more news.
     peer_running = peer_running || p.phase == Phase::kRunning;
+    if (p.phase == Phase::kRunning) swarm_t = std::max(swarm_t, p.stamp_s);
     if (!cfg_.barrier_peers.count(p.id)) continue;
     ++heard;
     ready += (p.phase == Phase::kReady || p.phase == Phase::kRunning) ? 1 : 0;
+  }
+  // A swarm long in flight does not wait for this agent: it joins now, on the swarm's clock.
+  if (swarm_t / cfg_.time_scale > kLateAfterWallS) {
+    s.late = true;
+    s.swarm_time_s = swarm_t;
+    enter_running(now, s, swarm_t);
+    return s;
   }
   const std::size_t expected = cfg_.barrier_peers.size();
   const bool all_heard = heard >= expected && matched_readers >= cfg_.min_matched_readers &&

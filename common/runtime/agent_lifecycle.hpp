@@ -80,6 +80,10 @@ struct PeerStatus {
 struct LifecycleStep {
   std::optional<Phase> announce;  // publish a waiting/ready announcement with this phase
   bool start = false;             // enter Phase::kRunning now, on the swarm clock start_time_s
+  // The swarm had been flying for a while when this agent came, and nothing planned it (a pod the
+  // cluster restarted, a process started again by hand): it joins on the swarm's clock and asks
+  // its neighbours back what it held, as a planned restart does.
+  bool late = false;
   double start_time_s = 0.0;
   double swarm_time_s = -1.0;  // kJoinWait: the swarm's clock as the newest running peer says
   int ticks = 0;               // consensus ticks to run now (0 or 1: a late loop catches up)
@@ -118,6 +122,9 @@ class AgentLifecycle {
   LifePhase phase() const { return phase_; }
   // How often an agent waiting at the start barrier says what it still waits for [wall s].
   static constexpr double kProgressPeriodS = 10.0;
+  // A running peer's clock this far past the start (wall seconds) makes an agent at the barrier a
+  // late one (LifecycleStep::late): further than any agent of one start lags behind its go.
+  static constexpr double kLateAfterWallS = 2.0;
   // Ready announcements at announce_period_s once the agent turns ready, before the slower beacon:
   // a peer learns at once, and one lost datagram costs no more than a period.
   static constexpr int kReadyAnnouncements = 3;

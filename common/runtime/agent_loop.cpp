@@ -138,7 +138,10 @@ AgentLoop::Poll AgentLoop::poll() {
       last_announce_record_s_ = now;
   }
   if (s.start) {
-    runtime_.set_start_time(s.start_time_s);
+    if (s.late)
+      runtime_.join_running(s.start_time_s);
+    else
+      runtime_.set_start_time(s.start_time_s);
     char buf[160];
     std::snprintf(buf, sizeof buf, "%s at swarm time %.3f s after %.2f s of discovery",
                   runtime_.params().start.recover_flows ? "restarting"

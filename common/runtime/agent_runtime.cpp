@@ -34,6 +34,12 @@ void AgentRuntime::set_start_time(double t_s) {
   p_.start.start_time_s = t_s;
 }
 
+void AgentRuntime::join_running(double t_s) {
+  set_start_time(t_s);
+  p_.start.expected_peers = 0;
+  p_.start.recover_flows = true;
+}
+
 Vec3 AgentRuntime::position() const {
   return p_.config.mode == AgentMode::kQuadcopter ? quad_.p_W
                                                   : Vec3(law_->state() + p_.spec.offset_W);

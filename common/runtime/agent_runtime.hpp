@@ -81,6 +81,9 @@ class AgentRuntime {
 
   // A late or restarted agent starts on the swarm's clock: set before the first step.
   void set_start_time(double t_s);
+  // An agent that found the swarm long in flight (LifecycleStep::late): on the swarm's clock, no
+  // wait for the initial graph, the flows it held asked back. Before the first step.
+  void join_running(double t_s);
 
   double time_s() const {
     return p_.start.start_time_s + static_cast<double>(steps_) / p_.config.physics_hz;

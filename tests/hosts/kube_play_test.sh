@@ -5,10 +5,12 @@
 # no IPv4 multicast or broadcast between pods (an nftables rule this test adds and removes), as on
 # most cluster networks. Run 1: the 12 converge on the exact initial average, each agent's record
 # names its pod. Run 2: once the swarm flies, one agent's pod is removed: the supervisor names it
-# missing and exits 1. Run 3, secure (`--keystore`): the keystore's files as ConfigMaps (podman
-# 4.3 cannot mount the Secrets quadswarm.yaml uses), each pod given only its own identity, copied
-# into its keystore by an init container; discovery by unicast at every pod's name, no server:
-# the 12 converge on the exact average with DDS-Security on.
+# missing and exits 1. Run 3: that pod removed and played again at a new address, as a cluster
+# restarts a pod on another node: it rejoins under its id, asks back the flows it held, and the
+# swarm converges on the exact average. Run 4, secure (`--keystore`): the keystore's files as
+# ConfigMaps (podman 4.3 cannot mount the Secrets quadswarm.yaml uses), each pod given only its
+# own identity, copied into its keystore by an init container; discovery by unicast at every
+# pod's name, no server: the 12 converge on the exact average with DDS-Security on.
 #
 # Usage: kube_play_test.sh [BIN_DIR]. Exit 77 (skipped) without podman, root or nftables, unless CI
 # is set (then 1: CI must fly it).
@@ -57,6 +59,7 @@ cleanup() {
   down "$WORK/d1/podman.yaml"
   down "$WORK/d2/podman.yaml"
   down "$WORK/d3/podman.yaml"
+  down "$WORK/d4/podman.yaml"
   podman network rm -f "$NET" >/dev/null 2>&1 || true
   nft delete table bridge "$NAME" 2>/dev/null || true
   rm -rf "$WORK"
@@ -171,8 +174,41 @@ code=$(verdict)
 record_checks "$vol" "$N" "$NAME" "$REMOVED" || fail=1
 down "$WORK/d2/podman.yaml"
 
-echo "kube play test: run 3, secure, $N agent pods"
-vol=$(play d3 1 secure)
+echo "kube play test: run 3, pod $NAME-agent-$REMOVED restarted at another address mid-run"
+vol=$(play d3 0.05)
+for _ in $(seq 1 600); do flying && break; sleep 0.2; done
+flying || { podman logs "$sup" 2>&1 | tail; echo "FAIL: run 3 never flew"; exit 1; }
+# The pod as its controller would make it again: the same spec, a new address, nothing else.
+/usr/bin/python3 - "$WORK/d3/podman.yaml" "$NAME-agent-$REMOVED" "$WORK/d3" <<'PY'
+import sys
+docs = open(sys.argv[1]).read().split("\n---\n")
+pod = [d for d in docs if f"name: {sys.argv[2]}\n" in d and "kind: Pod" in d]
+scenario = [d for d in docs if "kind: ConfigMap" in d]
+open(sys.argv[3] + "/again.yaml", "w").write(pod[0] + "\n")
+open(sys.argv[3] + "/scenario.yaml", "w").write(scenario[0].split("\n", 2)[-1] + "\n")
+PY
+old_ip=$(podman inspect "$NAME-agent-$REMOVED-agent" --format '{{range .NetworkSettings.Networks}}{{.IPAddress}}{{end}}')
+podman pod rm -f "$NAME-agent-$REMOVED" >/dev/null
+new_ip="${SUBNET%.0/24}.250"
+podman "${RUNTIME[@]}" kube play --network "$NET" --ip "$new_ip" --configmap "$WORK/d3/scenario.yaml" \
+  "$WORK/d3/again.yaml" >"$WORK/d3.again" 2>&1 || { cat "$WORK/d3.again"; echo "FAIL: replay"; exit 1; }
+code=$(verdict)
+[[ $code == 0 ]] && echo "ok: the supervisor exits 0" || { echo "FAIL: the supervisor exited $code"; fail=1; }
+record_checks "$vol" "$N" "$NAME" -1 || fail=1
+PYTHONPATH="$SRC/python" /usr/bin/python3 - "$vol" "$((REMOVED + 1))" "$old_ip" "$new_ip" <<'PY' || fail=1
+import glob, json, os, sys
+from qswarm import run_dir as names
+volume, agent, old, new = sys.argv[1], int(sys.argv[2]), sys.argv[3], sys.argv[4]
+s = json.load(open(os.path.join(sorted(glob.glob(os.path.join(volume, "*")))[-1], names.SUMMARY)))
+hosts = next(a.get("hosts", []) for a in s["agents"] if a["id"] == agent)
+ok = len(hosts) == 2 and hosts[0].endswith("/" + old) and hosts[1].endswith("/" + new)
+print(("ok: " if ok else "FAIL: ") + f"agent {agent} flew at {old}, then at {new} ({hosts})")
+sys.exit(0 if ok else 1)
+PY
+down "$WORK/d3/podman.yaml"
+
+echo "kube play test: run 4, secure, $N agent pods"
+vol=$(play d4 1 secure)
 code=$(verdict)
 [[ $code == 0 ]] && echo "ok: the supervisor exits 0" || { echo "FAIL: the supervisor exited $code"; fail=1; }
 record_checks "$vol" "$N" "$NAME" -1 secure || fail=1

@@ -197,6 +197,30 @@ TEST(Lifecycle, AnyRunningAgentOfTheRunReleasesAnAgentWhosePeersAreReady) {
   EXPECT_TRUE(s.start);
 }
 
+TEST(Lifecycle, AnAgentThatFindsTheSwarmLongInFlightJoinsOnItsClockAsARestartWould) {
+  // Given an agent born at the barrier (nothing planned its late start: a pod the cluster
+  // restarted) whose peers have flown 30 s
+  AgentLifecycle late(barrier_config(), 100.0);
+  LifecycleStep s = late.step(100.0, {{2, Phase::kRunning, 30.0}}, 0, 0.0);
+  // Then it joins at once, on the swarm's clock, as late (it asks back what it held)
+  EXPECT_TRUE(s.start);
+  EXPECT_TRUE(s.late);
+  EXPECT_DOUBLE_EQ(s.start_time_s, 30.0);
+  EXPECT_EQ(late.phase(), LifePhase::kRunning);
+  // Given a peer that started a moment before this agent's own go (1.5 wall s at time scale 4)
+  LifecycleConfig c = barrier_config();
+  c.time_scale = 4.0;
+  AgentLifecycle slow(c, 0.0);
+  s = slow.step(0.0, {{2, Phase::kRunning, 6.0}}, 1, 0.0);
+  // Then it is no late joiner: it waits for its barrier as usual
+  EXPECT_FALSE(s.start);
+  EXPECT_FALSE(s.late);
+  s = slow.step(0.1, {{2, Phase::kRunning, 6.4}, {3, Phase::kRunning, 6.4}}, 1, 0.0);
+  EXPECT_TRUE(s.start);
+  EXPECT_FALSE(s.late);
+  EXPECT_DOUBLE_EQ(s.start_time_s, 0.0);
+}
+
 TEST(Lifecycle, AClaimedReadinessInTheFutureCannotHoldTheStartBack) {
   // Given an agent whose only peer claims everyone turned ready a thousand seconds from now
   LifecycleConfig c = barrier_config();
