@@ -18,6 +18,13 @@ std::vector<AgentId> ConvergenceJudge::missing_now(double t_s, const Presence& p
   return out;
 }
 
+bool ConvergenceJudge::all_heard_after(double since_s, double t_s, const Presence& presence) const {
+  for (const auto& [id, track] : presence.tracks())
+    if (plan_.due_alive(id, t_s) && presence.running(id) && !(track.last_heard_s > since_s))
+      return false;
+  return true;
+}
+
 ConvergenceJudge::Verdict ConvergenceJudge::update(double t_s, const records::GraphSnapshot& g,
                                                    const Presence& presence) {
   if (converged_ || !missing_.empty() || elsewhere_m_ >= 0.0 || !outliers_.empty())
@@ -56,7 +63,7 @@ ConvergenceJudge::Verdict ConvergenceJudge::update(double t_s, const records::Gr
     converged_at_s_ = hold_start_s_;
     return Verdict::kAgreedElsewhere;
   }
-  if (missing.empty() && held >= hold_s_) {
+  if (missing.empty() && held >= hold_s_ && all_heard_after(hold_start_s_, t_s, presence)) {
     converged_ = true;
     converged_at_s_ = hold_start_s_;
     return Verdict::kConverged;

@@ -51,6 +51,9 @@ class ConvergenceJudge {
 
  private:
   std::vector<AgentId> missing_now(double t_s, const Presence& presence) const;
+  // Whether every agent due alive was heard after `since_s`: one frozen just as the others agreed
+  // (SIGSTOP, a hung host) is not yet known gone, and its last word cannot vouch for the hold.
+  bool all_heard_after(double since_s, double t_s, const Presence& presence) const;
   Verdict judge_outliers(double t_s, const records::GraphSnapshot& g, bool ready);
   double tolerance_m_, hold_s_, timeout_s_, max_drift_m_;
   double elsewhere_m_ = -1.0;

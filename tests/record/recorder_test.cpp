@@ -4,6 +4,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <initializer_list>
 #include <sstream>
 #include <string>
 
@@ -139,6 +140,13 @@ TEST(GraphMetrics, AGraphThatHasNotChangedIsNotDecomposedAgainButAChangedOneIs) 
   EXPECT_EQ(memo.reused, 2u);
 }
 
+// The listed agents report at swarm time t, as flying agents do every record period: a hold
+// counts only once every agent was heard during it.
+void hear(Presence& p, std::initializer_list<AgentId> ids, double t) {
+  static std::uint64_t seq = 1000;
+  for (const AgentId id : ids) p.on_sample(sample(id, ++seq, t, Vec3::Zero()), t);
+}
+
 TEST(ConvergenceJudge, HoldsForHoldSecondsAndWaitsForThePlanAndDueAgents) {
   FaultPlan plan;
   plan.kill.push_back({2, 1.0, 3.0});  // agent 2 killed at 1 s, back at 3 s
@@ -164,6 +172,7 @@ TEST(ConvergenceJudge, HoldsForHoldSecondsAndWaitsForThePlanAndDueAgents) {
   apart.set_disagreement_m(0.5);
   EXPECT_EQ(ConvergenceJudge::Verdict::kNone, judge.update(4.8, apart, p));  // and restarts
   EXPECT_EQ(ConvergenceJudge::Verdict::kNone, judge.update(4.9, agree, p));
+  hear(p, {1, 2}, 5.4);
   EXPECT_EQ(ConvergenceJudge::Verdict::kConverged, judge.update(5.4, agree, p));
   EXPECT_TRUE(judge.converged());
   EXPECT_DOUBLE_EQ(judge.converged_at_s(), 4.9);
@@ -188,6 +197,7 @@ TEST(ConvergenceJudge, AgreeingAwayFromTheAverageEdgeFlowKeepsIsNoConvergence) {
   EXPECT_EQ(ConvergenceJudge::Verdict::kNone, edge_flow.update(2.0, moved, p));  // once
   ConvergenceJudge laplacian(0.01, 0.5, 1.0, -1.0, FaultPlan{});
   laplacian.update(1.0, moved, p);
+  hear(p, {1, 2}, 1.5);
   EXPECT_EQ(ConvergenceJudge::Verdict::kConverged, laplacian.update(1.5, moved, p));
   // Within the tolerance (what flows in flight leave), edge-flow converges too.
   records::GraphSnapshot close = moved;
@@ -216,7 +226,80 @@ TEST(ConvergenceJudge, AgentsThatAgreeWithoutAnExpectedAgentHaveNotConverged) {
   plan.kill.push_back({3, 0.05, 0.0});
   ConvergenceJudge planned(0.01, 0.5, 1.0, -1.0, plan);
   EXPECT_EQ(ConvergenceJudge::Verdict::kNone, planned.update(1.0, agree, p));
+  hear(p, {1, 2}, 1.5);
   EXPECT_EQ(ConvergenceJudge::Verdict::kConverged, planned.update(1.5, agree, p));
+}
+
+TEST(ConvergenceJudge, EstimatesThatAgreeWhileTheBodiesAreStillApartHaveNotConverged) {
+  // The agents' consensus estimates agree to 1 mm, but the quadcopters are still 0.5 m from their
+  // slots (the spread): not converged, however long that holds.
+  ConvergenceJudge judge(0.01, 0.5, 1.0, -1.0, FaultPlan{});
+  Presence p({1, 2}, 10.0);
+  for (AgentId id : {1u, 2u}) p.on_sample(sample(id, 1, 0.0, Vec3::Zero()), 0.0);
+  records::GraphSnapshot flying;
+  flying.set_agents(2);
+  flying.set_disagreement_m(0.001);
+  flying.set_spread_m(0.5);
+  for (int k = 0; k <= 30; ++k) {
+    hear(p, {1, 2}, 0.1 * k);
+    EXPECT_EQ(ConvergenceJudge::Verdict::kNone, judge.update(0.1 * k, flying, p)) << k;
+  }
+  EXPECT_FALSE(judge.converged());
+  // Once the bodies are there too, the hold runs and the run converges.
+  records::GraphSnapshot there = flying;
+  there.set_spread_m(0.001);
+  EXPECT_EQ(ConvergenceJudge::Verdict::kNone, judge.update(3.1, there, p));
+  hear(p, {1, 2}, 3.6);
+  EXPECT_EQ(ConvergenceJudge::Verdict::kConverged, judge.update(3.6, there, p));
+}
+
+TEST(ConvergenceJudge, AnAgentThatNeverCameIsMissingNotConvergence) {
+  // Agent 3 is in the scenario and never sent a sample: the two that flew agree, and the verdict
+  // names 3 missing once the hold and the timeout have passed; never "converged".
+  ConvergenceJudge judge(0.01, 0.5, 1.0, -1.0, FaultPlan{});
+  Presence p({1, 2, 3}, 1.0);
+  records::GraphSnapshot agree;
+  agree.set_agents(2);
+  agree.set_disagreement_m(0.001);
+  agree.set_spread_m(0.001);
+  ConvergenceJudge::Verdict v = ConvergenceJudge::Verdict::kNone;
+  for (int k = 0; k <= 30 && v == ConvergenceJudge::Verdict::kNone; ++k) {
+    const double t = 0.1 * k;
+    for (AgentId id : {1u, 2u})
+      p.on_sample(sample(id, static_cast<std::uint64_t>(k) + 1, t, Vec3::Zero()), t);
+    v = judge.update(t, agree, p);
+  }
+  EXPECT_EQ(v, ConvergenceJudge::Verdict::kAgreedWithoutSome);
+  EXPECT_FALSE(judge.converged());
+  EXPECT_EQ(judge.missing(), std::vector<AgentId>{3});
+}
+
+TEST(ConvergenceJudge, AnAgentStoppedWithoutAWordIsMissingNotConvergence) {
+  // Agent 3 flew, then fell silent mid-run without saying goodbye (SIGSTOP, a frozen host): once
+  // the presence timeout names it departed, the two left agreeing is no convergence.
+  ConvergenceJudge judge(0.01, 0.5, 1.0, -1.0, FaultPlan{});
+  Presence p({1, 2, 3}, 1.0);
+  records::GraphSnapshot agree;
+  agree.set_agents(3);
+  agree.set_disagreement_m(0.001);
+  agree.set_spread_m(0.001);
+  for (AgentId id : {1u, 2u, 3u}) p.on_sample(sample(id, 1, 0.0, Vec3::Zero()), 0.0);
+  EXPECT_EQ(ConvergenceJudge::Verdict::kNone, judge.update(0.0, agree, p));  // the hold starts
+  ConvergenceJudge::Verdict v = ConvergenceJudge::Verdict::kNone;
+  agree.set_agents(2);
+  for (int k = 1; k <= 40 && v == ConvergenceJudge::Verdict::kNone; ++k) {
+    const double t = 0.1 * k;
+    for (AgentId id : {1u, 2u})
+      p.on_sample(sample(id, static_cast<std::uint64_t>(k) + 1, t, Vec3::Zero()), t);
+    p.expire(t);
+    v = judge.update(t, agree, p);
+    // Within the presence timeout agent 3 is still present: the hold may pass, no verdict yet.
+    if (t < 1.0) EXPECT_TRUE(p.running(3)) << t;
+  }
+  EXPECT_FALSE(p.running(3));
+  EXPECT_EQ(v, ConvergenceJudge::Verdict::kAgreedWithoutSome);
+  EXPECT_FALSE(judge.converged());
+  EXPECT_EQ(judge.missing(), std::vector<AgentId>{3});
 }
 
 // Agents start as their own neighbours are ready: one may fly (and trivially agree with itself)
@@ -238,6 +321,7 @@ TEST(ConvergenceJudge, AgentsStillAtTheirStartBarrierAreNotMissingAndHoldTheVerd
   agree.set_agents(3);
   for (const AgentId id : {1u, 3u}) p.on_sample(sample(id, 50, 4.1, Vec3::Zero()), 4.1);
   EXPECT_EQ(ConvergenceJudge::Verdict::kNone, judge.update(4.1, agree, p));
+  hear(p, {1, 2, 3}, 4.6);
   EXPECT_EQ(ConvergenceJudge::Verdict::kConverged, judge.update(4.6, agree, p));
 }
 
@@ -292,6 +376,7 @@ TEST(ConvergenceJudge, AnAgentHeldOffItsSlotByAvoidanceHasArrivedOnceItHoldsStil
   EXPECT_EQ(ConvergenceJudge::Verdict::kNone, judge.update(2.0, g, p));  // still moving
   g.set_held_speed_mps(0.005);  // below tolerance_m per second
   EXPECT_EQ(ConvergenceJudge::Verdict::kNone, judge.update(2.1, g, p));
+  hear(p, {1, 2}, 2.6);
   EXPECT_EQ(ConvergenceJudge::Verdict::kConverged, judge.update(2.6, g, p));
 }
 
@@ -351,6 +436,51 @@ TEST(Recorder, FedWithMessagesWritesTheRunRecordAndASummary) {
   all << ev.rdbuf();
   for (const char* kind : {",join,", ",cut,", ",cut_end,", ",converged,", ",end,"})
     EXPECT_NE(all.str().find(kind), std::string::npos) << kind << " in\n" << all.str();
+  std::filesystem::remove_all(dir);
+}
+
+TEST(Recorder, AStampFarAheadOfTheSwarmsClockNeverMovesTheRunsClock) {
+  // Two agents fly at 50 Hz for 1 s; mid-run a sample of agent 2's id stamped a million seconds
+  // ahead arrives (a forger's, or a relay's from the future), then another 10 s ahead. Neither
+  // moves the run's clock: no early end, no rows at their stamps; refused, counted, said once.
+  const RunConfig rc = resolve_scenario(
+      parse_scenario_text("name: \"ahead\"\nagents { id: 1 position { x: 0 } }\n"
+                          "agents { id: 2 position { x: 2 } }\nweight { policy: UNWEIGHTED }\n"
+                          "duration_s: 30\n",
+                          "ahead"));
+  const std::filesystem::path dir = fresh_dir("qswarm-ahead");
+  records::Summary s;
+  {
+    Recorder rec(rc, RunDir(dir), 1.0);
+    std::int64_t wall = 1'000'000'000;
+    for (int k = 0; k <= 50; ++k) {
+      const double t = 0.02 * k;
+      rec.on_sample(sample(1, k + 1, t, Vec3(0, 0, 0)), wall);
+      rec.on_sample(sample(2, k + 1, t, Vec3(2, 0, 0)), wall);
+      if (k == 20) rec.on_sample(sample(2, 1000, 1e6, Vec3(50, 0, 0)), wall);
+      if (k == 30)
+        rec.on_sample(sample(2, 1001, t + 10.0, Vec3(50, 0, 0)), wall);  // past the slack
+      rec.tick(wall);
+      EXPECT_LE(rec.time_s(), t + 1e-9) << k;
+      EXPECT_FALSE(rec.duration_reached()) << k;
+      wall += 20'000'000;
+    }
+    rec.finish("duration", 1.0);
+    s = rec.summary();
+  }
+  EXPECT_EQ(s.implausible_samples(), 2u);
+  std::ifstream ev(dir / "events.csv");
+  std::stringstream all;
+  all << ev.rdbuf();
+  const std::string said = ",implausible_sample,2,";
+  ASSERT_NE(all.str().find(said), std::string::npos) << all.str();
+  EXPECT_EQ(all.str().find(said, all.str().find(said) + 1), std::string::npos) << "said twice";
+  for (const auto& row : std::vector<std::string>{"telemetry.csv", "graph.csv"}) {
+    std::ifstream in(dir / row);
+    std::string line;
+    std::getline(in, line);
+    while (std::getline(in, line)) EXPECT_LT(std::atof(line.c_str()), 2.0) << row << ": " << line;
+  }
   std::filesystem::remove_all(dir);
 }
 
