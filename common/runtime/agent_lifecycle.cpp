@@ -127,11 +127,24 @@ void AgentLifecycle::enter_running(double now, LifecycleStep& s, double start_ti
   s.wake_at_s = now;  // the first tick is due at once
 }
 
+double AgentLifecycle::swarm_clock(const std::vector<PeerStatus>& peers) const {
+  std::vector<double> t;
+  for (const PeerStatus& p : peers)
+    if (p.phase == Phase::kRunning && std::isfinite(p.stamp_s) &&
+        (cfg_.duration_s <= 0.0 || p.stamp_s <= cfg_.duration_s + kClockSlackS))
+      t.push_back(p.stamp_s);
+  if (t.empty()) return -1.0;
+  std::sort(t.begin(), t.end());
+  const double median = t[(t.size() - 1) / 2];
+  double clock = -1.0;
+  for (const double v : t)
+    if (v <= median + kClockSlackS) clock = v;
+  return clock;
+}
+
 LifecycleStep AgentLifecycle::join_wait(double now, const std::vector<PeerStatus>& peers) {
   LifecycleStep s;
-  double swarm_t = -1.0;
-  for (const PeerStatus& p : peers)
-    if (p.phase == Phase::kRunning) swarm_t = std::max(swarm_t, p.stamp_s);
+  const double swarm_t = swarm_clock(peers);
   s.swarm_time_s = swarm_t;
   const double join_at = *cfg_.join_at_s;
   const bool timed_out = now - born_s_ > join_at / cfg_.time_scale + cfg_.join_timeout_s;
@@ -155,13 +168,12 @@ LifecycleStep AgentLifecycle::barrier(double now, const std::vector<PeerStatus>&
   LifecycleStep s;
   std::size_t heard = 0, ready = 0;
   bool peer_running = false, learnt = false;
-  double swarm_t = -1.0;
+  const double swarm_t = swarm_clock(peers);
   for (const PeerStatus& p : peers) {
     learnt = merge(p, now) || learnt;
     // Any agent of the run that runs: a running agent sends no bitsets, so one that started the
     // moment its go came due passes on no more news.
     peer_running = peer_running || p.phase == Phase::kRunning;
-    if (p.phase == Phase::kRunning) swarm_t = std::max(swarm_t, p.stamp_s);
     if (!cfg_.barrier_peers.count(p.id)) continue;
     ++heard;
     ready += (p.phase == Phase::kReady || p.phase == Phase::kRunning) ? 1 : 0;

@@ -30,7 +30,9 @@ struct LifecycleConfig {
   bool wait_recorder = false;
   // Late join or restart: wait silently until the swarm's clock reaches this simulated time.
   std::optional<double> join_at_s;
-  double time_scale = 1.0;        // simulated seconds per wall second
+  double time_scale = 1.0;  // simulated seconds per wall second
+  // The scenario's flight (simulated s; 0: unknown): no running peer's clock is past it.
+  double duration_s = 0.0;
   double start_timeout_s = 30.0;  // wall: start anyway after this long at the barrier
   double join_timeout_s = 40.0;   // wall: join anyway after this long in kJoinWait
   // wall: how often a ready agent looks whether its peers are ready too (start skew ~ this), and
@@ -125,6 +127,9 @@ class AgentLifecycle {
   // A running peer's clock this far past the start (wall seconds) makes an agent at the barrier a
   // late one (LifecycleStep::late): further than any agent of one start lags behind its go.
   static constexpr double kLateAfterWallS = 2.0;
+  // How far (simulated s) a running peer's clock may be ahead of the others' median and still be
+  // the swarm's: ticks of skew, a peer a record period ahead; as the recorder's slack.
+  static constexpr double kClockSlackS = 5.0;
   // Ready announcements at announce_period_s once the agent turns ready, before the slower beacon:
   // a peer learns at once, and one lost datagram costs no more than a period.
   static constexpr int kReadyAnnouncements = 3;
@@ -140,6 +145,10 @@ class AgentLifecycle {
   double ready_at_s() const { return ready_at_; }
 
  private:
+  // The swarm's clock as its running peers tell it (-1: none runs), with a peer stamped far
+  // ahead of the others' median, or past the flight, left out: a forger's or a relay's stamp
+  // from the future cannot move an agent that joins.
+  double swarm_clock(const std::vector<PeerStatus>& peers) const;
   LifecycleStep join_wait(double now, const std::vector<PeerStatus>& peers);
   LifecycleStep barrier(double now, const std::vector<PeerStatus>& peers, int matched_readers,
                         bool recorder_confirmed);

@@ -36,6 +36,7 @@ LifecycleConfig lifecycle_config(const RunConfig& rc, AgentId id, const AgentLoo
     c.shared_origin_s = tick_origin_s;
   }
   c.time_scale = o.time_scale;
+  c.duration_s = rc.judge.duration_s;
   const RunPlan plan = plan_at(rc, o.time_scale);  // its wall periods follow the time scale
   c.start_timeout_s = o.start_timeout_s >= 0.0 ? o.start_timeout_s : plan.start_timeout_s;
   c.join_timeout_s = c.start_timeout_s + (plan.join_timeout_s - plan.start_timeout_s);

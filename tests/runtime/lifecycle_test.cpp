@@ -370,6 +370,45 @@ TEST(Lifecycle, ALateJoinerStaysSilentUntilTheSwarmClockReachesItsTime) {
   EXPECT_TRUE(life.step(3.2, {}, 0, 6.0).kill);
 }
 
+TEST(Lifecycle, ALateJoinerIsNotMovedByOnePeersStampFromTheFuture) {
+  // A planned late joiner (at 3 s) hears two honest peers near 3 s and one stamped a million
+  // seconds ahead (a forger's, or a relay's from the future): it joins on the honest clock.
+  LifecycleConfig c = barrier_config();
+  c.join_at_s = 3.0;
+  c.duration_s = 60.0;
+  AgentLifecycle life(c, 0.0);
+  LifecycleStep s = life.step(
+      0.1, {{2, Phase::kRunning, 3.1}, {3, Phase::kRunning, 3.2}, {4, Phase::kRunning, 1e6}}, 0,
+      0.0);
+  EXPECT_TRUE(s.start);
+  EXPECT_DOUBLE_EQ(s.start_time_s, 3.2);
+  // Ahead of the others by more than the slack, even within the flight: left out too.
+  AgentLifecycle ahead(c, 0.0);
+  s = ahead.step(0.1,
+                 {{2, Phase::kRunning, 3.1}, {3, Phase::kRunning, 3.2}, {4, Phase::kRunning, 40.0}},
+                 0, 0.0);
+  EXPECT_DOUBLE_EQ(s.start_time_s, 3.2);
+}
+
+TEST(Lifecycle, AnAgentWhoseOnlyRunningPeerIsStampedFromTheFutureDoesNotJoinOnIt) {
+  // Its one running neighbour claims a clock past the whole flight (60 s): no swarm runs there.
+  LifecycleConfig c = barrier_config();
+  c.duration_s = 60.0;
+  AgentLifecycle late(c, 0.0);
+  LifecycleStep s = late.step(0.0, {{2, Phase::kRunning, 1e6}}, 0, 0.0);
+  EXPECT_FALSE(s.start);
+  EXPECT_FALSE(s.late);
+  c.join_at_s = 3.0;
+  AgentLifecycle joiner(c, 0.0);
+  s = joiner.step(0.1, {{2, Phase::kRunning, 1e6}}, 0, 0.0);
+  EXPECT_FALSE(s.start);
+  EXPECT_DOUBLE_EQ(s.swarm_time_s, -1.0);
+  // An honest peer at 3.05 s: the joiner starts there.
+  s = joiner.step(0.2, {{2, Phase::kRunning, 1e6}, {3, Phase::kRunning, 3.05}}, 0, 0.0);
+  EXPECT_TRUE(s.start);
+  EXPECT_DOUBLE_EQ(s.start_time_s, 3.05);
+}
+
 TEST(Lifecycle, AJoinerWhoseSwarmNeverRunsJoinsAfterItsTimeoutAndSaysSo) {
   LifecycleConfig c = barrier_config();
   c.join_at_s = 2.0;
