@@ -3,7 +3,8 @@
 # debootstrap, once: no image registry is reachable) and the project's image from docker/Dockerfile
 # (localhost/qswarm:latest, with podman's layer cache). compose_test.sh calls it; tools/test.sh also
 # starts it early, beside stages that do not measure time, so that the compose stage finds it made.
-# Exit 77 with the reason when it cannot be made here (no podman, no root for debootstrap).
+# Exit 77 with the reason when it cannot be made here (no podman, no root for debootstrap); under
+# CI (CI set) exit 1, so that no test that needs it passes as skipped.
 #
 # Usage: image.sh [PROGRAMS_DIR]. Given a directory holding swarm-agent, swarm-supervisor and
 # swarm-discovery (a release build's bin/), the image is the Dockerfile's runtime-base stage with
@@ -12,7 +13,10 @@
 # whole Dockerfile, as users build it.
 set -euo pipefail
 SRC="$(cd "$(dirname "$0")/../.." && pwd)"
-skip() { echo "SKIPPED: $*"; exit 77; }
+skip() {
+  if [[ -n ${CI:-} ]]; then echo "FAIL (CI): $*"; exit 1; fi
+  echo "SKIPPED: $*"; exit 77
+}
 
 command -v podman >/dev/null || skip "no podman (apt-get install podman podman-compose runc debootstrap)"
 export CONTAINERS_CONF="$SRC/tests/compose/containers.conf"

@@ -9,6 +9,8 @@
 #include <filesystem>
 #include <string>
 
+#include "tests/support/cannot_run.hpp"
+
 namespace qswarm::test {
 
 struct McapValidation {
@@ -24,15 +26,12 @@ inline std::string mcap_validator_missing() {
   return "";
 }
 
-// Skips the test where the validator cannot run, except in CI (CI=true), where it fails: CI's
-// set-up installs it, so a missing reader there is a broken set-up, not a machine without it.
-#define QSWARM_REQUIRE_MCAP_VALIDATOR()                                            \
-  do {                                                                             \
-    const std::string missing_ = ::qswarm::test::mcap_validator_missing();         \
-    if (!missing_.empty()) {                                                       \
-      if (std::getenv("CI")) FAIL() << "cannot validate MCAP files: " << missing_; \
-      GTEST_SKIP() << "cannot validate MCAP files: " << missing_;                  \
-    }                                                                              \
+// Skips the test where the validator cannot run, except in CI, where it fails: CI's set-up
+// installs it, so a missing reader there is a broken set-up, not a machine without it.
+#define QSWARM_REQUIRE_MCAP_VALIDATOR()                                                   \
+  do {                                                                                    \
+    const std::string missing_ = ::qswarm::test::mcap_validator_missing();                \
+    if (!missing_.empty()) QSWARM_CANNOT_RUN("cannot validate MCAP files: " << missing_); \
   } while (0)
 
 inline McapValidation validate_mcap(const std::filesystem::path& file,

@@ -12,6 +12,7 @@
 
 #include "common/mcap/file_check.hpp"
 #include "common/mcap/writer.hpp"
+#include "tests/support/cannot_run.hpp"
 
 namespace qswarm::mcap {
 namespace {
@@ -297,7 +298,7 @@ TEST(McapWriter, AChunkClosesOnceItSpansTheTimeOrHoldsTheBytesAndOnFlush) {
 }
 
 TEST(McapWriter, AFullDiskIsAnErrorThatNamesTheFileAndStopsTheWriter) {
-  if (!fs::exists("/dev/full")) GTEST_SKIP() << "no /dev/full on this machine";
+  if (!fs::exists("/dev/full")) QSWARM_CANNOT_RUN("no /dev/full on this machine");
   Writer w;
   ASSERT_FALSE(w.open("/dev/full") && w.flush() && w.close());
   EXPECT_FALSE(w.ok());

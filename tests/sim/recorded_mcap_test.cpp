@@ -14,6 +14,7 @@
 #include "common/sim/in_process_swarm.hpp"
 #include "tests/mcap/validate.hpp"
 #include "tests/sim/six_agents.hpp"
+#include "tests/support/cannot_run.hpp"
 
 namespace qswarm {
 namespace {
@@ -181,7 +182,7 @@ TEST(RecordedMcap, ExportRefusesWhatIsNotARunDirectoryNamingIt) {
 }
 
 TEST(RecordedMcap, AFullDiskUnderRunMcapEndsTheRunIncompleteNamingItNeverConverged) {
-  if (!fs::exists("/dev/full")) GTEST_SKIP() << "no /dev/full here";
+  if (!fs::exists("/dev/full")) QSWARM_CANNOT_RUN("no /dev/full here");
   // Given run.mcap on a device that is always full (every other file of the record is fine)
   const RunDir dir = RunDir::claim(scratch("full").string(), "six", "t");
   fs::create_symlink("/dev/full", dir.mcap());

@@ -28,6 +28,7 @@
 
 #include "common/scenario/scenario.hpp"
 #include "common/transport/port_plan.hpp"
+#include "tests/support/cannot_run.hpp"
 #include "tests/swarm/domain_lease.hpp"
 #include "tests/swarm/harness.hpp"
 
@@ -445,7 +446,7 @@ class Replay {
 // nothing they sent is decrypted, and the later run hears none of it, converges at the initial
 // average and names nothing.
 TEST(Attack, ARunsCapturedTrafficReplayedIntoALaterSecureRunReachesNoOne) {
-  if (geteuid() != 0) GTEST_SKIP() << "needs root to capture loopback traffic (AF_PACKET)";
+  if (geteuid() != 0) QSWARM_CANNOT_RUN("needs root to capture loopback traffic (AF_PACKET)");
   const fs::path ks = keystore("attack-replay");
   const auto replayed_into = [&](const std::string& name, const std::vector<std::string>& extra,
                                  std::uint64_t* sent, std::size_t* captured) {
@@ -469,7 +470,7 @@ TEST(Attack, ARunsCapturedTrafficReplayedIntoALaterSecureRunReachesNoOne) {
   std::size_t captured = 0;
   // Plain: the replay reaches the later run.
   const records::Summary plain = replayed_into("attack-replay-plain", {}, &sent, &captured);
-  if (captured == 0) GTEST_SKIP() << "cannot capture on lo here";
+  if (captured == 0) QSWARM_CANNOT_RUN("cannot capture on lo here");
   EXPECT_GT(sent, 1000u);
   EXPECT_GT(plain.foreign_samples(), 0u) << "the replay never reached the later plain run";
   RecordProperty("plain", "captured " + std::to_string(captured) + ", replayed " +

@@ -19,6 +19,7 @@
 #include <string>
 #include <vector>
 
+#include "tests/support/cannot_run.hpp"
 #include "tests/swarm/harness.hpp"
 #include "tests/swarm/net_hosts.hpp"
 
@@ -28,13 +29,10 @@ namespace {
 constexpr int kHosts = 3, kPerHost = 8, kAgents = kHosts * kPerHost;
 constexpr const char* kServerPort = "11811";
 
-#define REQUIRE_NET_HOSTS()                                               \
-  do {                                                                    \
-    const std::string why = net_hosts_unavailable();                      \
-    if (!why.empty()) {                                                   \
-      if (std::getenv("CI")) FAIL() << "hosts tests cannot run: " << why; \
-      GTEST_SKIP() << why;                                                \
-    }                                                                     \
+#define REQUIRE_NET_HOSTS()                                                 \
+  do {                                                                      \
+    const std::string why = net_hosts_unavailable();                        \
+    if (!why.empty()) QSWARM_CANNOT_RUN("hosts tests cannot run: " << why); \
   } while (false)
 
 int host_of(int agent) { return (agent - 1) / kPerHost; }
@@ -401,15 +399,14 @@ class ComposeHosts {
 TEST(Hosts, TheComposeSwarmOnThreeHostsPointedAtOneServerConvergesAndNamesEachHost) {
   REQUIRE_NET_HOSTS();
   for (const char* tool : {"podman", "docker-compose"}) {
-    if (!find_tool(tool).empty()) continue;
-    if (std::getenv("CI")) FAIL() << "no " << tool << " (apt-get install podman docker-compose)";
-    GTEST_SKIP() << "no " << tool;
+    if (find_tool(tool).empty())
+      QSWARM_CANNOT_RUN("no " << tool << " (apt-get install podman docker-compose)");
   }
   // The image of the programs under test, as the compose test makes it.
   const std::string bin_dir = std::filesystem::path(bin("swarm-agent")).parent_path();
   const Result image =
       run({std::string(QSWARM_SOURCE_DIR) + "/tests/compose/image.sh", bin_dir}, 900.0);
-  if (image.code == 77 && !std::getenv("CI")) GTEST_SKIP() << image.output;
+  if (image.code == 77) QSWARM_CANNOT_RUN(image.output);
   ASSERT_EQ(image.code, 0) << "tests/compose/image.sh: " << image.output;
   ComposeHosts c;
   ASSERT_EQ(c.start_engines(), "");

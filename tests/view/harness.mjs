@@ -1,6 +1,7 @@
 // What the view's multi-process tests share: a real `swarm run --view` (or `swarm view`) as a
 // child process, waiting on conditions (the run directory's view.url, a predicate), skipping
-// with the reason (exit 77, ctest's SKIP_RETURN_CODE) only where the test cannot run at all.
+// with the reason (exit 77, ctest's SKIP_RETURN_CODE) only where the test cannot run at all, and
+// never under CI (CI set): there a test that cannot run fails, naming what is missing.
 import { spawn } from 'node:child_process';
 import fs from 'node:fs';
 import path from 'node:path';
@@ -21,6 +22,10 @@ export const runsDir = process.env.QSWARM_TEST_RUNS_DIR;
 export const domain = process.env.QSWARM_TEST_DOMAIN;
 
 export function skip(reason) {
+  if (process.env.CI) {
+    console.log(`FAIL (CI): cannot run: ${reason}`);
+    process.exit(1);
+  }
   console.log(`SKIPPED: ${reason}`);
   process.exit(77);
 }
