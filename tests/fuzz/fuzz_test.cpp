@@ -14,6 +14,7 @@
 #include <sstream>
 
 #include "common/scenario/scenario.hpp"
+#include "common/transport/port_plan.hpp"
 #include "common/transport/sample_gate.hpp"
 
 namespace qswarm {
@@ -94,7 +95,7 @@ void expect_invariants(const RunConfig& rc) {
   }
   const double ratio = rc.agent.physics_hz / rc.agent.consensus_hz;
   ASSERT_NEAR(ratio, std::round(ratio), 1e-6 * ratio);
-  ASSERT_LE(rc.transport.domain_id, 51u);
+  ASSERT_LE(rc.transport.domain_id, PortPlan::kMaxDomain);  // the port plan's last domain
   for (const auto& k : rc.faults.kill) ASSERT_TRUE(std::isfinite(k.at_s) && k.at_s > 0.0);
   for (const auto& d : rc.faults.delay) ASSERT_TRUE(std::isfinite(d.mean_s + d.jitter_s));
 }

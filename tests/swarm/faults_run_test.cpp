@@ -14,6 +14,7 @@
 
 #include "common/core/graph.hpp"
 #include "common/scenario/scenario.hpp"
+#include "tests/support/cannot_run.hpp"
 #include "tests/swarm/domain_lease.hpp"
 #include "tests/swarm/harness.hpp"
 #include "tests/swarm/net_hosts.hpp"
@@ -157,23 +158,23 @@ TEST(Faults, LossBelowTheApplicationThroughFastDdsTestTransport) {
   // record period (5 ticks to 5 peers, and the record), so its records take the even places of
   // that cycle, or the odd ones, depending on where its sends began: the supervisor loses 1 or 2
   // of every 5 records of a sender (20 or 40 %), 30 % only on average. A few gaps at the ends of a
-  // short record are not counted, hence the margins below 20 % and above 40 %: still far from no
-  // loss at all and from losing everything.
+  // short record are not counted: each agent's share is within 6 points of 20 % or of 40 %
+  // (measured 17-21 % and 35-39 %), never the 30 % of a random drop, none or all.
   for (const auto& a : s.agents()) {
     const double seen = static_cast<double>(a.samples() + a.seq_gaps());
     ASSERT_GT(seen, 20.0) << "agent " << a.id();
     const double share = static_cast<double>(a.seq_gaps()) / seen;
     std::printf("transport loss 30 %%: the supervisor missed %.1f %% of agent %u's records\n",
                 100.0 * share, a.id());
-    EXPECT_GT(share, 0.1) << "agent " << a.id();
-    EXPECT_LT(share, 0.5) << "agent " << a.id();
+    EXPECT_TRUE(std::abs(share - 0.2) <= 0.06 || std::abs(share - 0.4) <= 0.06)
+        << "agent " << a.id() << " lost " << share << " of its records";
   }
 }
 
 // --- Multi-host: agents in separate network namespaces, links cut with iptables -------------
 
 TEST(Faults, NamespacesWithIptablesCutAndRandomLossTheDdsPathSurvives) {
-  if (const std::string why = net_hosts_unavailable(); !why.empty()) GTEST_SKIP() << why;
+  if (const std::string why = net_hosts_unavailable(); !why.empty()) QSWARM_CANNOT_RUN(why);
   // Host 0: supervisor; hosts 1-4: agents, each its own address on a bridge. Cut 1 <-> 2 both
   // ways with targeted DROP rules, and drop 30% of everything arriving at host 3.
   NetHosts hosts(5, NetHosts::Layout::kBridge);
