@@ -253,51 +253,51 @@ TEST(ConvergenceJudge, EstimatesThatAgreeWhileTheBodiesAreStillApartHaveNotConve
   EXPECT_EQ(ConvergenceJudge::Verdict::kConverged, judge.update(3.6, there, p));
 }
 
+// Agents 1 and 2 report every 0.1 s from from_s to to_s, agreeing, and the presence expires the
+// silent as the recorder does; until the judge says something. Returns what it said.
+ConvergenceJudge::Verdict two_agree(ConvergenceJudge& judge, Presence& p, double from_s,
+                                    double to_s) {
+  records::GraphSnapshot agree;
+  agree.set_agents(2);
+  agree.set_disagreement_m(0.001);
+  agree.set_spread_m(0.001);
+  ConvergenceJudge::Verdict v = ConvergenceJudge::Verdict::kNone;
+  for (int k = 0; from_s + 0.1 * k <= to_s + 1e-9 && v == ConvergenceJudge::Verdict::kNone; ++k) {
+    const double t = from_s + 0.1 * k;
+    hear(p, {1, 2}, t);
+    p.expire(t);
+    v = judge.update(t, agree, p);
+  }
+  return v;
+}
+
 TEST(ConvergenceJudge, AnAgentThatNeverCameIsMissingNotConvergence) {
   // Agent 3 is in the scenario and never sent a sample: the two that flew agree, and the verdict
   // names 3 missing once the hold and the timeout have passed; never "converged".
   ConvergenceJudge judge(0.01, 0.5, 1.0, -1.0, FaultPlan{});
   Presence p({1, 2, 3}, 1.0);
-  records::GraphSnapshot agree;
-  agree.set_agents(2);
-  agree.set_disagreement_m(0.001);
-  agree.set_spread_m(0.001);
-  ConvergenceJudge::Verdict v = ConvergenceJudge::Verdict::kNone;
-  for (int k = 0; k <= 30 && v == ConvergenceJudge::Verdict::kNone; ++k) {
-    const double t = 0.1 * k;
-    for (AgentId id : {1u, 2u})
-      p.on_sample(sample(id, static_cast<std::uint64_t>(k) + 1, t, Vec3::Zero()), t);
-    v = judge.update(t, agree, p);
-  }
-  EXPECT_EQ(v, ConvergenceJudge::Verdict::kAgreedWithoutSome);
+  EXPECT_EQ(two_agree(judge, p, 0.0, 3.0), ConvergenceJudge::Verdict::kAgreedWithoutSome);
   EXPECT_FALSE(judge.converged());
   EXPECT_EQ(judge.missing(), std::vector<AgentId>{3});
 }
 
 TEST(ConvergenceJudge, AnAgentStoppedWithoutAWordIsMissingNotConvergence) {
-  // Agent 3 flew, then fell silent mid-run without saying goodbye (SIGSTOP, a frozen host): once
-  // the presence timeout names it departed, the two left agreeing is no convergence.
+  // Agent 3 flew, then fell silent mid-run without saying goodbye (SIGSTOP, a frozen host), just as
+  // the three agreed: its last word cannot vouch for the hold, and once the presence timeout names
+  // it departed, the two left agreeing is no convergence.
   ConvergenceJudge judge(0.01, 0.5, 1.0, -1.0, FaultPlan{});
   Presence p({1, 2, 3}, 1.0);
-  records::GraphSnapshot agree;
-  agree.set_agents(3);
-  agree.set_disagreement_m(0.001);
-  agree.set_spread_m(0.001);
-  for (AgentId id : {1u, 2u, 3u}) p.on_sample(sample(id, 1, 0.0, Vec3::Zero()), 0.0);
-  EXPECT_EQ(ConvergenceJudge::Verdict::kNone, judge.update(0.0, agree, p));  // the hold starts
-  ConvergenceJudge::Verdict v = ConvergenceJudge::Verdict::kNone;
-  agree.set_agents(2);
-  for (int k = 1; k <= 40 && v == ConvergenceJudge::Verdict::kNone; ++k) {
-    const double t = 0.1 * k;
-    for (AgentId id : {1u, 2u})
-      p.on_sample(sample(id, static_cast<std::uint64_t>(k) + 1, t, Vec3::Zero()), t);
-    p.expire(t);
-    v = judge.update(t, agree, p);
-    // Within the presence timeout agent 3 is still present: the hold may pass, no verdict yet.
-    if (t < 1.0) EXPECT_TRUE(p.running(3)) << t;
-  }
+  hear(p, {1, 2, 3}, 0.0);
+  records::GraphSnapshot three;
+  three.set_agents(3);
+  three.set_disagreement_m(0.001);
+  three.set_spread_m(0.001);
+  EXPECT_EQ(ConvergenceJudge::Verdict::kNone, judge.update(0.0, three, p));  // the hold starts
+  // Past the hold, within the presence timeout: agent 3 is still present, no verdict.
+  EXPECT_EQ(two_agree(judge, p, 0.1, 0.9), ConvergenceJudge::Verdict::kNone);
+  EXPECT_TRUE(p.running(3));
+  EXPECT_EQ(two_agree(judge, p, 1.0, 4.0), ConvergenceJudge::Verdict::kAgreedWithoutSome);
   EXPECT_FALSE(p.running(3));
-  EXPECT_EQ(v, ConvergenceJudge::Verdict::kAgreedWithoutSome);
   EXPECT_FALSE(judge.converged());
   EXPECT_EQ(judge.missing(), std::vector<AgentId>{3});
 }

@@ -566,26 +566,49 @@ TEST(SwarmRun, BadSamplesFromATestParticipantAreDroppedByEveryAgentAndChangeNoth
   EXPECT_LT(s.average_drift_m(), 1e-3);
 }
 
-TEST(SwarmRun, CtrlCLeavesNoOrphansAndARecordThatSaysWhatIsMissing) {
-  const auto dir = fresh_dir("ctrl-c");
-  // Agent 2 ignores SIGTERM, so the launcher's escalation to SIGKILL is exercised too.
-  Child launcher(
-      {bin("swarm"), "run", scenario("paper/time_varying"), "--out", dir.string(), "--domain",
-       test_domain().str(), "--time-scale", "0.5", "--grace", "1", "--test-ignore-sigterm", "2"},
-      dir.parent_path() / "ctrl-c.log");
-  ASSERT_TRUE(wait_for(
+// `swarm run` of the paper's time-varying rendezvous into `dir`, interrupted with SIGINT (Ctrl-C)
+// once its 4 agents fly: what it said, and the pids of its agents and supervisor.
+struct Interrupted {
+  Result result;
+  std::vector<pid_t> pids;
+};
+Interrupted interrupt_once_flying(const std::filesystem::path& dir,
+                                  const std::vector<std::string>& extra) {
+  std::vector<std::string> argv = {bin("swarm"),
+                                   "run",
+                                   scenario("paper/time_varying"),
+                                   "--out",
+                                   dir.string(),
+                                   "--domain",
+                                   test_domain().str(),
+                                   "--time-scale",
+                                   "0.5"};
+  argv.insert(argv.end(), extra.begin(), extra.end());
+  Child launcher(argv, dir.parent_path() / (dir.filename().string() + ".log"));
+  Interrupted out;
+  const bool flying = wait_for(
       [&] {
         for (const auto& row : read_csv(dir / "graph.csv"))
           if (std::stoi(row.at("agents")) == 4) return true;
         return false;
       },
-      60.0));
-  std::vector<pid_t> pids;
-  for (unsigned id = 1; id <= 4; ++id) pids.push_back(pid_of(dir, "agent", id));
-  pids.push_back(pid_of(dir, "supervisor", 0));
-  for (pid_t p : pids) ASSERT_TRUE(process_alive(p));
+      60.0);
+  EXPECT_TRUE(flying) << "the 4 agents never flew";
+  for (unsigned id = 1; id <= 4 && flying; ++id) out.pids.push_back(pid_of(dir, "agent", id));
+  if (flying) out.pids.push_back(pid_of(dir, "supervisor", 0));
+  for (pid_t p : out.pids) EXPECT_TRUE(process_alive(p)) << p;
   launcher.signal(SIGINT);
-  const Result r = launcher.wait(60.0);
+  out.result = launcher.wait(60.0);
+  return out;
+}
+
+TEST(SwarmRun, CtrlCLeavesNoOrphansAndARecordThatSaysWhatIsMissing) {
+  const auto dir = fresh_dir("ctrl-c");
+  // Agent 2 ignores SIGTERM, so the launcher's escalation to SIGKILL is exercised too.
+  const Interrupted run =
+      interrupt_once_flying(dir, {"--grace", "1", "--test-ignore-sigterm", "2"});
+  const Result& r = run.result;
+  const std::vector<pid_t>& pids = run.pids;
   // Agent 2 could not write its stats (SIGKILL): the record is incomplete, and says which file.
   EXPECT_EQ(r.code, 3) << r.output;
   EXPECT_NE(r.output.find("1 needed SIGKILL"), std::string::npos) << r.output;
@@ -614,21 +637,10 @@ TEST(SwarmRun, CtrlCLeavesNoOrphansAndARecordThatSaysWhatIsMissing) {
 // is gone, the record is complete and says "interrupted", and the exit code is 1, never 0.
 TEST(SwarmRun, CtrlCOfARunThatStopsWhenToldExitsOneWithACompleteRecordSayingInterrupted) {
   const auto dir = fresh_dir("ctrl-c-clean");
-  Child launcher({bin("swarm"), "run", scenario("paper/time_varying"), "--out", dir.string(),
-                  "--domain", test_domain().str(), "--time-scale", "0.5"},
-                 dir.parent_path() / "ctrl-c-clean.log");
-  ASSERT_TRUE(wait_for(
-      [&] {
-        for (const auto& row : read_csv(dir / "graph.csv"))
-          if (std::stoi(row.at("agents")) == 4) return true;
-        return false;
-      },
-      60.0));
-  std::vector<pid_t> pids;
-  for (unsigned id = 1; id <= 4; ++id) pids.push_back(pid_of(dir, "agent", id));
-  pids.push_back(pid_of(dir, "supervisor", 0));
-  launcher.signal(SIGINT);
-  const Result r = launcher.wait(60.0);
+  const Interrupted run = interrupt_once_flying(dir, {});
+  const Result& r = run.result;
+  const std::vector<pid_t>& pids = run.pids;
+  ASSERT_EQ(pids.size(), 5u);
   EXPECT_EQ(r.code, 1) << r.output;
   for (pid_t p : pids) EXPECT_FALSE(process_alive(p)) << "orphan pid " << p;
   const records::Summary s = read_summary(dir);
