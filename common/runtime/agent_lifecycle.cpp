@@ -135,7 +135,9 @@ double AgentLifecycle::swarm_clock(const std::vector<PeerStatus>& peers) const {
       t.push_back(p.stamp_s);
   if (t.empty()) return -1.0;
   std::sort(t.begin(), t.end());
-  const double median = t[(t.size() - 1) / 2];
+  // The upper median: a peer killed without a word keeps its last stamp in the gate, so old
+  // stamps may be as many as the live ones; the swarm's clock is the newest of them.
+  const double median = t[t.size() / 2];
   double clock = -1.0;
   for (const double v : t)
     if (v <= median + kClockSlackS) clock = v;
@@ -178,8 +180,15 @@ LifecycleStep AgentLifecycle::barrier(double now, const std::vector<PeerStatus>&
     ++heard;
     ready += (p.phase == Phase::kReady || p.phase == Phase::kRunning) ? 1 : 0;
   }
-  // A swarm long in flight does not wait for this agent: it joins now, on the swarm's clock.
-  if (swarm_t / cfg_.time_scale > kLateAfterWallS) {
+  // A swarm long in flight does not wait for this agent: it joins now, on the swarm's clock, when
+  // two running peers tell it that clock (one, where it has a single barrier peer): a lone
+  // sample, a forger's, releases no barrier.
+  std::size_t telling = 0;
+  for (const PeerStatus& p : peers)
+    telling +=
+        p.phase == Phase::kRunning && p.stamp_s <= swarm_t && p.stamp_s >= swarm_t - kClockSlackS;
+  if (swarm_t / cfg_.time_scale > kLateAfterWallS &&
+      telling >= std::min<std::size_t>(2, std::max<std::size_t>(1, cfg_.barrier_peers.size()))) {
     s.late = true;
     s.swarm_time_s = swarm_t;
     enter_running(now, s, swarm_t);

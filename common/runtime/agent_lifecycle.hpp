@@ -146,8 +146,8 @@ class AgentLifecycle {
 
  private:
   // The swarm's clock as its running peers tell it (-1: none runs), with a peer stamped far
-  // ahead of the others' median, or past the flight, left out: a forger's or a relay's stamp
-  // from the future cannot move an agent that joins.
+  // ahead of the others' (upper) median, or past the flight, left out: a stamp from the future
+  // moves no agent that joins unless as many peers tell it as the honest ones.
   double swarm_clock(const std::vector<PeerStatus>& peers) const;
   LifecycleStep join_wait(double now, const std::vector<PeerStatus>& peers);
   LifecycleStep barrier(double now, const std::vector<PeerStatus>& peers, int matched_readers,

@@ -201,11 +201,15 @@ TEST(Lifecycle, AnAgentThatFindsTheSwarmLongInFlightJoinsOnItsClockAsARestartWou
   // Given an agent born at the barrier (nothing planned its late start: a pod the cluster
   // restarted) whose peers have flown 30 s
   AgentLifecycle late(barrier_config(), 100.0);
+  // A lone running sample (one peer of two; a forger's would look the same) releases nothing
   LifecycleStep s = late.step(100.0, {{2, Phase::kRunning, 30.0}}, 0, 0.0);
-  // Then it joins at once, on the swarm's clock, as late (it asks back what it held)
+  EXPECT_FALSE(s.start);
+  // Two peers telling the same clock: it joins at once, on the swarm's clock, as late (it asks
+  // back what it held)
+  s = late.step(100.01, {{2, Phase::kRunning, 30.0}, {3, Phase::kRunning, 30.02}}, 0, 0.0);
   EXPECT_TRUE(s.start);
   EXPECT_TRUE(s.late);
-  EXPECT_DOUBLE_EQ(s.start_time_s, 30.0);
+  EXPECT_DOUBLE_EQ(s.start_time_s, 30.02);
   EXPECT_EQ(late.phase(), LifePhase::kRunning);
   // Given a peer that started a moment before this agent's own go (1.5 wall s at time scale 4)
   LifecycleConfig c = barrier_config();
@@ -407,6 +411,21 @@ TEST(Lifecycle, AnAgentWhoseOnlyRunningPeerIsStampedFromTheFutureDoesNotJoinOnIt
   s = joiner.step(0.2, {{2, Phase::kRunning, 1e6}, {3, Phase::kRunning, 3.05}}, 0, 0.0);
   EXPECT_TRUE(s.start);
   EXPECT_DOUBLE_EQ(s.start_time_s, 3.05);
+}
+
+TEST(Lifecycle, AJoinerTakesTheLiveClockOverADeadPeersLastStamp) {
+  // A restart due at 12 s hears agent 2's last stamp (4 s: it was killed without a word, and its
+  // last sample stays) beside agent 3's live clock: the live one counts.
+  LifecycleConfig c = barrier_config();
+  c.join_at_s = 12.0;
+  c.duration_s = 60.0;
+  AgentLifecycle life(c, 0.0);
+  LifecycleStep s = life.step(7.0, {{2, Phase::kRunning, 4.0}, {3, Phase::kRunning, 9.0}}, 0, 0.0);
+  EXPECT_FALSE(s.start);
+  EXPECT_DOUBLE_EQ(s.swarm_time_s, 9.0);
+  s = life.step(10.0, {{2, Phase::kRunning, 4.0}, {3, Phase::kRunning, 12.02}}, 0, 0.0);
+  EXPECT_TRUE(s.start);
+  EXPECT_DOUBLE_EQ(s.start_time_s, 12.02);
 }
 
 TEST(Lifecycle, AJoinerWhoseSwarmNeverRunsJoinsAfterItsTimeoutAndSaysSo) {
