@@ -172,6 +172,16 @@ try {
             docs.filter((d) => d.spec?.template?.metadata?.labels?.peer === "dds").length === 5);
     }
   }
+  // The size typed once, secure too: keys for --agents 5 random agents, deployed with the same.
+  const keys5 = path.join(work, "keys5");
+  execFileSync(path.join(bin, "swarm"), ["keys", scenario, "--agents", "5", "--out", keys5]);
+  execFileSync(path.join(bin, "swarm"), ["deploy", "k8s", scenario, "--agents", "5", "--keystore",
+                                         keys5, "--out", path.join(work, "secure5")]);
+  const five = YAML.parseAllDocuments(readFileSync(path.join(work, "secure5", "quadswarm.yaml"),
+                                                   "utf8")).map((d) => d.toJS());
+  check("secure, --agents 5: five agents, each its own key",
+        five.filter((d) => d.kind === "StatefulSet").length === 5 &&
+        five.filter((d) => d.kind === "Secret").length === 7 && problems(five).length === 0);
   // The validator can fail: a StatefulSet whose replicas is text, and a Pod without containers.
   const docs = YAML.parseAllDocuments(readFileSync(path.join(work, "d4", "quadswarm.yaml"), "utf8"))
     .map((d) => d.toJS());
