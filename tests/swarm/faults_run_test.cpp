@@ -158,15 +158,15 @@ TEST(Faults, LossBelowTheApplicationThroughFastDdsTestTransport) {
   // record period (5 ticks to 5 peers, and the record), so its records take the even places of
   // that cycle, or the odd ones, depending on where its sends began: the supervisor loses 1 or 2
   // of every 5 records of a sender (20 or 40 %), 30 % only on average. A few gaps at the ends of a
-  // short record are not counted: each agent's share is within 6 points of 20 % or of 40 %
-  // (measured 17-21 % and 35-39 %), never the 30 % of a random drop, none or all.
+  // short record are not counted: each agent's share is within 8 points of 20 % or of 40 %
+  // (measured 17-21 % and 35-39 %), never near the 30 % of a random drop, none or all.
   for (const auto& a : s.agents()) {
     const double seen = static_cast<double>(a.samples() + a.seq_gaps());
     ASSERT_GT(seen, 20.0) << "agent " << a.id();
     const double share = static_cast<double>(a.seq_gaps()) / seen;
     std::printf("transport loss 30 %%: the supervisor missed %.1f %% of agent %u's records\n",
                 100.0 * share, a.id());
-    EXPECT_TRUE(std::abs(share - 0.2) <= 0.06 || std::abs(share - 0.4) <= 0.06)
+    EXPECT_TRUE(std::abs(share - 0.2) <= 0.08 || std::abs(share - 0.4) <= 0.08)
         << "agent " << a.id() << " lost " << share << " of its records";
   }
 }

@@ -352,7 +352,7 @@ class ComposeHosts {
   }
   ~ComposeHosts() {
     for (int h = 0; h < kHosts && h < static_cast<int>(engines_.size()); ++h)
-      run(compose(h, {"down", "--timeout", "5"}), 120.0);
+      run(compose(h, {"down", "--timeout", "5"}), 30.0);
     for (auto& e : engines_) {
       e->signal(SIGTERM);
       e->wait(20.0);
@@ -405,18 +405,18 @@ TEST(Hosts, TheComposeSwarmOnThreeHostsPointedAtOneServerConvergesAndNamesEachHo
   // The image of the programs under test, as the compose test makes it.
   const std::string bin_dir = std::filesystem::path(bin("swarm-agent")).parent_path();
   const Result image =
-      run({std::string(QSWARM_SOURCE_DIR) + "/tests/compose/image.sh", bin_dir}, 900.0);
+      run({std::string(QSWARM_SOURCE_DIR) + "/tests/compose/image.sh", bin_dir}, 500.0);
   if (image.code == 77) QSWARM_CANNOT_RUN(image.output);
   ASSERT_EQ(image.code, 0) << "tests/compose/image.sh: " << image.output;
   ComposeHosts c;
   ASSERT_EQ(c.start_engines(), "");
   // The other machines first: their agents wait for the server, as a lab's would.
   for (int h = 1; h < kHosts; ++h) {
-    const Result up = run(c.compose(h, {"up", "-d", "--no-build", "agent"}), 300.0);
+    const Result up = run(c.compose(h, {"up", "-d", "--no-build", "agent"}), 150.0);
     ASSERT_EQ(up.code, 0) << "host " << h << ": " << up.output;
   }
   const Result r = run(
-      c.compose(0, {"up", "--no-build", "--exit-code-from", "supervisor", "--no-color"}), 400.0);
+      c.compose(0, {"up", "--no-build", "--exit-code-from", "supervisor", "--no-color"}), 300.0);
   ASSERT_EQ(r.code, 0) << r.output.substr(r.output.size() > 6000 ? r.output.size() - 6000 : 0);
   std::vector<std::filesystem::path> runs;
   for (const auto& e : std::filesystem::directory_iterator(c.dir_ / "runs")) runs.push_back(e);
