@@ -97,13 +97,15 @@ duration_s: 60
 seed: 3
 EOF
   if [[ ${3:-} == secure ]]; then
-    "$BIN/swarm" keys "$WORK/$1.txtpb" --out "$WORK/$1.keys" >/dev/null
+    "$BIN/swarm" keys "$WORK/$1.txtpb" --out "$WORK/$1.keys" >/dev/null ||
+      { echo "FAIL: swarm keys" >&2; exit 1; }
     keys=(--keystore "$WORK/$1.keys")
   fi
   "$BIN/swarm" deploy k8s "$WORK/$1.txtpb" "${size[@]}" "${keys[@]}" --out "$WORK/$1" \
-    --name "$NAME" >/dev/null
-  podman "${RUNTIME[@]}" kube play --network "$NET" "$WORK/$1/podman.yaml" >"$WORK/$1.play" 2>&1 || {
-    cat "$WORK/$1.play"; echo "FAIL: kube play"; exit 1; }
+    --name "$NAME" >/dev/null || { echo "FAIL: swarm deploy k8s" >&2; exit 1; }
+  # Said on stderr: stdout is the caller's $(...).
+  timeout 300 podman "${RUNTIME[@]}" kube play --network "$NET" "$WORK/$1/podman.yaml" \
+    >"$WORK/$1.play" 2>&1 || { cat "$WORK/$1.play" >&2; echo "FAIL: kube play ($1)" >&2; exit 1; }
   podman volume inspect "$NAME-runs" --format '{{.Mountpoint}}'
 }
 # The supervisor's exit code, once it ends (at most 300 s).
