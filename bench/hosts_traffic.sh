@@ -31,7 +31,8 @@ teardown() {
 }
 trap 'teardown; rm -rf "$WORK"' EXIT
 addr() { echo "10.78.$(($1 + 1)).2"; }
-on() { local h=$1; shift; nsenter --net="/run/netns/$P$h" -- "$@"; }
+# Runs on host $1, in place of the calling (sub)shell: started with `&`, $! is the program's pid.
+on() { local h=$1; shift; exec nsenter --net="/run/netns/$P$h" -- "$@"; }
 median() { sort -g | awk '{ v[NR] = $1 } END { print (NR % 2) ? v[(NR + 1) / 2] : (v[NR / 2] + v[NR / 2 + 1]) / 2 }'; }
 
 printf '%-6s %6s %14s %14s %16s %18s\n' "H:P" agents "B/agent/s" "pkt/agent/s" "MB/host/s" "B/off-host sample"
