@@ -56,9 +56,10 @@ std::string indented(const std::string& text, int spaces) {
 
 constexpr const char* kKeysDir = "/keys/store";  // where a pod's keystore is copied to
 
-// A keystore file, as a pod needs it: its name there and its bytes.
+// A keystore file, as a pod needs it: its name (in its identity's directory, or at the
+// keystore's top for the shared ones) and its bytes.
 struct KeyFile {
-  std::string path, bytes;
+  std::string name, bytes;
 };
 
 struct Deploy {
@@ -123,8 +124,8 @@ struct Deploy {
     for (const auto& [who, files] : keys) {
       if (!who.empty() && who != identity) continue;
       for (const KeyFile& f : files)
-        copy += " && cp -L /etc/quadswarm-" + std::string(who.empty() ? "trust" : "key") + "/" +
-                file_key(f.path) + " " + kKeysDir + "/" + f.path;
+        copy += " && cp -L /etc/quadswarm-" + std::string(who.empty() ? "trust/" : "key/") +
+                f.name + " " + kKeysDir + "/" + (who.empty() ? "" : who + "/") + f.name;
     }
     std::ostringstream c;
     c << "initContainers:\n- name: keys\n  image: " << quoted(image)
@@ -135,16 +136,11 @@ struct Deploy {
       << "  - name: keys\n    mountPath: /keys\n";
     return indented(c.str(), indent);
   }
-  // A keystore file's key in its Secret ("agent-3/cert.pem" -> "cert.pem").
-  static std::string file_key(const std::string& path) {
-    return path.substr(path.find('/') == std::string::npos ? 0 : path.find('/') + 1);
-  }
   std::string key_volume(const std::string& volume, const std::string& object) const {
     // Readable by the pod's group (fsGroup) only, for the init container to copy.
-    return podman_pods ? "- name: " + volume + "\n  configMap:\n    name: " + object +
-                             "\n    defaultMode: 0440\n"
-                       : "- name: " + volume + "\n  secret:\n    secretName: " + object +
-                             "\n    defaultMode: 0440\n";
+    return "- name: " + volume +
+           (podman_pods ? "\n  configMap:\n    name: " : "\n  secret:\n    secretName: ") + object +
+           "\n    defaultMode: 0440\n";
   }
   std::string volumes(int indent, bool runs_volume, const std::string& identity = "") const {
     std::ostringstream v;
@@ -165,8 +161,8 @@ struct Deploy {
         << "\nmetadata:\n  name: " << key_object(who) << "\n"
         << (podman_pods ? "" : "type: Opaque\n") << "data:\n";
       for (const KeyFile& f : files)
-        y << "  " << file_key(f.path) << ": "
-          << (podman_pods ? quoted(f.bytes) : base64_encode(f.bytes)) << "\n";
+        y << "  " << f.name << ": " << (podman_pods ? quoted(f.bytes) : base64_encode(f.bytes))
+          << "\n";
     }
     return y.str();
   }
@@ -320,8 +316,7 @@ bool read_keystore(const std::string& dir, Deploy& d) {
       std::cerr << "swarm deploy k8s: --keystore: " << f.why << "\n";
       return false;
     }
-    const std::string name = file.filename().string();
-    d.keys[who].push_back({who.empty() ? name : who + "/" + name, std::move(bytes)});
+    d.keys[who].push_back({file.filename().string(), std::move(bytes)});
     return true;
   };
   if (!add("", ks.ca_certificate()) || !add("", ks.governance())) return false;
