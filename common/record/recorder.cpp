@@ -8,6 +8,7 @@
 #include "common/record/graph_metrics.hpp"
 
 #include "common/scenario/proto_util.hpp"
+#include "common/transport/stamp_slack.hpp"
 
 namespace qswarm {
 namespace {

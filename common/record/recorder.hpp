@@ -115,9 +115,6 @@ class Recorder {
   bool robust_ = true, robust_known_ = false;
   bool degree_short_ = false, not_robust_ = false;
   double resilience_t_s_ = -1.0;
-  // How far (simulated s) a sample may be stamped ahead of the swarm's clock: a late joiner's
-  // first stamps, the supervisor's own scheduling, a tick or two of skew.
-  static constexpr double kStampSlackS = 5.0;
   // How far beyond the avoidance filter's distance a neighbour may be and still hold a held agent
   // off its slot (the filter settles at its distance; tracking adds centimetres).
   static constexpr double kHeldReachM = 0.25;

@@ -6,6 +6,7 @@
 #include <bit>
 #include <cstdio>
 
+#include "common/transport/stamp_slack.hpp"
 #include "common/transport/state_message.hpp"
 
 namespace qswarm {
@@ -127,26 +128,27 @@ void AgentLifecycle::enter_running(double now, LifecycleStep& s, double start_ti
   s.wake_at_s = now;  // the first tick is due at once
 }
 
-double AgentLifecycle::swarm_clock(const std::vector<PeerStatus>& peers) const {
+AgentLifecycle::SwarmClock AgentLifecycle::swarm_clock(const std::vector<PeerStatus>& peers) const {
   std::vector<double> t;
   for (const PeerStatus& p : peers)
     if (p.phase == Phase::kRunning && std::isfinite(p.stamp_s) &&
-        (cfg_.duration_s <= 0.0 || p.stamp_s <= cfg_.duration_s + kClockSlackS))
+        (cfg_.duration_s <= 0.0 || p.stamp_s <= cfg_.duration_s + kStampSlackS))
       t.push_back(p.stamp_s);
-  if (t.empty()) return -1.0;
+  SwarmClock clock;
+  if (t.empty()) return clock;
   std::sort(t.begin(), t.end());
   // The upper median: a peer killed without a word keeps its last stamp in the gate, so old
   // stamps may be as many as the live ones; the swarm's clock is the newest of them.
   const double median = t[t.size() / 2];
-  double clock = -1.0;
   for (const double v : t)
-    if (v <= median + kClockSlackS) clock = v;
+    if (v <= median + kStampSlackS) clock.t = v;
+  for (const double v : t) clock.telling += v <= clock.t && v >= clock.t - kStampSlackS;
   return clock;
 }
 
 LifecycleStep AgentLifecycle::join_wait(double now, const std::vector<PeerStatus>& peers) {
   LifecycleStep s;
-  const double swarm_t = swarm_clock(peers);
+  const double swarm_t = swarm_clock(peers).t;
   s.swarm_time_s = swarm_t;
   const double join_at = *cfg_.join_at_s;
   const bool timed_out = now - born_s_ > join_at / cfg_.time_scale + cfg_.join_timeout_s;
@@ -170,7 +172,7 @@ LifecycleStep AgentLifecycle::barrier(double now, const std::vector<PeerStatus>&
   LifecycleStep s;
   std::size_t heard = 0, ready = 0;
   bool peer_running = false, learnt = false;
-  const double swarm_t = swarm_clock(peers);
+  const SwarmClock clock = swarm_clock(peers);
   for (const PeerStatus& p : peers) {
     learnt = merge(p, now) || learnt;
     // Any agent of the run that runs: a running agent sends no bitsets, so one that started the
@@ -183,15 +185,12 @@ LifecycleStep AgentLifecycle::barrier(double now, const std::vector<PeerStatus>&
   // A swarm long in flight does not wait for this agent: it joins now, on the swarm's clock, when
   // two running peers tell it that clock (one, where it has a single barrier peer): a lone
   // sample, a forger's, releases no barrier.
-  std::size_t telling = 0;
-  for (const PeerStatus& p : peers)
-    telling +=
-        p.phase == Phase::kRunning && p.stamp_s <= swarm_t && p.stamp_s >= swarm_t - kClockSlackS;
-  if (swarm_t / cfg_.time_scale > kLateAfterWallS &&
-      telling >= std::min<std::size_t>(2, std::max<std::size_t>(1, cfg_.barrier_peers.size()))) {
+  if (clock.t / cfg_.time_scale > kLateAfterWallS &&
+      clock.telling >=
+          std::min<std::size_t>(2, std::max<std::size_t>(1, cfg_.barrier_peers.size()))) {
     s.late = true;
-    s.swarm_time_s = swarm_t;
-    enter_running(now, s, swarm_t);
+    s.swarm_time_s = clock.t;
+    enter_running(now, s, clock.t);
     return s;
   }
   const std::size_t expected = cfg_.barrier_peers.size();

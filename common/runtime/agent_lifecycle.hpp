@@ -127,9 +127,6 @@ class AgentLifecycle {
   // A running peer's clock this far past the start (wall seconds) makes an agent at the barrier a
   // late one (LifecycleStep::late): further than any agent of one start lags behind its go.
   static constexpr double kLateAfterWallS = 2.0;
-  // How far (simulated s) a running peer's clock may be ahead of the others' median and still be
-  // the swarm's: ticks of skew, a peer a record period ahead; as the recorder's slack.
-  static constexpr double kClockSlackS = 5.0;
   // Ready announcements at announce_period_s once the agent turns ready, before the slower beacon:
   // a peer learns at once, and one lost datagram costs no more than a period.
   static constexpr int kReadyAnnouncements = 3;
@@ -145,10 +142,15 @@ class AgentLifecycle {
   double ready_at_s() const { return ready_at_; }
 
  private:
-  // The swarm's clock as its running peers tell it (-1: none runs), with a peer stamped far
+  // The swarm's clock as its running peers tell it (t -1: none runs), with a peer stamped far
   // ahead of the others' (upper) median, or past the flight, left out: a stamp from the future
-  // moves no agent that joins unless as many peers tell it as the honest ones.
-  double swarm_clock(const std::vector<PeerStatus>& peers) const;
+  // moves no agent that joins unless as many peers tell it as the honest ones. `telling`: the
+  // running peers within the slack below that clock.
+  struct SwarmClock {
+    double t = -1.0;
+    std::size_t telling = 0;
+  };
+  SwarmClock swarm_clock(const std::vector<PeerStatus>& peers) const;
   LifecycleStep join_wait(double now, const std::vector<PeerStatus>& peers);
   LifecycleStep barrier(double now, const std::vector<PeerStatus>& peers, int matched_readers,
                         bool recorder_confirmed);
