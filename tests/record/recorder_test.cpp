@@ -393,12 +393,20 @@ TEST(GraphMetrics, HeldAgentsAreLeftOutOfTheSpreadFromTheSlots) {
       0.02, 1e-12);
 }
 
+// Agents 1 (at x = 0) and 2 (at x = 2), unweighted, and `extra` of the scenario.
+RunConfig two_agents(const std::string& name, const std::string& extra = "") {
+  return resolve_scenario(parse_scenario_text(
+      "name: \"" + name +
+          "\"\nagents { id: 1 position { x: 0 } }\nagents { id: 2 position { x: 2 } }\n"
+          "weight { policy: UNWEIGHTED }\n" +
+          extra,
+      name));
+}
+
 TEST(Recorder, FedWithMessagesWritesTheRunRecordAndASummary) {
-  const RunConfig rc = resolve_scenario(parse_scenario_text(
-      "name: \"rec\"\nagents { id: 1 position { x: 0 } }\nagents { id: 2 position { x: 2 } }\n"
-      "weight { policy: UNWEIGHTED }\nconvergence { tolerance_m: 0.1 hold_s: 0.2 }\n"
-      "faults { cut { a: 1 b: 2 start_s: 0.1 end_s: 0.2 } }\n",
-      "rec"));
+  const RunConfig rc = two_agents("rec",
+                                  "convergence { tolerance_m: 0.1 hold_s: 0.2 }\n"
+                                  "faults { cut { a: 1 b: 2 start_s: 0.1 end_s: 0.2 } }\n");
   const std::filesystem::path dir = fresh_dir("qswarm-recorder");
   std::string text;
   {
@@ -443,11 +451,7 @@ TEST(Recorder, AStampFarAheadOfTheSwarmsClockNeverMovesTheRunsClock) {
   // Two agents fly at 50 Hz for 1 s; mid-run a sample of agent 2's id stamped a million seconds
   // ahead arrives (a forger's, or a relay's from the future), then another 10 s ahead. Neither
   // moves the run's clock: no early end, no rows at their stamps; refused, counted, said once.
-  const RunConfig rc = resolve_scenario(
-      parse_scenario_text("name: \"ahead\"\nagents { id: 1 position { x: 0 } }\n"
-                          "agents { id: 2 position { x: 2 } }\nweight { policy: UNWEIGHTED }\n"
-                          "duration_s: 30\n",
-                          "ahead"));
+  const RunConfig rc = two_agents("ahead", "duration_s: 30\n");
   const std::filesystem::path dir = fresh_dir("qswarm-ahead");
   records::Summary s;
   {
@@ -485,10 +489,7 @@ TEST(Recorder, AStampFarAheadOfTheSwarmsClockNeverMovesTheRunsClock) {
 }
 
 TEST(Recorder, TheHostsEachAgentFlewOnAreRecordedInOrderAndAFlappingOneIsNotFollowed) {
-  const RunConfig rc = resolve_scenario(parse_scenario_text(
-      "name: \"hosts\"\nagents { id: 1 position { x: 0 } }\nagents { id: 2 position { x: 2 } }\n"
-      "weight { policy: UNWEIGHTED }\n",
-      "hosts"));
+  const RunConfig rc = two_agents("hosts");
   const std::filesystem::path dir = fresh_dir("qswarm-hosts");
   std::string text;
   records::Summary s;
@@ -584,10 +585,7 @@ struct ForgedRun {
 };
 
 ForgedRun fly_with_suspects(std::uint8_t reported_by_agent_1) {
-  const RunConfig rc = resolve_scenario(parse_scenario_text(
-      "name: \"forged\"\nagents { id: 1 position { x: 0 } }\nagents { id: 2 position { x: 2 } }\n"
-      "weight { policy: UNWEIGHTED }\nconvergence { tolerance_m: 0.1 hold_s: 0.2 }\n",
-      "forged"));
+  const RunConfig rc = two_agents("forged", "convergence { tolerance_m: 0.1 hold_s: 0.2 }\n");
   const std::filesystem::path dir = fresh_dir("qswarm-forged");
   ForgedRun out;
   {

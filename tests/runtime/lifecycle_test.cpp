@@ -374,20 +374,25 @@ TEST(Lifecycle, ALateJoinerStaysSilentUntilTheSwarmClockReachesItsTime) {
   EXPECT_TRUE(life.step(3.2, {}, 0, 6.0).kill);
 }
 
+// A planned late joiner (or a restart) due at join_at_s, in a 60 s flight.
+LifecycleConfig joining_at(double join_at_s) {
+  LifecycleConfig c = barrier_config();
+  c.join_at_s = join_at_s;
+  c.duration_s = 60.0;
+  return c;
+}
+
 TEST(Lifecycle, ALateJoinerIsNotMovedByOnePeersStampFromTheFuture) {
   // A planned late joiner (at 3 s) hears two honest peers near 3 s and one stamped a million
   // seconds ahead (a forger's, or a relay's from the future): it joins on the honest clock.
-  LifecycleConfig c = barrier_config();
-  c.join_at_s = 3.0;
-  c.duration_s = 60.0;
-  AgentLifecycle life(c, 0.0);
+  AgentLifecycle life(joining_at(3.0), 0.0);
   LifecycleStep s = life.step(
       0.1, {{2, Phase::kRunning, 3.1}, {3, Phase::kRunning, 3.2}, {4, Phase::kRunning, 1e6}}, 0,
       0.0);
   EXPECT_TRUE(s.start);
   EXPECT_DOUBLE_EQ(s.start_time_s, 3.2);
   // Ahead of the others by more than the slack, even within the flight: left out too.
-  AgentLifecycle ahead(c, 0.0);
+  AgentLifecycle ahead(joining_at(3.0), 0.0);
   s = ahead.step(0.1,
                  {{2, Phase::kRunning, 3.1}, {3, Phase::kRunning, 3.2}, {4, Phase::kRunning, 40.0}},
                  0, 0.0);
@@ -402,8 +407,7 @@ TEST(Lifecycle, AnAgentWhoseOnlyRunningPeerIsStampedFromTheFutureDoesNotJoinOnIt
   LifecycleStep s = late.step(0.0, {{2, Phase::kRunning, 1e6}}, 0, 0.0);
   EXPECT_FALSE(s.start);
   EXPECT_FALSE(s.late);
-  c.join_at_s = 3.0;
-  AgentLifecycle joiner(c, 0.0);
+  AgentLifecycle joiner(joining_at(3.0), 0.0);
   s = joiner.step(0.1, {{2, Phase::kRunning, 1e6}}, 0, 0.0);
   EXPECT_FALSE(s.start);
   EXPECT_DOUBLE_EQ(s.swarm_time_s, -1.0);
@@ -416,10 +420,7 @@ TEST(Lifecycle, AnAgentWhoseOnlyRunningPeerIsStampedFromTheFutureDoesNotJoinOnIt
 TEST(Lifecycle, AJoinerTakesTheLiveClockOverADeadPeersLastStamp) {
   // A restart due at 12 s hears agent 2's last stamp (4 s: it was killed without a word, and its
   // last sample stays) beside agent 3's live clock: the live one counts.
-  LifecycleConfig c = barrier_config();
-  c.join_at_s = 12.0;
-  c.duration_s = 60.0;
-  AgentLifecycle life(c, 0.0);
+  AgentLifecycle life(joining_at(12.0), 0.0);
   LifecycleStep s = life.step(7.0, {{2, Phase::kRunning, 4.0}, {3, Phase::kRunning, 9.0}}, 0, 0.0);
   EXPECT_FALSE(s.start);
   EXPECT_DOUBLE_EQ(s.swarm_time_s, 9.0);
