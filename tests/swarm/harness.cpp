@@ -103,6 +103,15 @@ std::string read_file(const std::filesystem::path& p) {
   return s.str();
 }
 
+double stats_value(const std::filesystem::path& run_dir, unsigned id, const std::string& key) {
+  std::ifstream in(run_dir / ("agent-" + std::to_string(id) + ".stats"));
+  std::string k;
+  double v = 0.0;
+  while (in >> k >> v)
+    if (k == key) return v;
+  return -1.0;
+}
+
 records::Summary read_summary(const std::filesystem::path& run_dir) {
   records::Summary s;
   google::protobuf::util::JsonParseOptions opt;

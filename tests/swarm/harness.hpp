@@ -53,6 +53,8 @@ bool wait_for(const std::function<bool()>& cond, double timeout_s);
 
 records::Summary read_summary(const std::filesystem::path& run_dir);
 std::string read_file(const std::filesystem::path& p);
+// A number an agent wrote to its agent-ID.stats ("key value" lines); -1 if it wrote none.
+double stats_value(const std::filesystem::path& run_dir, unsigned id, const std::string& key);
 // Rows of a CSV file as column-name -> value maps.
 std::vector<std::map<std::string, std::string>> read_csv(const std::filesystem::path& p);
 // pid of role/id from the run directory's processes.csv (-1 if absent).

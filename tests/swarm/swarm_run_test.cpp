@@ -240,11 +240,10 @@ TEST(SwarmRun, ThroughItsServerAnAgentOnAFixedGraphMeetsOnlyItsNeighbours) {
                        240.0);
   ASSERT_EQ(r.code, 0) << r.output;
   EXPECT_TRUE(read_summary(dir).converged());
-  for (int id = 1; id <= 12; ++id) {
-    const std::string stats = read_file(dir / ("agent-" + std::to_string(id) + ".stats"));
-    const std::size_t at = stats.find("\nparticipants ");
-    ASSERT_NE(at, std::string::npos) << stats;
-    EXPECT_LE(std::atoi(stats.c_str() + at + 14), 6) << "agent " << id << ":\n" << stats;
+  for (unsigned id = 1; id <= 12; ++id) {
+    const double known = stats_value(dir, id, "participants");
+    EXPECT_GE(known, 0) << "agent " << id << " wrote no participant count";
+    EXPECT_LE(known, 6) << "agent " << id;
   }
 }
 
@@ -555,7 +554,17 @@ TEST(SwarmRun, BadSamplesFromATestParticipantAreDroppedByEveryAgentAndChangeNoth
   ASSERT_GT(published, 10);
   const records::Summary s = read_summary(dir);
   EXPECT_TRUE(s.converged());
-  for (const auto& a : s.agents()) EXPECT_GE(a.dropped_by_agent(), 1u) << "agent " << a.id();
+  // Each saboteur round sends three samples every agent's gate drops and counts (NaN, a future
+  // incarnation, an agent not in the scenario); agent 2 takes the one with its own id for its own
+  // echo. A best-effort sample may be lost and the last ones come after an agent's stats, so the
+  // count lies between one and that per round; more is a sample counted twice.
+  for (const auto& a : s.agents()) {
+    const double per_round = a.id() == 2 ? 2.0 : 3.0;
+    const double dropped = stats_value(dir, a.id(), "dropped");
+    EXPECT_GE(dropped, 1) << "agent " << a.id();
+    EXPECT_LE(dropped, per_round * published) << "agent " << a.id();
+    EXPECT_GE(a.dropped_by_agent(), 1u) << "agent " << a.id() << ": the summary counts them";
+  }
   // The stranger is noted once and kept out of the swarm's record.
   EXPECT_EQ(s.agents_size(), 4);
   int noted = 0;

@@ -4,7 +4,7 @@ import { spawn, spawnSync } from 'node:child_process';
 import fs from 'node:fs';
 import net from 'node:net';
 import path from 'node:path';
-import { binDir, check, domain, finish, freshDir, npm, until, sleep, SCENARIO, SUMMARY, TELEMETRY,
+import { binDir, check, domain, finish, freshDir, npm, until, SCENARIO, SUMMARY, TELEMETRY,
   RECORDS, VIEW_URL } from './harness.mjs';
 
 const { FoxgloveClient } = npm('@foxglove/ws-protocol');
@@ -108,12 +108,18 @@ try {
   await until(() => raw.readyState === 1, 5000, 'a control connection');
   raw.on('message', (d) => { const m = JSON.parse(d); if (m.op === 'status') said += `status: ${m.message}\n`; });
   const send = (o) => raw.send(JSON.stringify({ op: 'qswarmPlayback', ...o }));
+  const sent = msgs.length;
   send({ action: 'pause' });
-  const paused = await until(() => msgs.slice().reverse().find((m) => m.replay && !m.replay.playing), 5000, 'paused');
+  const paused = await until(() => msgs.slice(sent).find((m) => m.replay && !m.replay.playing), 5000, 'paused');
   const tPaused = paused.replay.t;
-  await sleep(1000);
-  const last = msgs[msgs.length - 1];
-  check(Math.abs(last.t - tPaused) < 0.11, `paused: time stays at ${tPaused.toFixed(2)} s (${last.t})`);
+  check(tPaused < duration - 0.5, `paused before the end: at ${tPaused} of ${duration} s`);
+  // Paused, the server still sends a heartbeat frame each wall second: two of them after the
+  // pause span at least a second, and the replay's time must not move in them.
+  const from = msgs.indexOf(paused) + 1;
+  const beats = await until(() => { const f = msgs.slice(from).filter((m) => m.type === 'frame');
+    return f.length >= 2 && f; }, 5000, 'two heartbeats while paused');
+  check(beats.every((m) => m.replay && !m.replay.playing && m.replay.t === tPaused),
+    `paused: time stays at ${tPaused.toFixed(2)} s (${beats.map((m) => m.replay && m.replay.t)})`);
   msgs.length = 0;
   send({ action: 'seek', t: 0.5 });  // back: a fresh snapshot up to t = 0.5
   const back = await until(() => msgs.find((m) => m.type === 'snapshot'), 5000, 'a snapshot after seeking back');
