@@ -1,5 +1,6 @@
 #include "common/dds/participant.hpp"
 
+#include "common/dds/tick_transport.hpp"
 #include "common/security/keystore.hpp"
 #include "common/transport/name_list.hpp"
 #include "common/transport/port_plan.hpp"
@@ -54,17 +55,25 @@ DdsParticipant::DdsParticipant(const ParticipantOptions& opts) : opts_(opts) {
   dds::DomainParticipantQos pqos;
   pqos.name(opts.name);
   pqos.transport().use_builtin_transports = false;
+  std::shared_ptr<rtps::TransportDescriptorInterface> udp;
   if (opts.test_drop_data_percent > 0 || opts.test_drop_writer_announcements) {
     auto t = std::make_shared<rtps::test_UDPv4TransportDescriptor>();
     if (!opts.interface.empty()) t->interfaceWhiteList.push_back(opts.interface);
     t->dropDataMessagesPercentage = opts.test_drop_data_percent;
     t->dropPublicationBuiltinTopicData = opts.test_drop_writer_announcements;
-    pqos.transport().user_transports.push_back(t);
+    udp = t;
   } else {
-    auto udp = std::make_shared<rtps::UDPv4TransportDescriptor>();
-    if (!opts.interface.empty()) udp->interfaceWhiteList.push_back(opts.interface);
-    pqos.transport().user_transports.push_back(udp);
+    auto u = std::make_shared<rtps::UDPv4TransportDescriptor>();
+    if (!opts.interface.empty()) u->interfaceWhiteList.push_back(opts.interface);
+    udp = u;
   }
+  if (opts.tick_receive) {
+    // Fast DDS still sends (and drops, for the test transport); the sockets it would read with a
+    // thread each are read by the loop's thread.
+    tick_rx_ = std::make_shared<TickReceive>(opts.interface);
+    udp = tick_transport(udp, tick_rx_);
+  }
+  pqos.transport().user_transports.push_back(udp);
   if (opts.shared_memory) {
     pqos.transport().user_transports.push_back(
         std::make_shared<rtps::SharedMemTransportDescriptor>());

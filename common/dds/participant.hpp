@@ -17,6 +17,8 @@ class DomainParticipantQos;
 
 namespace qswarm {
 
+class TickReceive;
+
 // How a process's one DDS participant is made: where its traffic may go, how it discovers.
 struct ParticipantOptions {
   std::uint32_t domain_id = 0;
@@ -69,6 +71,9 @@ struct ParticipantOptions {
   // secure Discovery Server: the two together are refused.
   std::string keystore;
   std::string identity;
+  // Receive without Fast DDS's receive threads (TickReceive): the thread that owns the loop reads
+  // the sockets (drain_receive()) once a tick. false: Fast DDS's UDPv4, a thread per locator.
+  bool tick_receive = false;
 };
 
 // One DomainParticipant with the project's settings: transports (one UDPv4 on the allowed
@@ -90,8 +95,11 @@ class DdsParticipant {
   const WriterRegistry& writers() const { return *writers_; }
   // What Fast DDS's threads run at, for the log ("" with threads_nice 0).
   const std::string& threads_priority() const { return threads_priority_; }
+  // With tick_receive: what reads its sockets (drain() each tick); null otherwise.
+  TickReceive* tick_receive() const { return tick_rx_.get(); }
 
  private:
+  std::shared_ptr<TickReceive> tick_rx_;
   ParticipantOptions opts_;
   std::unique_ptr<WriterRegistry> writers_ = std::make_unique<WriterRegistry>();
   eprosima::fastdds::dds::DomainParticipant* participant_ = nullptr;
