@@ -36,7 +36,7 @@ std::optional<AgentId> claim_id(DdsBus& bus, const RunConfig& rc, const AgentFla
   return taken;
 }
 
-int fly(const RunConfig& rc, AgentId id, AgentFlags& f, DdsBus& bus, SteadyClock& clock,
+int fly(const RunConfig& rc, AgentId id, AgentFlags& f, DdsBus& bus, Clock& clock,
         std::optional<IdClaimRunner>& claim, const std::atomic<bool>& stop) {
   const RunDir dir(f.run_dir);
   auto log = make_process_logger("agent-" + std::to_string(id),
@@ -85,7 +85,8 @@ int fly(const RunConfig& rc, AgentId id, AgentFlags& f, DdsBus& bus, SteadyClock
   log->info(final_report(loop, bus.counters()));
   if (!dir.empty() &&
       !write_stats(dir.agent_stats(id), loop, bus.counters(),
-                   bus.participant().writers().participants_known(), clock.now_s(), flight_start)) {
+                   bus.participant().writers().participants_known(), clock.now_s(), flight_start,
+                   bus.participant().tick_receive())) {
     log->error("cannot write {}", dir.agent_stats(id).string());
     exit_code = 3;  // the record is incomplete: say so, as the supervisor does
   }

@@ -23,7 +23,7 @@ std::optional<AgentId> claim_id(DdsBus& bus, const RunConfig& rc, const AgentFla
 // Flies agent `id` on the bus until its end, a stop or a planned kill (which it carries out on
 // itself), then writes its stats into the run directory. Returns the process's exit code: 0, 2
 // when another replica holds its claimed id, 3 when its stats could not be written.
-int fly(const RunConfig& rc, AgentId id, AgentFlags& f, DdsBus& bus, SteadyClock& clock,
+int fly(const RunConfig& rc, AgentId id, AgentFlags& f, DdsBus& bus, Clock& clock,
         std::optional<IdClaimRunner>& claim, const std::atomic<bool>& stop);
 
 }  // namespace qswarm

@@ -10,6 +10,7 @@
 #include "agent/flight.hpp"
 #include "common/app/process_dds.hpp"
 #include "common/app/process_life.hpp"
+#include "common/dds/tick_transport.hpp"
 #include "common/security/keystore.hpp"
 
 namespace {
@@ -60,8 +61,10 @@ int main(int argc, char** argv) {
     d.options.participant.threads_nice = rc->plan.dds_threads_nice;
     d.options.state.self = id;
     d.options.id_claims = d.options.claim_first = claiming;  // the state waits for its id
-    SteadyClock clock;
+    d.options.participant.tick_receive = rc->transport.tick_receive;
+    DrainingClock clock;
     DdsBus bus(d.options, clock);
+    clock.drain(bus.participant().tick_receive());
     std::optional<IdClaimRunner> claim;
     if (claiming) {
       int exit_code = 0;

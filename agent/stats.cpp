@@ -43,7 +43,7 @@ ProcessUsage process_usage() {
 
 bool write_stats(const std::filesystem::path& path, const AgentLoop& loop, const BusCounters& c,
                  int participants_known, double wall_now_s,
-                 const std::optional<ProcessUsage>& flight_start) {
+                 const std::optional<ProcessUsage>& flight_start, const TickReceive* tick) {
   const ProcessUsage now = process_usage();
   const double since = loop.running_since_s();
   std::ofstream out(path);
@@ -59,6 +59,11 @@ bool write_stats(const std::filesystem::path& path, const AgentLoop& loop, const
         << "\nflight_involuntary_switches "
         << now.involuntary_switches - flight_start->involuntary_switches << "\nstarted_epoch_s "
         << std::fixed << std::setprecision(6) << flight_start->epoch_s << std::defaultfloat << "\n";
+  if (tick != nullptr) {
+    const TickReceive::Counters t = tick->counters();
+    out << "tick_drains " << t.drains << "\ntick_datagrams " << t.datagrams << "\ntick_truncated "
+        << t.truncated << "\n";
+  }
   if (c.ages.total() > 0)
     out << "arrival_age_p50_ms " << c.ages.quantile_ms(0.5) << "\narrival_age_p99_ms "
         << c.ages.quantile_ms(0.99) << "\n";

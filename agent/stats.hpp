@@ -4,6 +4,7 @@
 #include <optional>
 #include <string>
 
+#include "common/dds/tick_transport.hpp"
 #include "common/runtime/agent_loop.hpp"
 #include "common/transport/neighbor_bus.hpp"
 
@@ -30,8 +31,11 @@ std::string final_report(const AgentLoop& loop, const BusCounters& c);
 // flight_voluntary_switches, flight_involuntary_switches, over the same wall_s), without the
 // process's start-up and discovery, which a short run's cpu_s is dominated by at small sizes, and
 // when it started (started_epoch_s: how far apart a swarm's agents started).
+// With receive at the tick (`tick` set): its drains and the datagrams they read (tick_drains,
+// tick_datagrams, tick_truncated).
 bool write_stats(const std::filesystem::path& path, const AgentLoop& loop, const BusCounters& c,
                  int participants_known, double wall_now_s,
-                 const std::optional<ProcessUsage>& flight_start);
+                 const std::optional<ProcessUsage>& flight_start,
+                 const TickReceive* tick = nullptr);
 
 }  // namespace qswarm

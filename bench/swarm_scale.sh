@@ -35,6 +35,7 @@
 #              SECURE=1: DDS-Security on every process (a `swarm keys` keystore per size)
 #              DISCOVERY=simple|server: transport.discovery (unset: the scenario's default, the
 #              run's own Discovery Server above 32 plain agents)
+#              RECEIVE=tick|threads: transport.receive (unset: the scenario's default)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 BUILD=${BUILD_DIR:-build}
@@ -54,6 +55,14 @@ socket_drops() {
   inodes=$(find "/proc/$1/fd" -lname 'socket:*' -printf '%l ' 2>/dev/null | tr -dc '0-9 ')
   awk -v list="$inodes" 'BEGIN { n = split(list, a, " "); for (i = 1; i <= n; i++) want[a[i]] = 1 }
     FNR > 1 && ($10 in want) { d += $NF } END { print d + 0 }' /proc/net/udp /proc/net/udp6
+}
+# Adds field $2 to scenario $1's transport block (a second block would be refused).
+transport_field() {
+  if grep -q '^transport {' "$1"; then
+    sed -i "s/^transport {/transport { $2/" "$1"
+  else
+    echo "transport { $2 }" >>"$1"
+  fi
 }
 # The host's UDP receive-buffer errors so far (every socket, every process).
 rcvbuf_errors() { awk '$1 == "Udp:" && $2 ~ /^[0-9]/ { print $6 }' /proc/net/snmp; }
@@ -109,9 +118,8 @@ for kind in "${KINDS[@]}"; do
         ;;
       *) echo "swarm_scale: unknown scenario $kind (all, range, grid, ring, torus)" >&2; exit 2 ;;
     esac
-    if [[ -n ${DISCOVERY:-} ]]; then
-      echo "transport { discovery: ${DISCOVERY^^} }" >>"$scen"
-    fi
+    [[ -n ${DISCOVERY:-} ]] && transport_field "$scen" "discovery: ${DISCOVERY^^}"
+    [[ -n ${RECEIVE:-} ]] && transport_field "$scen" "receive: ${RECEIVE^^}"
     secure=()
     if [[ ${SECURE:-0} == 1 ]]; then
       ks="$OUT/keys-$n"  # random agents are ids 1..N whatever the scenario
@@ -152,6 +160,7 @@ for kind in "${KINDS[@]}"; do
     IFS=$'\t' read -r cpu fcpu wakes late p50 p99 np50 np99 np99max per_s cpu_per disc spread known rss end <<<"$row"
     [[ ${SECURE:-0} == 1 ]] && kind_shown="$kind, secure" || kind_shown=$kind
     [[ -n ${DISCOVERY:-} ]] && kind_shown="$kind_shown, ${DISCOVERY,,}"
+    [[ -n ${RECEIVE:-} ]] && kind_shown="$kind_shown, receive ${RECEIVE,,}"
     awk -v n="$n" -v k="$kind_shown" -v hz="$RATE_HZ" -v ts="$TIME_SCALE" -v cpu="$cpu" -v fcpu="$fcpu" -v wakes="$wakes" -v late="$late" \
       -v p50="$p50" -v p99="$p99" -v np50="$np50" -v np99="$np99" -v np99max="$np99max" -v s="$per_s" -v cs="$cpu_per" -v d="$disc" -v sp="$spread" -v kn="$known" -v rss="$rss" \
       -v sup="$sup_cpu" -v sd="$sup_drops" -v he="$host_errors" -v end="$end" '

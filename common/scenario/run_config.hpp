@@ -69,6 +69,8 @@ struct TransportConfig {
   // Under Delivery::kAll on loopback a sample is one datagram to the run's multicast group;
   // false: one per reader (a host whose loopback carries no multicast).
   bool multicast = true;
+  // An agent reads its sockets at its tick (TickReceive) instead of with Fast DDS's threads.
+  bool tick_receive = false;
 };
 
 // A scenario with every default filled in and random agents resolved: what a run actually uses.
