@@ -35,7 +35,7 @@
 #              SECURE=1: DDS-Security on every process (a `swarm keys` keystore per size)
 #              DISCOVERY=simple|server: transport.discovery (unset: the scenario's default, the
 #              run's own Discovery Server above 32 plain agents)
-#              RECEIVE=tick|threads: transport.receive (unset: the scenario's default)
+#              RECEIVE=tick|threads: transport.receive (unset: the scenario's, tick by default)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 BUILD=${BUILD_DIR:-build}

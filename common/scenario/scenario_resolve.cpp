@@ -390,7 +390,7 @@ void resolve_transport(const scenario::Transport& t, RunConfig& rc) {
     fail("transport.interface", "an IPv4 address such as 127.0.0.1", "\"\"");
   if (t.has_shared_memory()) tc.shared_memory = t.shared_memory();
   if (t.has_multicast()) tc.multicast = t.multicast();
-  tc.tick_receive = t.receive() == scenario::Transport::TICK;
+  tc.tick_receive = t.receive() != scenario::Transport::THREADS;
   tc.run_id = t.run_id();
   if (!t.keystore().empty()) {
     std::error_code ec;
