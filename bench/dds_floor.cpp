@@ -9,6 +9,7 @@
 // process per second and CPU per received sample: what an agent costs beyond this is the
 // project's, not Fast DDS's or the kernel's (bench/wire_floor.cpp is the kernel's floor).
 // Usage: dds_floor N [SECONDS=20] [RATE_HZ=50] [multicast|unicast] [ENTRIES=N-1] [DOMAIN=20]
+//        [threads|tick] (Fast DDS's receive threads, or the sockets drained after each wait)
 #include <sys/mman.h>
 
 #include <algorithm>
@@ -32,6 +33,7 @@
 
 #include "bench/process_bench.hpp"
 #include "common/dds/participant.hpp"
+#include "common/dds/tick_transport.hpp"
 #include "common/dds/qos.hpp"
 #include "common/transport/port_plan.hpp"
 #include "swarm_statePubSubTypes.h"
@@ -69,7 +71,7 @@ struct Counter : public dds::DataReaderListener {
 };
 
 Result fly(int i, int n, double seconds, double hz, bool multicast, int entries,
-           std::uint32_t domain, Shared& shared) {
+           std::uint32_t domain, bool tick, Shared& shared) {
   Counter counter;  // the reader's listener: it outlives the participant
   counter.self = static_cast<std::uint32_t>(i + 1);
   qswarm::ParticipantOptions po;
@@ -77,7 +79,12 @@ Result fly(int i, int n, double seconds, double hz, bool multicast, int entries,
   po.name = "dds-floor-" + std::to_string(i + 1);
   po.participant_id = i;
   po.threads_nice = 15;
+  po.tick_receive = tick;
   qswarm::DdsParticipant participant(po);
+  // With the receive at the tick, this thread reads the sockets after each wait, as an agent does.
+  const auto drain = [&] {
+    if (qswarm::TickReceive* rx = participant.tick_receive()) rx->drain();
+  };
   dds::DomainParticipant* p = participant.get();
   dds::TypeSupport type(new qswarm_msgs::AgentStatePubSubType());
   type.register_type(p);
@@ -125,11 +132,14 @@ Result fly(int i, int n, double seconds, double hz, bool multicast, int entries,
     reader->get_subscription_matched_status(st);
     if (st.current_count >= n) break;
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    drain();
   }
   r.matched = st.current_count >= n;
   if (shared.matched.fetch_add(1) + 1 == n) shared.start = std::ceil(now_s()) + 1.0;
-  while (shared.start.load() == 0.0 && !shared.failed && now_s() < give_up + 10.0)
+  while (shared.start.load() == 0.0 && !shared.failed && now_s() < give_up + 10.0) {
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    drain();
+  }
   const double start = shared.start.load();
   if (start == 0.0) {
     r.matched = false;  // the others never all matched: this process did not fly
@@ -143,6 +153,7 @@ Result fly(int i, int n, double seconds, double hz, bool multicast, int entries,
   for (long k = 0; static_cast<double>(k) * period < seconds; ++k) {
     const double due = start + static_cast<double>(k) * period;
     sleep_until(due);
+    drain();
     if (now_s() - due > period) ++r.late;
     ++r.ticks;
     out.seq(static_cast<std::uint64_t>(k));
@@ -159,7 +170,7 @@ int main(int argc, char** argv) {
   if (argc < 2) {
     std::fprintf(stderr,
                  "usage: dds_floor N [SECONDS=20] [RATE_HZ=50] [multicast|unicast] "
-                 "[ENTRIES=N-1] [DOMAIN=20]\n");
+                 "[ENTRIES=N-1] [DOMAIN=20] [threads|tick]\n");
     return 2;
   }
   const int n = std::atoi(argv[1]);
@@ -168,6 +179,7 @@ int main(int argc, char** argv) {
   const std::string mode = argc > 4 ? argv[4] : "multicast";
   const int entries = argc > 5 ? std::atoi(argv[5]) : n - 1;
   const long domain = argc > 6 ? std::atol(argv[6]) : 20;
+  const std::string receive = argc > 7 ? argv[7] : "threads";
   const char* bad = nullptr;
   if (n < 2 || n > 256) {
     bad = "N: 2 to 256 processes";
@@ -181,6 +193,8 @@ int main(int argc, char** argv) {
     bad = "ENTRIES: 0 to 511";
   } else if (domain < 0 || domain > static_cast<long>(qswarm::PortPlan::kMaxDomain)) {
     bad = "DOMAIN: 0 to the port plan's largest domain";
+  } else if (receive != "threads" && receive != "tick") {
+    bad = "RECEIVE: threads or tick";
   }
   if (bad) {
     std::fprintf(stderr, "dds_floor: %s\n", bad);
@@ -193,7 +207,7 @@ int main(int argc, char** argv) {
   const std::vector<Result> all = qswarm::bench::in_processes<Result>(n, [&](int i) {
     try {
       return fly(i, n, seconds, hz, mode == "multicast", entries,
-                 static_cast<std::uint32_t>(domain), shared);
+                 static_cast<std::uint32_t>(domain), receive == "tick", shared);
     } catch (const std::exception& e) {  // its ports taken (another run on DOMAIN), ...
       std::fprintf(stderr, "dds_floor: process %d: %s\n", i + 1, e.what());
       shared.failed = true;  // the others stop waiting for it

@@ -6,10 +6,12 @@
 #include <fastdds/rtps/transport/TransportReceiverInterface.h>
 #include <fastrtps/utils/IPLocator.h>
 #include <netinet/in.h>
+#include <poll.h>
 #include <sys/socket.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cerrno>
 #include <set>
 #include <utility>
@@ -216,6 +218,23 @@ std::size_t TickReceive::drain() {
     }
   }
   return got;
+}
+
+void DrainingClock::sleep_until(double t_s) {
+  if (rx_ == nullptr || !eager_) {
+    base_.sleep_until(t_s);
+    if (rx_ != nullptr) rx_->drain();
+    return;
+  }
+  std::vector<pollfd> fds;
+  for (const int fd : rx_->fds()) fds.push_back({fd, POLLIN, 0});
+  for (;;) {
+    rx_->drain();
+    const double left_s = t_s - now_s();
+    if (left_s <= 0.0) return;
+    const int ms = static_cast<int>(std::ceil(left_s * 1000.0));
+    if (::poll(fds.data(), fds.size(), ms) <= 0 && now_s() >= t_s) return;
+  }
 }
 
 namespace {
