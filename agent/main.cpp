@@ -61,7 +61,7 @@ int main(int argc, char** argv) {
     d.options.participant.threads_nice = rc->plan.dds_threads_nice;
     d.options.state.self = id;
     d.options.id_claims = d.options.claim_first = claiming;  // the state waits for its id
-    d.options.participant.tick_receive = rc->transport.tick_receive;
+    d.options.participant.tick_receive = rc->plan.tick_receive;
     DrainingClock clock;
     DdsBus bus(d.options, clock);
     clock.drain(bus.participant().tick_receive());

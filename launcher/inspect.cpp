@@ -136,7 +136,8 @@ std::string describe_plan(const RunPlan& p) {
   o.precision(4);
   o << "run plan (swarm run on this host, docs/run-plan.md):\n"
     << "  who hears whom: " << to_string(p.delivery) << ", routed as " << to_string(p.routing)
-    << (p.multicast_group.empty() ? ", unicast" : ", multicast group " + p.multicast_group) << "\n"
+    << (p.multicast_group.empty() ? ", unicast" : ", multicast group " + p.multicast_group)
+    << "; agents receive " << (p.tick_receive ? "at the tick" : "on Fast DDS's threads") << "\n"
     << "  discovery: " << to_string(p.discovery)
     << (p.own_server ? " (the run's own Discovery Server)" : "") << ", " << p.participants
     << " participants, announced every " << p.participant_announce_period_s << " s\n"

@@ -69,8 +69,9 @@ struct TransportConfig {
   // Under Delivery::kAll on loopback a sample is one datagram to the run's multicast group;
   // false: one per reader (a host whose loopback carries no multicast).
   bool multicast = true;
-  // An agent reads its sockets at its tick (TickReceive) instead of with Fast DDS's threads.
-  bool tick_receive = false;
+  // An agent reads its sockets at its tick (TickReceive) instead of with Fast DDS's threads, as
+  // the scenario asks; unset: as the plan decides for the run's size (RunPlan).
+  std::optional<bool> tick_receive;
 };
 
 // A scenario with every default filled in and random agents resolved: what a run actually uses.

@@ -65,6 +65,8 @@ struct RunPlan {
   std::string multicast_group;
   // A state reader's room: agents the keyed reader holds (Fast DDS defaults to 10).
   int reader_agents = 0;
+  // An agent reads its sockets at its tick (TickReceive), not with Fast DDS's receive threads.
+  bool tick_receive = true;
 
   // Discovery and ports.
   DiscoveryMode discovery = DiscoveryMode::kMulticast;

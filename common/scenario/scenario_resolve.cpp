@@ -390,7 +390,8 @@ void resolve_transport(const scenario::Transport& t, RunConfig& rc) {
     fail("transport.interface", "an IPv4 address such as 127.0.0.1", "\"\"");
   if (t.has_shared_memory()) tc.shared_memory = t.shared_memory();
   if (t.has_multicast()) tc.multicast = t.multicast();
-  tc.tick_receive = t.receive() != scenario::Transport::THREADS;
+  if (t.receive() != scenario::Transport::RECEIVE_UNSPECIFIED)
+    tc.tick_receive = t.receive() == scenario::Transport::TICK;
   tc.run_id = t.run_id();
   if (!t.keystore().empty()) {
     std::error_code ec;
@@ -563,8 +564,9 @@ void write_back_defaults(RunConfig& rc, scenario::Scenario& s) {
   s.mutable_transport()->set_interface(rc.transport.interface);
   s.mutable_transport()->set_shared_memory(rc.transport.shared_memory);
   s.mutable_transport()->set_multicast(rc.transport.multicast);
-  s.mutable_transport()->set_receive(rc.transport.tick_receive ? scenario::Transport::TICK
-                                                               : scenario::Transport::THREADS);
+  if (rc.transport.tick_receive)
+    s.mutable_transport()->set_receive(*rc.transport.tick_receive ? scenario::Transport::TICK
+                                                                  : scenario::Transport::THREADS);
   if (!rc.transport.keystore.empty()) s.mutable_transport()->set_keystore(rc.transport.keystore);
   s.mutable_transport()->set_run_id(rc.transport.run_id);
   s.mutable_avoidance()->set_enabled(rc.agent.avoidance.enabled);

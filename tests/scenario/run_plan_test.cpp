@@ -74,6 +74,7 @@ TEST(RunPlan, EveryThresholdOnBothSidesPlainAndSecure) {
     EXPECT_EQ(p.routing, r.routing) << at;
     EXPECT_EQ(p.participants, r.participants) << at;
     EXPECT_EQ(p.tick_phases, r.tick_phases) << at;
+    EXPECT_EQ(p.tick_receive, r.n <= 32) << at;  // receive at the tick up to 32 agents
     EXPECT_DOUBLE_EQ(p.record_hz, r.record_hz) << at;
     EXPECT_EQ(p.record_every, static_cast<std::uint32_t>(std::lround(50.0 / r.record_hz))) << at;
     EXPECT_EQ(p.spread_records, r.spread_records) << at;
@@ -117,6 +118,14 @@ TEST(RunPlan, TheScenarioOverridesWhatItSetsAndTheTimeScaleStretchesTheWallLimit
   EXPECT_EQ(asked.plan.multicast_group, "");
   EXPECT_DOUBLE_EQ(asked.plan.record_hz, 25.0);
   EXPECT_EQ(asked.plan.record_every, 2u);
+  EXPECT_TRUE(resolve_scenario(parse_scenario_text("random_agents { count: 64 }\n"
+                                                   "transport { receive: TICK }\n",
+                                                   "s"))
+                  .plan.tick_receive);
+  EXPECT_FALSE(resolve_scenario(parse_scenario_text("random_agents { count: 8 }\n"
+                                                    "transport { receive: THREADS }\n",
+                                                    "s"))
+                   .plan.tick_receive);
   // The scenario as run says what the plan decided, so a process that resolves it again agrees.
   EXPECT_EQ(asked.resolved.transport().delivery(), scenario::Transport::ALL);
   EXPECT_DOUBLE_EQ(asked.resolved.record().rate_hz(), 25.0);
