@@ -87,10 +87,9 @@ int fly(const RunConfig& rc, AgentId id, AgentFlags& f, DdsBus& bus, Clock& cloc
   }
   loop.stop();
   log->info(final_report(loop, bus.counters()));
-  if (!dir.empty() &&
-      !write_stats(dir.agent_stats(id), loop, bus.counters(),
-                   bus.participant().writers().participants_known(), clock.now_s(), flight_start,
-                   bus.participant().tick_receive())) {
+  if (!dir.empty() && !write_stats(dir.agent_stats(id), loop, bus.counters(),
+                                   bus.participant().writers().participants_known(), clock.now_s(),
+                                   flight_start, bus.participant().tick_receive())) {
     log->error("cannot write {}", dir.agent_stats(id).string());
     exit_code = 3;  // the record is incomplete: say so, as the supervisor does
   }

@@ -33,8 +33,8 @@
 
 #include "bench/process_bench.hpp"
 #include "common/dds/participant.hpp"
-#include "common/dds/tick_transport.hpp"
 #include "common/dds/qos.hpp"
+#include "common/dds/tick_transport.hpp"
 #include "common/transport/port_plan.hpp"
 #include "swarm_statePubSubTypes.h"
 

@@ -11,8 +11,8 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <cmath>
 #include <cerrno>
+#include <cmath>
 #include <set>
 #include <utility>
 
@@ -204,7 +204,8 @@ std::size_t TickReceive::drain() {
         }
         Locator_t remote;
         remote.kind = LOCATOR_KIND_UDPv4;
-        IPLocator::setIPv4(remote, reinterpret_cast<const unsigned char*>(&from[i].sin_addr.s_addr));
+        IPLocator::setIPv4(remote,
+                           reinterpret_cast<const unsigned char*>(&from[i].sin_addr.s_addr));
         remote.port = ntohs(from[i].sin_port);
         ++counters_.datagrams;
         counters_.bytes += msgs[i].msg_len;
