@@ -278,23 +278,34 @@ TEST(Attack, ASecureRunRefusesAMemberWithAgent3sCertificatePublishingAsAgent5) {
   EXPECT_GE(files_containing(dir, "agent-", "refused samples keyed as agent 5"), 4);
 }
 
+// The six agents of the fault runs with `extra` appended, flown secure with a keystore made for
+// them: the run's directory and what `swarm keys` (if it failed) or `swarm run` said.
+struct SecureSix {
+  fs::path dir;
+  Result result;
+};
+SecureSix fly_secure_six(const std::string& name, const std::string& extra) {
+  SecureSix six{fresh_dir(name), {}};
+  const fs::path scen = six.dir.parent_path() / (name + ".txtpb");
+  std::ofstream(scen) << read_file(scenario("faults_six")) << extra;
+  const fs::path ks = fresh_dir(name + "-keys");
+  six.result = run({bin("swarm"), "keys", scen.string(), "--out", ks.string()}, 60.0);
+  if (six.result.code == 0)
+    six.result = run({bin("swarm"), "run", scen.string(), "--out", six.dir.string(), "--domain",
+                      test_domain().str(), "--quiet", "--secure", ks.string()},
+                     240.0);
+  return six;
+}
+
 // A secure run's processes discover by unicast within the run's block: an agent killed (SIGKILL)
 // and started again on its own participant id, and an agent that joins late, still meet every
 // other one (a new participant each, a fresh key exchange), and the average holds.
 TEST(SecureRun, AKilledAndRestartedAgentAndALateJoinerMeetEveryoneAgainAndTheAverageHolds) {
-  const fs::path dir = fresh_dir("secure-kill");
-  const fs::path scen = dir.parent_path() / "secure-kill.txtpb";
-  std::ofstream(scen) << read_file(scenario("faults_six"))
-                      << "faults { kill { agent: 2 at_s: 3 restart_at_s: 6 } "
-                         "late_join { agent: 6 at_s: 2 } }\n";
-  const fs::path ks = fresh_dir("secure-kill-keys");
-  const Result k = run({bin("swarm"), "keys", scen.string(), "--out", ks.string()}, 60.0);
-  ASSERT_EQ(k.code, 0) << k.output;
-  const Result r = run({bin("swarm"), "run", scen.string(), "--out", dir.string(), "--domain",
-                        test_domain().str(), "--quiet", "--secure", ks.string()},
-                       240.0);
-  ASSERT_EQ(r.code, 0) << r.output;
-  const records::Summary s = read_summary(dir);
+  const SecureSix six = fly_secure_six("secure-kill",
+                                       "faults { kill { agent: 2 at_s: 3 restart_at_s: 6 } "
+                                       "late_join { agent: 6 at_s: 2 } }\n");
+  ASSERT_EQ(six.result.code, 0) << six.result.output;
+  const records::Summary s = read_summary(six.dir);
   EXPECT_TRUE(s.secure());
   EXPECT_TRUE(s.converged()) << s.end_reason();
   EXPECT_EQ(s.agents_size(), 6);
@@ -306,25 +317,23 @@ TEST(SecureRun, AKilledAndRestartedAgentAndALateJoinerMeetEveryoneAgainAndTheAve
   EXPECT_LT((final_q(s, 6) - kAgreement).norm(), 1e-6);
 }
 
-// DDS-Security over the receive at the tick: the handshakes, key exchange and encrypted samples
-// all pass through the agents' drains, and the secure swarm meets at the exact average.
-TEST(SecureRun, AgentsThatReadTheirSocketsAtTheTickAuthenticateAndMeet) {
-  const fs::path dir = fresh_dir("secure-tick");
-  const fs::path scen = dir.parent_path() / "secure-tick.txtpb";
-  std::ofstream(scen) << read_file(scenario("faults_six")) << "transport { receive: TICK }\n";
-  const fs::path ks = fresh_dir("secure-tick-keys");
-  const Result k = run({bin("swarm"), "keys", scen.string(), "--out", ks.string()}, 60.0);
-  ASSERT_EQ(k.code, 0) << k.output;
-  const Result r = run({bin("swarm"), "run", scen.string(), "--out", dir.string(), "--domain",
-                        test_domain().str(), "--quiet", "--secure", ks.string()},
-                       240.0);
-  ASSERT_EQ(r.code, 0) << r.output;
-  const records::Summary s = read_summary(dir);
-  EXPECT_TRUE(s.secure());
-  EXPECT_TRUE(s.converged()) << s.end_reason();
-  EXPECT_LT(s.average_relative_error(), 1e-9);
-  for (unsigned id = 1; id <= 6; ++id)
-    EXPECT_GT(stats_value(dir, id, "tick_datagrams"), 0) << "agent " << id;
+// DDS-Security over the receive at the tick, and over Fast DDS's receive threads: the
+// handshakes, key exchange and encrypted samples pass through either, and the secure swarm meets
+// at the exact average.
+TEST(SecureRun, AgentsReceivingAtTheTickOrOnThreadsAuthenticateAndMeet) {
+  for (const char* receive : {"TICK", "THREADS"}) {
+    const SecureSix six = fly_secure_six(std::string("secure-") + receive,
+                                         std::string("transport { receive: ") + receive + " }\n");
+    ASSERT_EQ(six.result.code, 0) << receive << ": " << six.result.output;
+    const records::Summary s = read_summary(six.dir);
+    EXPECT_TRUE(s.secure()) << receive;
+    EXPECT_TRUE(s.converged()) << receive << ": " << s.end_reason();
+    EXPECT_LT(s.average_relative_error(), 1e-9) << receive;
+    // Drained at the tick, or never (no counts written).
+    for (unsigned id = 1; id <= 6; ++id)
+      EXPECT_EQ(stats_value(six.dir, id, "tick_datagrams") > 0, std::string(receive) == "TICK")
+          << receive << ", agent " << id;
+  }
 }
 
 // Every UDP datagram to a domain's ports on loopback, as a root process sees them (an AF_PACKET

@@ -192,31 +192,34 @@ TEST(SwarmRun, TwelveSeededRandomAgentsConvergeToTheirInitialAverage) {
   EXPECT_LT(s.average_drift_m(), 1e-3);
 }
 
-// transport.receive TICK: each agent's tick reads its sockets (no receive threads). Loss (the
-// fault bus's, and the test transport's below the application), a kill and a restart, and a late
-// joiner: the swarm still meets at the exact initial average, and every agent's sockets were
-// read by its drains.
-TEST(SwarmRun, AgentsThatReadTheirSocketsAtTheTickKeepTheExactAverageThroughFaults) {
-  const auto dir = fresh_dir("tick-receive");
-  const auto scen = dir.parent_path() / "tick-receive.txtpb";
-  std::ofstream(scen) << read_file(scenario("faults_six"))
-                      << "transport { receive: TICK }\n"
-                         "faults { loss { probability: 0.2 } transport_drop_percent: 10 "
-                         "kill { agent: 2 at_s: 3 restart_at_s: "
-                         "6 } late_join { agent: 6 at_s: 2 } }\n";
-  const Result r = run({bin("swarm"), "run", scen.string(), "--out", dir.string(), "--domain",
-                        test_domain().str(), "--time-scale", "2", "--quiet"},
-                       240.0);
-  ASSERT_EQ(r.code, 0) << r.output;
-  const records::Summary s = read_summary(dir);
-  EXPECT_TRUE(s.converged()) << s.end_reason();
-  EXPECT_EQ(s.faults().restarts(), 1u);
-  EXPECT_EQ(s.faults().late_joins(), 1u);
-  EXPECT_LT(s.average_relative_error(), 1e-9);
-  EXPECT_NE(read_file(dir / "scenario.txtpb").find("receive: TICK"), std::string::npos);
-  for (unsigned id = 1; id <= 6; ++id) {
-    EXPECT_GT(stats_value(dir, id, "tick_datagrams"), 0) << "agent " << id;
-    EXPECT_EQ(stats_value(dir, id, "tick_truncated"), 0) << "agent " << id;
+// transport.receive TICK (each agent's tick reads its sockets, no receive threads) and THREADS
+// (Fast DDS's): loss (the fault bus's, and the test transport's below the application), a kill
+// and a restart, and a late joiner, and the swarm still meets at the exact initial average; at
+// the tick every agent's sockets were read by its drains.
+TEST(SwarmRun, AgentsReceivingAtTheTickOrOnThreadsKeepTheExactAverageThroughFaults) {
+  for (const std::string receive : {"TICK", "THREADS"}) {
+    const auto dir = fresh_dir("receive-" + receive);
+    const auto scen = dir.parent_path() / ("receive-" + receive + ".txtpb");
+    std::ofstream(scen) << read_file(scenario("faults_six")) << "transport { receive: " << receive
+                        << " }\n"
+                           "faults { loss { probability: 0.2 } transport_drop_percent: 10 "
+                           "kill { agent: 2 at_s: 3 restart_at_s: 6 } "
+                           "late_join { agent: 6 at_s: 2 } }\n";
+    const Result r = run({bin("swarm"), "run", scen.string(), "--out", dir.string(), "--domain",
+                          test_domain().str(), "--time-scale", "2", "--quiet"},
+                         240.0);
+    ASSERT_EQ(r.code, 0) << receive << ": " << r.output;
+    const records::Summary s = read_summary(dir);
+    EXPECT_TRUE(s.converged()) << receive << ": " << s.end_reason();
+    EXPECT_EQ(s.faults().restarts(), 1u) << receive;
+    EXPECT_EQ(s.faults().late_joins(), 1u) << receive;
+    EXPECT_LT(s.average_relative_error(), 1e-9) << receive;
+    EXPECT_NE(read_file(dir / "scenario.txtpb").find("receive: " + receive), std::string::npos);
+    for (unsigned id = 1; id <= 6; ++id) {
+      EXPECT_EQ(stats_value(dir, id, "tick_datagrams") > 0, receive == "TICK")
+          << receive << ", agent " << id;
+      EXPECT_LE(stats_value(dir, id, "tick_truncated"), 0) << receive << ", agent " << id;
+    }
   }
 }
 
