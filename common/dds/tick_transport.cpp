@@ -27,6 +27,9 @@ using eprosima::fastrtps::rtps::Locator_t;
 namespace {
 // Datagrams read per recvmmsg: a tick's worth from a few dozen peers in one or two calls.
 constexpr std::size_t kBatch = 16;
+// Batches a drain reads from one socket at most: a drain ends even while datagrams keep coming
+// (a backlog after a stop, a flood), and what is left waits for the next one.
+constexpr int kBatchesPerDrain = 8;
 
 bool every_interface(const std::string& interface) {
   return interface.empty() || interface == "0.0.0.0";
@@ -180,7 +183,7 @@ std::size_t TickReceive::drain() {
     if (std::find(channels_.begin(), channels_.end(), c) == channels_.end()) continue;  // closed
     const std::size_t slot = std::max<std::uint32_t>(c->max_size, 1);
     if (buffer_.size() < slot * kBatch) buffer_.resize(slot * kBatch);
-    for (;;) {
+    for (int batch = 0; batch < kBatchesPerDrain; ++batch) {
       mmsghdr msgs[kBatch] = {};
       iovec iov[kBatch];
       sockaddr_in from[kBatch];
@@ -198,6 +201,8 @@ std::size_t TickReceive::drain() {
         break;
       }
       for (int i = 0; i < n; ++i) {
+        // Closed by a listener meanwhile: its receiver may be gone.
+        if (std::find(channels_.begin(), channels_.end(), c) == channels_.end()) return got;
         if (msgs[i].msg_hdr.msg_flags & MSG_TRUNC) {
           ++counters_.truncated;
           continue;
@@ -214,8 +219,6 @@ std::size_t TickReceive::drain() {
                                     msgs[i].msg_len, c->locator, remote);
       }
       if (n < static_cast<int>(kBatch)) break;
-      // Closed by a listener meanwhile: its receiver may be gone.
-      if (std::find(channels_.begin(), channels_.end(), c) == channels_.end()) break;
     }
   }
   return got;
@@ -228,13 +231,15 @@ void DrainingClock::sleep_until(double t_s) {
     return;
   }
   std::vector<pollfd> fds;
-  for (const int fd : rx_->fds()) fds.push_back({fd, POLLIN, 0});
   for (;;) {
     rx_->drain();
     const double left_s = t_s - now_s();
-    if (left_s <= 0.0) return;
-    const int ms = static_cast<int>(std::ceil(left_s * 1000.0));
-    if (::poll(fds.data(), fds.size(), ms) <= 0 && now_s() >= t_s) return;
+    if (!(left_s > 0.0)) return;
+    // The sockets as they are now (a drain's listener may open one); at most a second a poll.
+    fds.clear();
+    for (const int fd : rx_->fds()) fds.push_back({fd, POLLIN, 0});
+    const int ms = static_cast<int>(std::ceil(std::min(left_s, 1.0) * 1000.0));
+    ::poll(fds.data(), fds.size(), ms);
   }
 }
 
