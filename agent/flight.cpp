@@ -7,7 +7,6 @@
 #include "agent/stats.hpp"
 #include "common/app/process_dds.hpp"
 #include "common/app/process_life.hpp"
-#include "common/dds/tick_transport.hpp"
 #include "common/record/run_dir.hpp"
 
 namespace qswarm {
@@ -80,9 +79,6 @@ int fly(const RunConfig& rc, AgentId id, AgentFlags& f, DdsBus& bus, Clock& cloc
         break;
       }
     }
-    // Once it flies, an agent's receive at the tick reads its sockets once a wait, no sooner.
-    if (auto* draining = dynamic_cast<DrainingClock*>(&clock))
-      draining->eager(loop.running_since_s() < 0.0);
     clock.sleep_until(std::min(p.wake_at_s, clock.now_s() + kMaxSleepS));
   }
   loop.stop();

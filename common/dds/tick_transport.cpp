@@ -6,13 +6,11 @@
 #include <fastdds/rtps/transport/TransportReceiverInterface.h>
 #include <fastrtps/utils/IPLocator.h>
 #include <netinet/in.h>
-#include <poll.h>
 #include <sys/socket.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
-#include <cmath>
 #include <set>
 #include <utility>
 
@@ -222,25 +220,6 @@ std::size_t TickReceive::drain() {
     }
   }
   return got;
-}
-
-void DrainingClock::sleep_until(double t_s) {
-  if (rx_ == nullptr || !eager_) {
-    base_.sleep_until(t_s);
-    if (rx_ != nullptr) rx_->drain();
-    return;
-  }
-  std::vector<pollfd> fds;
-  for (;;) {
-    rx_->drain();
-    const double left_s = t_s - now_s();
-    if (!(left_s > 0.0)) return;
-    // The sockets as they are now (a drain's listener may open one); at most a second a poll.
-    fds.clear();
-    for (const int fd : rx_->fds()) fds.push_back({fd, POLLIN, 0});
-    const int ms = static_cast<int>(std::ceil(std::min(left_s, 1.0) * 1000.0));
-    ::poll(fds.data(), fds.size(), ms);
-  }
 }
 
 namespace {

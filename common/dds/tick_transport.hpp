@@ -78,22 +78,23 @@ std::shared_ptr<eprosima::fastdds::rtps::TransportDescriptorInterface> tick_tran
 
 // The process's clock for a loop that reads its participant at the tick: every wait on it ends
 // with a drain, so the loop acts on what arrived while it slept, and its thread wakes once a wait.
-// Eager (before the loop flies): a wait also wakes for each arrival and drains it at once, so
-// discovery's many round trips each take a datagram's time, not up to a wait's.
+// (Waking for each arrival before flight as well was tried: at 32 agents discovery took 3.3 s
+// against 2.4 to 2.5, and at 256 it changed nothing.)
 class DrainingClock final : public Clock {
  public:
   // What to drain after each wait (null: nothing, a plain SteadyClock).
   void drain(TickReceive* rx) { rx_ = rx; }
-  void eager(bool on) { eager_ = on; }
   double now_s() const override { return base_.now_s(); }
   std::int64_t wall_ns() const override { return base_.wall_ns(); }
-  void sleep_until(double t_s) override;
+  void sleep_until(double t_s) override {
+    base_.sleep_until(t_s);
+    if (rx_ != nullptr) rx_->drain();
+  }
   double shared_origin_s() const override { return base_.shared_origin_s(); }
 
  private:
   SteadyClock base_;
   TickReceive* rx_ = nullptr;
-  bool eager_ = true;
 };
 
 }  // namespace qswarm
