@@ -1,5 +1,7 @@
 #include "agent/stats.hpp"
 
+#include "common/dds/tick_transport.hpp"
+
 #include <sys/resource.h>
 
 #include <chrono>

@@ -4,11 +4,12 @@
 #include <optional>
 #include <string>
 
-#include "common/dds/tick_transport.hpp"
 #include "common/runtime/agent_loop.hpp"
 #include "common/transport/neighbor_bus.hpp"
 
 namespace qswarm {
+
+class TickReceive;
 
 // What the whole process has used so far (every thread's, getrusage RUSAGE_SELF).
 struct ProcessUsage {

@@ -40,15 +40,13 @@ in_addr ipv4(const std::string& text) {
 }
 }  // namespace
 
-// One bound socket and where its datagrams go. Several share a port where the participant
-// listens to several multicast groups on it (one socket bound to each group).
+// One bound socket and where its datagrams go.
 struct TickReceive::Channel {
   int fd = -1;
   std::uint16_t port = 0;
   Locator_t locator;  // as Fast DDS opened it: the local locator of what arrives
   rtps::TransportReceiverInterface* receiver = nullptr;
   std::uint32_t max_size = 0;
-  bool primary = false;  // the port's first channel: what Fast DDS asked to open
   ~Channel() {
     if (fd >= 0) ::close(fd);
   }
@@ -60,18 +58,14 @@ TickReceive::TickReceive(std::string interface, int receive_buffer_bytes)
 TickReceive::~TickReceive() = default;
 
 std::shared_ptr<TickReceive::Channel> TickReceive::bind_channel(
-    const Locator_t& locator, rtps::TransportReceiverInterface* rx, std::uint32_t max_size,
-    std::string& why) {
+    const Locator_t& locator, rtps::TransportReceiverInterface* rx, std::uint32_t max_size) {
   auto c = std::make_shared<Channel>();
   c->port = IPLocator::getPhysicalPort(locator);
   c->locator = locator;
   c->receiver = rx;
   c->max_size = max_size;
   c->fd = ::socket(AF_INET, SOCK_DGRAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
-  if (c->fd < 0) {
-    why = "socket";
-    return nullptr;
-  }
+  if (c->fd < 0) return nullptr;
   // Where the kernel allows it (root), past rmem_max: it holds what arrives between two drains.
   if (::setsockopt(c->fd, SOL_SOCKET, SO_RCVBUFFORCE, &buffer_bytes_, sizeof buffer_bytes_) != 0)
     ::setsockopt(c->fd, SOL_SOCKET, SO_RCVBUF, &buffer_bytes_, sizeof buffer_bytes_);
@@ -88,10 +82,7 @@ std::shared_ptr<TickReceive::Channel> TickReceive::bind_channel(
   } else {
     at.sin_addr = ipv4(every_interface(interface_) ? "0.0.0.0" : interface_);
   }
-  if (::bind(c->fd, reinterpret_cast<const sockaddr*>(&at), sizeof at) != 0) {
-    why = "bind";
-    return nullptr;
-  }
+  if (::bind(c->fd, reinterpret_cast<const sockaddr*>(&at), sizeof at) != 0) return nullptr;
   if (multicast) {
     std::vector<std::string> on;
     if (every_interface(interface_)) {
@@ -107,10 +98,7 @@ std::shared_ptr<TickReceive::Channel> TickReceive::bind_channel(
       m.imr_interface = ipv4(address);
       joined |= ::setsockopt(c->fd, IPPROTO_IP, IP_ADD_MEMBERSHIP, &m, sizeof m) == 0;
     }
-    if (!joined) {
-      why = "join";
-      return nullptr;
-    }
+    if (!joined) return nullptr;
   }
   return c;
 }
@@ -118,26 +106,10 @@ std::shared_ptr<TickReceive::Channel> TickReceive::bind_channel(
 bool TickReceive::open(const Locator_t& locator, rtps::TransportReceiverInterface* receiver,
                        std::uint32_t max_size) {
   const std::lock_guard<std::recursive_mutex> lock(mu_);
-  const std::uint16_t port = IPLocator::getPhysicalPort(locator);
-  const bool port_open = std::any_of(channels_.begin(), channels_.end(),
-                                     [&](const auto& c) { return c->port == port; });
-  // As Fast DDS's UDPv4: a port opens once (true); another group on an open port is joined
-  // there, through the port's receiver, and reported as not newly opened.
-  if (port_open) {
-    if (!IPLocator::isMulticast(locator)) return false;
-    for (const auto& c : channels_)
-      if (c->port == port && c->locator == locator) return false;
-    rtps::TransportReceiverInterface* rx = receiver;
-    for (const auto& c : channels_)
-      if (c->port == port && c->primary) rx = c->receiver;
-    std::string why;
-    if (auto c = bind_channel(locator, rx, max_size, why)) channels_.push_back(std::move(c));
-    return false;
-  }
-  std::string why;
-  auto c = bind_channel(locator, receiver, max_size, why);
+  // As Fast DDS's UDPv4, a port opens once; Fast DDS asks is_open (by port) before it opens one.
+  if (is_open(locator)) return false;
+  auto c = bind_channel(locator, receiver, max_size);
   if (!c) return false;
-  c->primary = true;
   channels_.push_back(std::move(c));
   return true;
 }

@@ -47,7 +47,7 @@ class TickReceive {
   // Returns how many. Call it from one thread (the loop's); Fast DDS's listeners run on it.
   std::size_t drain();
   Counters counters() const;
-  // The sockets' descriptors (to poll them while nothing else wakes the thread).
+  // The descriptors of the sockets it reads, one per input locator Fast DDS opened.
   std::vector<int> fds() const;
 
   // The transport's side (Fast DDS calls these through it).
@@ -60,7 +60,7 @@ class TickReceive {
   struct Channel;
   std::shared_ptr<Channel> bind_channel(const eprosima::fastrtps::rtps::Locator_t& locator,
                                         eprosima::fastdds::rtps::TransportReceiverInterface* rx,
-                                        std::uint32_t max_size, std::string& why);
+                                        std::uint32_t max_size);
   const std::string interface_;
   const int buffer_bytes_;
   // Recursive: a listener that drain() runs may make an endpoint, which opens a channel.
