@@ -54,6 +54,11 @@ int main(int argc, char** argv) {
                  "its participant id in the port plan (swarm run's own server; its ports are "
                  "taken exactly, a taken one is an error)")
       ->check(CLI::Range(0, 544));
+  int nice = 0;
+  app.add_option("--nice", nice,
+                 "run this much nicer than started (negative: a higher priority, where the host "
+                 "allows it; otherwise it says so and runs as started)")
+      ->check(CLI::Range(-20, 19));
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -82,6 +87,8 @@ int main(int argc, char** argv) {
   }
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
+  // Before the participant exists, so that every thread Fast DDS starts inherits it.
+  if (nice != 0) std::printf("swarm-discovery: %s\n", qswarm::change_thread_nice(nice).c_str());
   try {
     qswarm::DiscoveryServer server(domain, listen, static_cast<std::uint16_t>(port), participant_id,
                                    index, list);

@@ -93,7 +93,9 @@ std::vector<std::string> Launcher::discovery_argv() const {
       "--participant-id",
       std::to_string(spec_.discovery_id),
       "--ready-file",
-      spec_.dir.discovery_ready().string()};
+      spec_.dir.discovery_ready().string(),
+      "--nice",
+      std::to_string(spec_.rc.plan.server_nice)};
 }
 
 const ChildProcesses::Child& Launcher::supervisor() const {

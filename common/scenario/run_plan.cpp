@@ -38,6 +38,10 @@ constexpr double kPeerHostsWaitS = 120.0;
 // handshakes race between receive threads in Fast DDS 2.9.1 (docs/fast-dds-workarounds.md, W2), and
 // slowed down a secure compose swarm lost a pair of replicas that never heard each other.
 constexpr int kDdsThreadsNice = 15;
+// The run's own Discovery Server runs at this nice value where the host lets it (root, or
+// CAP_SYS_NICE): starved of CPU it batches more changes and hangs more in Fast DDS 2.9.1 (W5; on
+// the 64-agent lattice beside a busy loop 7 of 40 runs hung at nice 0, 0 of 12 at -10).
+constexpr int kServerNice = -10;
 
 // Past this many agents every second one by id ticks half a period after the others: two bursts
 // of half the size on two cores instead of one.
@@ -184,6 +188,7 @@ RunPlan plan_run(const RunConfig& rc, const Hosts& hosts) {
     p.peer_host_addresses =
         hosts.unicast_block ? hosts.peer_host_names : static_cast<std::size_t>(p.participants);
   p.dds_threads_nice = p.secure ? 0 : kDdsThreadsNice;
+  p.server_nice = p.own_server ? kServerNice : 0;
 
   p.tick_phases = n > kTickPhasesAbove ? 2 : 1;
   p.tick_receive = rc.transport.tick_receive ? *rc.transport.tick_receive : n <= kTickReceiveUpTo;
@@ -270,6 +275,7 @@ plan::RunPlan to_proto(const RunPlan& p, int participant_base) {
   o.set_peer_hosts_wait_s(p.peer_hosts_wait_s);
   o.set_peer_host_addresses(static_cast<std::uint32_t>(p.peer_host_addresses));
   o.set_dds_threads_nice(p.dds_threads_nice);
+  o.set_server_nice(p.server_nice);
   o.set_tick_phases(p.tick_phases);
   o.set_record_hz(p.record_hz);
   o.set_record_every(p.record_every);

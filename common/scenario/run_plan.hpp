@@ -79,6 +79,7 @@ struct RunPlan {
   // or, with a block of ids per host (--unicast-peers), one per name (each a host).
   std::size_t peer_host_addresses = 0;
   int dds_threads_nice = 0;  // how much nicer an agent's Fast DDS threads run than its tick
+  int server_nice = 0;       // the run's own Discovery Server's nice value (where the host allows)
 
   // Ticks and the record.
   int tick_phases = 1;      // 2: every second agent by id ticks half a period after the others

@@ -222,6 +222,12 @@ TEST(Launcher, ADiscoveryServerSeenListeningOnceIsUpAndTheWaitSaysHowLongItTook)
   EXPECT_EQ(procs.children().size(), 5u);  // the server, the supervisor, agents 1..3
   EXPECT_EQ(polls, 2);
   EXPECT_TRUE(has(l.discovery_argv(), spec.dir.discovery_ready().string()));
+  // At the plan's priority for it.
+  const std::vector<std::string> server = l.discovery_argv();
+  const auto nice = std::find(server.begin(), server.end(), "--nice");
+  ASSERT_NE(nice, server.end());
+  ASSERT_NE(std::next(nice), server.end());
+  EXPECT_EQ(*std::next(nice), std::to_string(spec.rc.plan.server_nice));
 
   // One that never listens: the wait says how long it waited (20 s on the manual clock).
   FakeProcesses silent;

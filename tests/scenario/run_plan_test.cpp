@@ -207,6 +207,15 @@ TEST(RunPlan, TheBlockNamesEveryProcessOnce) {
   EXPECT_EQ(p.server_participant(100), 100 + p.participants - 1);
 }
 
+TEST(RunPlan, OnlyTheRunsOwnDiscoveryServerRunsAtAHigherPriority) {
+  const RunPlan served = test::plan_for(33);
+  ASSERT_TRUE(served.own_server);
+  EXPECT_EQ(served.server_nice, -10);
+  EXPECT_EQ(to_proto(served).server_nice(), -10);
+  EXPECT_EQ(test::plan_for(32).server_nice, 0);        // simple discovery: no server
+  EXPECT_EQ(test::plan_for(33, true).server_nice, 0);  // secure: never a server (W8)
+}
+
 TEST(RunPlan, ItsRecordSaysEveryDecisionAndTheNamesOnTheWire) {
   const plan::RunPlan o = to_proto(test::plan_for(129), 40);
   EXPECT_EQ(o.agents(), 129u);
