@@ -23,6 +23,7 @@ Command add_plot_command(CLI::App& app);        // python_commands.cpp: `swarm p
 Command add_paper_command(CLI::App& app);       // ... `swarm paper`
 Command add_resilience_command(CLI::App& app);  // ... `swarm resilience`
 Command add_deploy_command(CLI::App& app);      // deploy_command.cpp: `swarm deploy k8s`
+Command add_calibrate_command(CLI::App& app);   // calibrate_command.cpp: `swarm calibrate`
 
 // Where this executable is, with swarm-agent, swarm-supervisor and the Python package beside it.
 std::filesystem::path bin_dir();

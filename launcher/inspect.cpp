@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "common/core/graph.hpp"
+#include "common/runtime/run_load.hpp"
 #include "common/scenario/scenario.hpp"
 #include "proto/records.pb.h"
 
@@ -51,6 +52,7 @@ std::string as_json(const RunConfig& rc, const InitialGraph& g, double tau) {
   for (const AgentId id : rc.held_agents()) ins.add_held_agents(id);
   *ins.mutable_resolved() = rc.resolved;
   *ins.mutable_plan() = to_proto(rc.plan);
+  *ins.mutable_load() = predict_load_here(rc, rc.plan.hosts.time_scale);
   if (rc.agent.law.kind == LawKind::kWmsr) {
     const ResilienceCheck c = resilience_of(rc, g);
     records::Resilience* r = ins.mutable_resilience();
@@ -109,7 +111,7 @@ std::string as_text(const RunConfig& rc, const InitialGraph& g, double tau) {
          "approaches closer than "
       << rc.agent.avoidance.safe_distance_m << " m)\n";
   }
-  o << describe_plan(rc.plan);
+  o << describe_plan(rc.plan) << describe_load(predict_load_here(rc, rc.plan.hosts.time_scale));
   if (rc.has_formation()) {
     o << "formation: the agents agree on the centre above and fly to centre + slot\n";
     o << "  agent        slot about the centre         where it ends\n";

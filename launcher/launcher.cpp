@@ -286,6 +286,14 @@ Launcher::Outcome Launcher::conclude(double wall_time_s) {
   Outcome out;
   const int sup = supervisor_status();
   const RunDir& dir = spec_.dir;
+  // The prediction goes into whichever summary there is (the supervisor's, or the one written
+  // below for it), before anything amends it.
+  const auto note_load = [&] { return !spec_.load || dir.note_load(*spec_.load); };
+  if (dir.read_summary() && !note_load()) {
+    out.lines.push_back("cannot write the predicted load into " + dir.summary().string());
+    out.exit_code = 3;
+    return out;
+  }
   if (!dir.read_summary()) {
     // The supervisor died before it could write the summary (or a stranger's file is there): the
     // launcher says why.
@@ -293,7 +301,8 @@ Launcher::Outcome Launcher::conclude(double wall_time_s) {
     if (!end_.empty() && end_ != kFinished) reason = end_ + "; " + reason;
     if (const std::string p = mcap_problem(dir); !p.empty()) reason += "; " + p;
     out.lines.push_back(reason + "; the summary says so");
-    out.exit_code = dir.write_fallback_summary(spec_.rc, reason, wall_time_s) ? 1 : 3;
+    out.exit_code =
+        dir.write_fallback_summary(spec_.rc, reason, wall_time_s) && note_load() ? 1 : 3;
     return out;
   }
   if (WIFEXITED(sup) && WEXITSTATUS(sup) == 3) {

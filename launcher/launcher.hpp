@@ -36,6 +36,8 @@ struct LaunchSpec {
   double discovery_ready_timeout_s = 20.0;
   int view_port = -1;  // the supervisor serves the live view on this port (-1: no view)
   std::string view_listen = "127.0.0.1";
+  // What the run was predicted to ask of this host (run_load.hpp): written into its summary.
+  std::optional<plan::Load> load;
 };
 
 // The supervisor refused its input (it exited 2 before it listened: a --view port another

@@ -2,7 +2,8 @@
 // its run plan without flying (`swarm inspect`), make a keystore (`swarm keys`), draw a run
 // (`swarm plot`), rebuild its run.mcap (`swarm export`), replay it (`swarm view`), regenerate the
 // paper's figures and report (`swarm paper`), or draw the laws under an insider's attacks (`swarm
-// resilience`). Each subcommand, with its flags, is a file of its own (launcher/commands.hpp).
+// resilience`), or measure what this host sustains (`swarm calibrate`). Each subcommand, with its
+// flags, is a file of its own (launcher/commands.hpp).
 #include <CLI/CLI.hpp>
 
 #include <cstdlib>
@@ -20,10 +21,11 @@ int main(int argc, char** argv) {
     unsetenv(v);
   CLI::App app{"swarm: a quadcopter swarm that agrees over DDS"};
   app.require_subcommand(1);
-  const std::vector<Command> commands = {
-      add_run_command(app),   add_view_command(app),       add_inspect_command(app),
-      add_keys_command(app),  add_plot_command(app),       add_export_command(app),
-      add_paper_command(app), add_resilience_command(app), add_deploy_command(app)};
+  const std::vector<Command> commands = {add_run_command(app),     add_view_command(app),
+                                         add_inspect_command(app), add_keys_command(app),
+                                         add_plot_command(app),    add_export_command(app),
+                                         add_paper_command(app),   add_resilience_command(app),
+                                         add_deploy_command(app),  add_calibrate_command(app)};
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

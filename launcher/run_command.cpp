@@ -10,6 +10,7 @@
 
 #include "common/app/cli_checks.hpp"
 #include "common/record/run_dir.hpp"
+#include "common/runtime/run_load.hpp"
 #include "common/scenario/fault_flags.hpp"
 #include "common/scenario/scenario.hpp"
 #include "common/security/keystore.hpp"
@@ -201,6 +202,8 @@ int run(const RunOptions& opt) {
     // them in that instant.
     spec.discovery_ready = [ready = dir.discovery_ready()] { return fs::exists(ready); };
   }
+  // What the run asks of this host, said before it flies and kept in its summary.
+  spec.load = predict_load_here(rc, opt.time_scale);
   spec.view_port = opt.view_port;
   spec.view_listen = opt.view_listen;
   if (!dir.write_scenario(rc.resolved)) {
@@ -217,9 +220,11 @@ int run(const RunOptions& opt) {
               << rc.transport.domain_id << ", time scale " << opt.time_scale << ", seed " << rc.seed
               << "\n"
               << "initial graph: " << g.edges.size() << " edges, lambda2 " << g.spectrum.lambda2
-              << (g.spectrum.components > 1 ? " (not connected yet)" : "")
-              << "\nrun directory: " << dir.str() << std::endl;
+              << (g.spectrum.components > 1 ? " (not connected yet)" : "") << "\n"
+              << describe_load(*spec.load) << "run directory: " << dir.str() << std::endl;
   }
+  if (const std::string w = load_warning(*spec.load); !w.empty())
+    std::cerr << "swarm run: " << w << std::endl;
 
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);

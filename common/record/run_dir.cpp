@@ -236,4 +236,11 @@ bool RunDir::amend_summary(const std::vector<std::string>& problems) const {
   return write_summary(to_json(*s));
 }
 
+bool RunDir::note_load(const plan::Load& load) const {
+  std::optional<records::Summary> s = read_summary();
+  if (!s) return false;
+  *s->mutable_load() = load;
+  return write_summary(to_json(*s));
+}
+
 }  // namespace qswarm

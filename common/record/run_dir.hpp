@@ -91,6 +91,9 @@ class RunDir {
   // Problems the supervisor could not see (a crash at teardown, a file of the record missing):
   // summary.json is rewritten with converged false and the problems appended to its end_reason.
   bool amend_summary(const std::vector<std::string>& problems) const;
+  // The run's predicted load (run_load.hpp) written into summary.json. False if there is no
+  // summary or it could not be written.
+  bool note_load(const plan::Load& load) const;
 
   // Every file name a run directory may hold, with what it is: for the docs, and for the check
   // that the figure scripts spell them the same way.

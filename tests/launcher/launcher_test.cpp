@@ -424,6 +424,43 @@ TEST(Launcher, ARunStoppedAtTheWallLimitSaysSoAndASummaryCutShortIsReplaced) {
   }
 }
 
+// What the run was predicted to ask of its host goes into its summary, the supervisor's or the
+// one the launcher writes for a supervisor that died.
+TEST(Launcher, TheSummaryKeepsThePredictedLoadWhoeverWroteIt) {
+  for (const bool supervisor_died : {false, true}) {
+    FakeProcesses procs;
+    ManualClock clock;
+    LaunchSpec spec = spec_for("");
+    spec.load.emplace();
+    spec.load->set_agents(3);
+    spec.load->set_calibrated(true);
+    spec.load->set_exceeds(true);
+    spec.load->set_predicted_cores(2.5);
+    Launcher l(spec, procs, clock, [] { return true; });
+    l.start();
+    if (!supervisor_died) {
+      records::Summary s;
+      s.set_converged(false);
+      s.set_end_reason("duration");
+      ASSERT_TRUE(spec.dir.write_summary(to_json(s)));
+      mcap::Writer w;
+      ASSERT_TRUE(w.open(spec.dir.mcap()) && w.close());
+    }
+    procs.exit_child("supervisor", 0, supervisor_died ? signalled(SIGKILL) : exited(1));
+    ASSERT_TRUE(l.poll(false).has_value());
+    l.stop();
+    for (AgentId id = 1; id <= 3; ++id) std::ofstream(spec.dir.agent_stats(id)) << "{}";
+    const Launcher::Outcome out = l.conclude(clock.now_s());
+    EXPECT_EQ(out.exit_code, 1) << supervisor_died;
+    const records::Summary s = read_summary(spec.dir);
+    EXPECT_FALSE(s.converged());
+    EXPECT_TRUE(s.load().exceeds()) << supervisor_died;
+    EXPECT_EQ(s.load().predicted_cores(), 2.5);
+    EXPECT_EQ(s.load().agents(), 3U);
+    std::filesystem::remove_all(spec.dir.path());
+  }
+}
+
 // run.mcap ends with a footer only when the supervisor closed it. A summary that says converged
 // over a run.mcap cut short (or missing) is amended, and the run exits 3 naming the file; a
 // supervisor that died leaves a summary that names it too.

@@ -1,0 +1,234 @@
+#include "common/runtime/run_load.hpp"
+
+#include <google/protobuf/text_format.h>
+#include <sched.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <sstream>
+
+#include "common/runtime/neighbourhood.hpp"
+#include "common/transport/regular_file.hpp"
+
+namespace qswarm {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// A count a second as people read it: 78000, not 7.8e+04.
+std::string per_s(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.0f", v);
+  return buf;
+}
+
+constexpr std::uintmax_t kMaxCalibrationBytes = 64 * 1024;
+
+// Whether every cost is a finite, positive number of microseconds (a hand-edited or damaged file
+// must not make a run look free, or impossible); the first field that is not, otherwise "".
+std::string bad_cost(const plan::HostCalibration& c) {
+  const std::pair<const char*, double> costs[] = {
+      {"tick_us_particle", c.tick_us_particle()},
+      {"tick_us_quadcopter", c.tick_us_quadcopter()},
+      {"delivery_us_tick", c.delivery_us_tick()},
+      {"delivery_us_threads", c.delivery_us_threads()},
+      {"tick_us_particle_threads", c.tick_us_particle_threads()},
+      {"tick_us_quadcopter_threads", c.tick_us_quadcopter_threads()},
+  };
+  for (const auto& [name, v] : costs) {
+    if (!std::isfinite(v) || v <= 0.0 || v > 1e6) {
+      std::ostringstream o;
+      o << "field '" << name << "': " << v << " is not a cost in microseconds (0 to 1e6]";
+      return o.str();
+    }
+  }
+  if (c.quadcopter_steps_per_tick() == 0) return "field 'quadcopter_steps_per_tick': 0";
+  return "";
+}
+
+}  // namespace
+
+fs::path calibration_path() {
+  if (const char* p = std::getenv("QSWARM_CALIBRATION"); p != nullptr && *p != '\0') return p;
+  if (const char* s = std::getenv("XDG_STATE_HOME"); s != nullptr && *s != '\0')
+    return fs::path(s) / "qswarm" / "calibration.txtpb";
+  const char* home = std::getenv("HOME");
+  return fs::path(home != nullptr && *home != '\0' ? home : ".") / ".local" / "state" / "qswarm" /
+         "calibration.txtpb";
+}
+
+std::string host_name() {
+  char buf[256] = {};
+  if (gethostname(buf, sizeof buf - 1) != 0) return "unknown";
+  return buf;
+}
+
+unsigned host_cores() {
+  cpu_set_t set;
+  CPU_ZERO(&set);
+  if (sched_getaffinity(0, sizeof set, &set) == 0 && CPU_COUNT(&set) > 0)
+    return static_cast<unsigned>(CPU_COUNT(&set));
+  const long n = sysconf(_SC_NPROCESSORS_ONLN);
+  return n > 0 ? static_cast<unsigned>(n) : 1U;
+}
+
+std::optional<plan::HostCalibration> read_calibration(const fs::path& path, const std::string& host,
+                                                      unsigned cores, std::string& why) {
+  RegularFile f;
+  const std::string text = read_regular_file(path, kMaxCalibrationBytes, f);
+  if (f.problem == RegularFile::Problem::kMissing) {
+    why = "none at " + path.string() + " (swarm calibrate measures this host)";
+    return std::nullopt;
+  }
+  if (f.problem != RegularFile::Problem::kNone) {
+    why = path.string() + ": " + f.why;
+    return std::nullopt;
+  }
+  plan::HostCalibration c;
+  if (!google::protobuf::TextFormat::ParseFromString(text, &c)) {
+    why = path.string() + ": not a calibration (run swarm calibrate again)";
+    return std::nullopt;
+  }
+  if (const std::string bad = bad_cost(c); !bad.empty()) {
+    why = path.string() + ": " + bad + " (run swarm calibrate again)";
+    return std::nullopt;
+  }
+  if (c.host() != host || c.cores() != cores) {
+    why = path.string() + ": measured on " + c.host() + " with " + std::to_string(c.cores()) +
+          " cores, not on this host (" + host + ", " + std::to_string(cores) +
+          " cores): run swarm calibrate here";
+    return std::nullopt;
+  }
+  why = path.string() + " (measured " + c.measured_at() + ")";
+  return c;
+}
+
+plan::Load predict_load(const RunConfig& rc, double time_scale,
+                        const std::optional<plan::HostCalibration>& cal, unsigned cores,
+                        const std::string& calibration) {
+  plan::Load load;
+  const std::size_t n = rc.agents.size();
+  load.set_agents(static_cast<std::uint32_t>(n));
+  const double ticks_per_agent = rc.agent.consensus_hz * time_scale;
+  load.set_ticks_per_s(ticks_per_agent * static_cast<double>(n));
+  // Every agent's interest at its start, once; then who hears whom, pair by pair.
+  std::vector<Interest> interests;
+  interests.reserve(n);
+  for (const AgentSpec& a : rc.agents)
+    interests.push_back(Neighbourhood(rc, a.id).update(a.position_W, a.q0(), {}));
+  double heard = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    for (std::size_t j = 0; j < n; ++j) {
+      if (i != j &&
+          Interest::hears(interests[i], interests[j], rc.agents[j].q0(), rc.agents[j].position_W))
+        heard += 1.0;
+    }
+  }
+  load.set_deliveries_per_tick(heard);
+  load.set_deliveries_per_s(heard * ticks_per_agent);
+  load.set_calibration(calibration);
+  load.set_cores(cores);
+  if (!cal) return load;
+
+  const bool tick = rc.plan.tick_receive;
+  const double particle = tick ? cal->tick_us_particle() : cal->tick_us_particle_threads();
+  const double quad = tick ? cal->tick_us_quadcopter() : cal->tick_us_quadcopter_threads();
+  // A quadcopter's tick is a point agent's plus its physics steps, measured at
+  // quadcopter_steps_per_tick and scaled to this run's.
+  const double tick_us = rc.agent.mode == AgentMode::kQuadcopter
+                             ? particle + std::max(0.0, quad - particle) *
+                                              rc.agent.steps_per_tick() /
+                                              static_cast<double>(cal->quadcopter_steps_per_tick())
+                             : particle;
+  const double delivery_us = tick ? cal->delivery_us_tick() : cal->delivery_us_threads();
+  const double ticks_cores = load.ticks_per_s() * tick_us * 1e-6;
+  const double predicted = ticks_cores + load.deliveries_per_s() * delivery_us * 1e-6;
+  const double usable = kUsableCoreShare * cores;
+  load.set_calibrated(true);
+  load.set_usable_cores(usable);
+  load.set_predicted_cores(predicted);
+  load.set_sustained_deliveries_per_s(std::max(0.0, usable - ticks_cores) / (delivery_us * 1e-6));
+  load.set_exceeds(predicted > usable);
+  const double share = predicted > 0 ? usable / predicted : 1.0;
+  load.set_holdable_time_scale(time_scale * share);
+  // The fastest consensus rate that holds and that the physics rate still divides (the resolver
+  // refuses others), as the scenario's rate when it holds.
+  double hz = rc.agent.consensus_hz;
+  if (load.exceeds()) {
+    const double raw = rc.agent.consensus_hz * share;
+    const double steps = std::ceil(rc.agent.physics_hz / raw - 1e-9);
+    hz = raw > 0 && std::isfinite(steps) ? rc.agent.physics_hz / steps : 0.0;
+  }
+  load.set_holdable_consensus_hz(hz);
+  return load;
+}
+
+plan::Load predict_load_here(const RunConfig& rc, double time_scale) {
+  const std::string host = host_name();
+  const unsigned cores = host_cores();
+  std::string why;
+  const std::optional<plan::HostCalibration> cal =
+      read_calibration(calibration_path(), host, cores, why);
+  return predict_load(rc, time_scale, cal, cores, why);
+}
+
+std::string describe_load(const plan::Load& l) {
+  std::ostringstream o;
+  o.precision(3);
+  o << "load: " << l.agents() << " agents x "
+    << (l.agents() > 0 ? l.ticks_per_s() / l.agents() : 0.0) << " ticks/s, each hearing "
+    << (l.agents() > 0 ? l.deliveries_per_tick() / l.agents() : 0.0)
+    << " agents at the start: " << per_s(l.deliveries_per_s()) << " samples received/s\n";
+  if (!l.calibrated()) {
+    o << "  host: not calibrated: " << l.calibration() << "\n";
+    return o.str();
+  }
+  o << "  host: " << l.cores() << " cores, " << l.usable_cores()
+    << " for agents; predicted agent CPU " << l.predicted_cores() << " cores; the host sustains "
+    << per_s(l.sustained_deliveries_per_s()) << " samples/s beside these ticks (calibration "
+    << l.calibration() << ")\n";
+  if (l.exceeds()) {
+    o << "  EXCEEDS this host: expect late ticks; it holds real time at consensus_hz "
+      << l.holdable_consensus_hz() << ", or this rate at --time-scale " << l.holdable_time_scale()
+      << "\n";
+  }
+  return o.str();
+}
+
+std::string load_warning(const plan::Load& l) {
+  if (!l.calibrated() || !l.exceeds()) return "";
+  std::ostringstream o;
+  o.precision(3);
+  o << "warning: predicted agent CPU " << l.predicted_cores() << " cores exceeds the "
+    << l.usable_cores() << " this host sustains (" << per_s(l.deliveries_per_s())
+    << " samples received/s): expect late ticks; real time holds at consensus_hz "
+    << l.holdable_consensus_hz() << " or --time-scale " << l.holdable_time_scale();
+  return o.str();
+}
+
+std::optional<FittedCosts> fit_costs(const std::vector<CalibrationSample>& runs) {
+  // Normal equations of the two-column least squares, in seconds per tick and per sample.
+  double tt = 0, tr = 0, rr = 0, tc = 0, rc = 0;
+  for (const CalibrationSample& s : runs) {
+    if (!std::isfinite(s.cpu_s) || !std::isfinite(s.ticks) || !std::isfinite(s.received))
+      return std::nullopt;
+    tt += s.ticks * s.ticks;
+    tr += s.ticks * s.received;
+    rr += s.received * s.received;
+    tc += s.ticks * s.cpu_s;
+    rc += s.received * s.cpu_s;
+  }
+  const double det = tt * rr - tr * tr;
+  // Runs whose samples per tick are (nearly) the same cannot tell the two costs apart.
+  if (!(det > 1e-9 * tt * rr)) return std::nullopt;
+  FittedCosts f;
+  f.tick_us = (tc * rr - rc * tr) / det * 1e6;
+  f.delivery_us = (rc * tt - tc * tr) / det * 1e6;
+  if (!(f.tick_us > 0) || !(f.delivery_us > 0)) return std::nullopt;
+  return f;
+}
+
+}  // namespace qswarm
