@@ -28,8 +28,9 @@
 # the supervisor's CPU (sampled from /proc every 0.2 s while it
 # runs: its user + system time at the last sample over the run's wall time), the datagrams its
 # sockets dropped at full receive buffers (/proc/net/udp, by the inodes of its sockets, at the last
-# sample), the host's UDP receive-buffer errors during the run (/proc/net/snmp), and how the run
-# ended.
+# sample), the host's UDP receive-buffer errors during the run (/proc/net/snmp), the samples a
+# second and agent CPU the run was predicted to take (its summary's load: `swarm calibrate`) beside
+# the CPU its agents took in flight, and how the run ended.
 # Usage: bench/swarm_scale.sh [N ...]        (default: 8 32 64 128)
 # Environment: SCENARIOS="all range ring" DURATION=30 TIME_SCALE=1 RATE_HZ=50 BUILD_DIR=build
 #              SECURE=1: DDS-Security on every process (a `swarm keys` keystore per size)
@@ -81,8 +82,8 @@ circulant() {
       i, i % n + 1, i, (i + s - 1) % n + 1
     print " }" }'
 }
-printf "| agents | scenario | consensus [Hz] | time scale | CPU per agent [%% of a core] | in flight [%% of a core] | wake-ups per agent in flight [1/s] | late ticks [%%] | record age p50 / p99 [ms] | neighbour sample age p50 / p99 (max) [ms] | accepted samples [1/s] | CPU per accepted sample [us] | discovery max [s] | start spread [s] | participants known [max] | RSS per agent [MB] | supervisor CPU [%% of a core] | supervisor socket drops | host UDP receive-buffer errors | end |\n"
-printf "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n"
+printf "| agents | scenario | consensus [Hz] | time scale | CPU per agent [%% of a core] | in flight [%% of a core] | wake-ups per agent in flight [1/s] | late ticks [%%] | record age p50 / p99 [ms] | neighbour sample age p50 / p99 (max) [ms] | accepted samples [1/s] | CPU per accepted sample [us] | discovery max [s] | start spread [s] | participants known [max] | RSS per agent [MB] | supervisor CPU [%% of a core] | supervisor socket drops | host UDP receive-buffer errors | predicted samples [1/s] | predicted / measured agent CPU [cores] | end |\n"
+printf "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n"
 domain=${DOMAIN:-12}  # one run at a time: each reuses the domain the last one left
 for kind in "${KINDS[@]}"; do
   for n in "${SIZES[@]}"; do
@@ -152,22 +153,23 @@ for kind in "${KINDS[@]}"; do
       late_ticks_pct messages.age_p50_ms \
       messages.age_p99_ms stats.arrival_age_p50_ms.median stats.arrival_age_p99_ms.median \
       stats.arrival_age_p99_ms.max delivered_per_s cpu_us_per_delivered stats.discovery_s.max start_spread_s \
-      stats.participants.max stats.max_rss_kb.median end_reason 2>/dev/null); then
+      stats.participants.max stats.max_rss_kb.median load.deliveries_per_s load.predicted_cores \
+      end_reason 2>/dev/null); then
       printf "| %d | %s | %s | %s | (no record: %s) |\n" "$n" "$kind" "$RATE_HZ" "$TIME_SCALE" \
         "$(tail -1 "$dir.log")"
       continue
     fi
-    IFS=$'\t' read -r cpu fcpu wakes late p50 p99 np50 np99 np99max per_s cpu_per disc spread known rss end <<<"$row"
+    IFS=$'\t' read -r cpu fcpu wakes late p50 p99 np50 np99 np99max per_s cpu_per disc spread known rss pred_s pred_cores end <<<"$row"
     [[ ${SECURE:-0} == 1 ]] && kind_shown="$kind, secure" || kind_shown=$kind
     [[ -n ${DISCOVERY:-} ]] && kind_shown="$kind_shown, ${DISCOVERY,,}"
     [[ -n ${RECEIVE:-} ]] && kind_shown="$kind_shown, receive ${RECEIVE,,}"
     awk -v n="$n" -v k="$kind_shown" -v hz="$RATE_HZ" -v ts="$TIME_SCALE" -v cpu="$cpu" -v fcpu="$fcpu" -v wakes="$wakes" -v late="$late" \
       -v p50="$p50" -v p99="$p99" -v np50="$np50" -v np99="$np99" -v np99max="$np99max" -v s="$per_s" -v cs="$cpu_per" -v d="$disc" -v sp="$spread" -v kn="$known" -v rss="$rss" \
-      -v sup="$sup_cpu" -v sd="$sup_drops" -v he="$host_errors" -v end="$end" '
+      -v sup="$sup_cpu" -v sd="$sup_drops" -v he="$host_errors" -v ps="$pred_s" -v pc="$pred_cores" -v end="$end" '
       # "-": no agent heard a sample, or an agent build older than the flight columns
       function f(fmt, x) { return x == "-" ? "-" : sprintf(fmt, x) }
       BEGIN {
-        printf "| %d | %s | %s | %s | %.2f | %s | %s | %.2f | %.1f / %.1f | %s / %s (%s) | %.0f | %.1f | %.2f | %s | %s | %.1f | %s | %s | %s | %s |\n",
-          n, k, hz, ts, cpu, f("%.2f", fcpu), f("%.0f", wakes), late, p50, p99, f("%.2f", np50), f("%.2f", np99), f("%.2f", np99max), s, cs, d, f("%.3f", sp), kn, rss / 1024, sup, sd, he, end }'
+        printf "| %d | %s | %s | %s | %.2f | %s | %s | %.2f | %.1f / %.1f | %s / %s (%s) | %.0f | %.1f | %.2f | %s | %s | %.1f | %s | %s | %s | %.0f | %s / %s | %s |\n",
+          n, k, hz, ts, cpu, f("%.2f", fcpu), f("%.0f", wakes), late, p50, p99, f("%.2f", np50), f("%.2f", np99), f("%.2f", np99max), s, cs, d, f("%.3f", sp), kn, rss / 1024, sup, sd, he, f("%.0f", ps), f("%.2f", pc), f("%.2f", fcpu * n / 100), end }'
   done
 done
