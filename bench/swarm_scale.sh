@@ -153,13 +153,14 @@ for kind in "${KINDS[@]}"; do
       late_ticks_pct messages.age_p50_ms \
       messages.age_p99_ms stats.arrival_age_p50_ms.median stats.arrival_age_p99_ms.median \
       stats.arrival_age_p99_ms.max delivered_per_s cpu_us_per_delivered stats.discovery_s.max start_spread_s \
-      stats.participants.max stats.max_rss_kb.median load.deliveries_per_s load.predicted_cores \
+      stats.participants.max stats.max_rss_kb.median load.deliveries_per_s load.calibrated load.predicted_cores \
       end_reason 2>/dev/null); then
       printf "| %d | %s | %s | %s | (no record: %s) |\n" "$n" "$kind" "$RATE_HZ" "$TIME_SCALE" \
         "$(tail -1 "$dir.log")"
       continue
     fi
-    IFS=$'\t' read -r cpu fcpu wakes late p50 p99 np50 np99 np99max per_s cpu_per disc spread known rss pred_s pred_cores end <<<"$row"
+    IFS=$'\t' read -r cpu fcpu wakes late p50 p99 np50 np99 np99max per_s cpu_per disc spread known rss pred_s calibrated pred_cores end <<<"$row"
+    [[ $calibrated == true ]] || pred_cores=-  # no calibration of this host: nothing predicted
     [[ ${SECURE:-0} == 1 ]] && kind_shown="$kind, secure" || kind_shown=$kind
     [[ -n ${DISCOVERY:-} ]] && kind_shown="$kind_shown, ${DISCOVERY,,}"
     [[ -n ${RECEIVE:-} ]] && kind_shown="$kind_shown, receive ${RECEIVE,,}"
