@@ -29,8 +29,8 @@ namespace fs = std::filesystem;
 
 namespace {
 
-std::atomic<int> g_signal{0};
-void on_signal(int sig) { g_signal = sig; }
+std::atomic<int> g_calibrate_signal{0};
+void on_calibrate_signal(int sig) { g_calibrate_signal = sig; }
 
 struct CalibrateOptions {
   std::string out;  // default calibration_path()
@@ -100,7 +100,7 @@ std::optional<CalibrationSample> fly(const Flight& f, const CalibrateOptions& op
                "--quiet", "--domain", std::to_string(opt.domain)},
               (root / (std::string(f.name) + ".out")).string(), false);
   while (procs.any_running()) {
-    if (g_signal != 0) {
+    if (g_calibrate_signal != 0) {
       procs.terminate_all(10.0);
       why = "interrupted";
       return std::nullopt;
@@ -149,8 +149,8 @@ int calibrate(const CalibrateOptions& opt) {
     }
     root = tmpl;
   }
-  std::signal(SIGINT, on_signal);
-  std::signal(SIGTERM, on_signal);
+  std::signal(SIGINT, on_calibrate_signal);
+  std::signal(SIGTERM, on_calibrate_signal);
   const Flight flights[] = {
       {"particle4-tick", 4, false, true},       {"particle24-tick", 24, false, true},
       {"quadcopter4-tick", 4, true, true},      {"particle4-threads", 4, false, false},
@@ -165,7 +165,7 @@ int calibrate(const CalibrateOptions& opt) {
               << std::endl;
     const std::optional<CalibrationSample> s = fly(f, opt, root, why);
     if (!s) {
-      code = g_signal != 0 ? 130 : 1;
+      code = g_calibrate_signal != 0 ? 130 : 1;
       break;
     }
     samples.push_back(*s);

@@ -25,7 +25,7 @@ std::string per_s(double v) {
   return buf;
 }
 
-constexpr std::uintmax_t kMaxCalibrationBytes = 64 * 1024;
+constexpr std::uintmax_t kMaxCalibrationBytes = std::uintmax_t{64} * 1024;
 
 // Whether every cost is a finite, positive number of microseconds (a hand-edited or damaged file
 // must not make a run look free, or impossible); the first field that is not, otherwise "".
