@@ -37,6 +37,7 @@
 #              DISCOVERY=simple|server: transport.discovery (unset: the scenario's default, the
 #              run's own Discovery Server above 32 plain agents)
 #              RECEIVE=tick|threads: transport.receive (unset: the scenario's, tick by default)
+#              PREDICT=1: fly nothing; print what `swarm inspect` predicts of each run's load
 set -euo pipefail
 cd "$(dirname "$0")/.."
 BUILD=${BUILD_DIR:-build}
@@ -82,8 +83,11 @@ circulant() {
       i, i % n + 1, i, (i + s - 1) % n + 1
     print " }" }'
 }
-printf "| agents | scenario | consensus [Hz] | time scale | CPU per agent [%% of a core] | in flight [%% of a core] | wake-ups per agent in flight [1/s] | late ticks [%%] | record age p50 / p99 [ms] | neighbour sample age p50 / p99 (max) [ms] | accepted samples [1/s] | CPU per accepted sample [us] | discovery max [s] | start spread [s] | participants known [max] | RSS per agent [MB] | supervisor CPU [%% of a core] | supervisor socket drops | host UDP receive-buffer errors | predicted samples [1/s] | predicted / measured agent CPU [cores] | end |\n"
-printf "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n"
+if [[ ${PREDICT:-0} == 1 ]]; then
+  printf "| agents | scenario | consensus [Hz] | time scale | predicted samples [1/s] | predicted agent CPU [cores] | exceeds the host | consensus rate that holds [Hz] |\n| --- | --- | --- | --- | --- | --- | --- | --- |\n"
+fi
+[[ ${PREDICT:-0} == 1 ]] || printf "| agents | scenario | consensus [Hz] | time scale | CPU per agent [%% of a core] | in flight [%% of a core] | wake-ups per agent in flight [1/s] | late ticks [%%] | record age p50 / p99 [ms] | neighbour sample age p50 / p99 (max) [ms] | accepted samples [1/s] | CPU per accepted sample [us] | discovery max [s] | start spread [s] | participants known [max] | RSS per agent [MB] | supervisor CPU [%% of a core] | supervisor socket drops | host UDP receive-buffer errors | predicted samples [1/s] | predicted / measured agent CPU [cores] | end |\n"
+[[ ${PREDICT:-0} == 1 ]] || printf "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n"
 domain=${DOMAIN:-12}  # one run at a time: each reuses the domain the last one left
 for kind in "${KINDS[@]}"; do
   for n in "${SIZES[@]}"; do
@@ -121,6 +125,21 @@ for kind in "${KINDS[@]}"; do
     esac
     [[ -n ${DISCOVERY:-} ]] && transport_field "$scen" "discovery: ${DISCOVERY^^}"
     [[ -n ${RECEIVE:-} ]] && transport_field "$scen" "receive: ${RECEIVE^^}"
+    if [[ ${PREDICT:-0} == 1 ]]; then
+      # What `swarm inspect` predicts for the run instead of flying it (its agents drawn as the run
+      # would draw them: N of them, seed 3).
+      sed -i -e "s/count: [0-9]*/count: $n/" -e "s/^seed: .*/seed: 3/" "$scen"
+      "$BUILD"/bin/swarm inspect "$scen" --json | /usr/bin/python3 -c '
+import json, sys
+load = json.load(sys.stdin)["load"]
+cal = load.get("calibrated", False)
+cores = "%.2f" % load.get("predicted_cores", 0) if cal else "-"
+over = ("yes" if load.get("exceeds") else "no") if cal else "-"
+holds = "%.3g" % load.get("holdable_consensus_hz", 0) if cal else "-"
+print("| %s | %s | %s | %s | %.0f | %s | %s | %s |" % (*sys.argv[1:5], load.get("deliveries_per_s", 0), cores, over, holds))
+' "$n" "$kind" "$RATE_HZ" "$TIME_SCALE"
+      continue
+    fi
     secure=()
     if [[ ${SECURE:-0} == 1 ]]; then
       ks="$OUT/keys-$n"  # random agents are ids 1..N whatever the scenario
