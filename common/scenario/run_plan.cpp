@@ -46,11 +46,13 @@ constexpr int kServerNice = -10;
 // Past this many agents every second one by id ticks half a period after the others: two bursts
 // of half the size on two cores instead of one.
 constexpr std::size_t kTickPhasesAbove = 16;
-// Receive at the tick up to this many agents (0.56 to 0.65 times the CPU at 8 and 32 all-to-all).
-// Above it the measured swarms are CPU-bound on two cores, and there the tick's drain, run at the
-// tick's priority at the tick's instant, made ticks later (128 in the grid: 68 % late against 19 %)
-// where Fast DDS's receive threads, nicer than the tick, wait for idle time.
-constexpr std::size_t kTickReceiveUpTo = 32;
+// Receive at the tick up to this many agents: 0.56 to 0.65 times the CPU at 8 and 32 all-to-all,
+// and discovery at the tick's priority: at 128 a ring's agents on Fast DDS's receive threads (nice
+// 15) never matched a neighbour's endpoint before their start timeout, and the grid at 25 Hz ran
+// 2.9 % late, unconverged, where at the tick it converged 0.9 % late. Past it the tick's drain,
+// run at the tick's priority, made a swarm beyond its host later still (256 in the grid at time
+// scale 0.5: 33 % late against 2 %), where nicer threads wait for idle time.
+constexpr std::size_t kTickReceiveUpTo = 128;
 // The record: 10 Hz per agent up to 128 agents, then this many samples per second over the
 // agents (5 Hz at 256), so that the one supervisor's share of the traffic stays bounded.
 constexpr double kRecordHz = 10.0;

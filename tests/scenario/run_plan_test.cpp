@@ -74,7 +74,7 @@ TEST(RunPlan, EveryThresholdOnBothSidesPlainAndSecure) {
     EXPECT_EQ(p.routing, r.routing) << at;
     EXPECT_EQ(p.participants, r.participants) << at;
     EXPECT_EQ(p.tick_phases, r.tick_phases) << at;
-    EXPECT_EQ(p.tick_receive, r.n <= 32) << at;  // receive at the tick up to 32 agents
+    EXPECT_EQ(p.tick_receive, r.n <= 128) << at;  // receive at the tick up to 128 agents
     EXPECT_DOUBLE_EQ(p.record_hz, r.record_hz) << at;
     EXPECT_EQ(p.record_every, static_cast<std::uint32_t>(std::lround(50.0 / r.record_hz))) << at;
     EXPECT_EQ(p.spread_records, r.spread_records) << at;
@@ -118,7 +118,7 @@ TEST(RunPlan, TheScenarioOverridesWhatItSetsAndTheTimeScaleStretchesTheWallLimit
   EXPECT_EQ(asked.plan.multicast_group, "");
   EXPECT_DOUBLE_EQ(asked.plan.record_hz, 25.0);
   EXPECT_EQ(asked.plan.record_every, 2u);
-  EXPECT_TRUE(resolve_scenario(parse_scenario_text("random_agents { count: 64 }\n"
+  EXPECT_TRUE(resolve_scenario(parse_scenario_text("random_agents { count: 200 }\n"
                                                    "transport { receive: TICK }\n",
                                                    "s"))
                   .plan.tick_receive);
