@@ -730,9 +730,24 @@ TEST(SwarmRun, AnAgentStoppedWhenTheLauncherIsKilledStillStopsCleanlyAndLeavesNo
         return true;
       },
       30.0));
-  for (const pid_t p : pids) {
-    EXPECT_FALSE(process_alive(p)) << "orphan pid " << p;
-    if (process_alive(p)) ::kill(p, SIGKILL);
+  for (std::size_t k = 0; k < pids.size(); ++k) {
+    const pid_t p = pids[k];
+    if (!process_alive(p)) continue;
+    // What a survivor was doing, for a failure that is rare: its state, where it waits, its
+    // threads, and the end of its log (k 0: the supervisor, k: agent k).
+    const std::string proc = "/proc/" + std::to_string(p);
+    std::string tasks;
+    std::error_code ec;
+    for (const auto& t : std::filesystem::directory_iterator(proc + "/task", ec))
+      tasks += read_file(t.path() / "stat").substr(0, 60) + " wchan " +
+               read_file(t.path() / "wchan") + "\n";
+    const std::string log = read_file(
+        dir / (k == 0 ? std::string("supervisor.log") : "agent-" + std::to_string(k) + ".log"));
+    ADD_FAILURE() << "orphan pid " << p << " (" << (k == 0 ? "supervisor" : "agent")
+                  << (k == 0 ? "" : " " + std::to_string(k)) << ")\n"
+                  << tasks << "its log ends:\n"
+                  << log.substr(log.size() > 1500 ? log.size() - 1500 : 0);
+    ::kill(p, SIGKILL);
   }
   EXPECT_TRUE(std::filesystem::exists(dir / "agent-2.stats"));
 }
