@@ -1,5 +1,6 @@
 #include "common/runtime/run_load.hpp"
 
+#include <google/protobuf/io/tokenizer.h>
 #include <google/protobuf/text_format.h>
 #include <sched.h>
 #include <unistd.h>
@@ -24,6 +25,12 @@ std::string per_s(double v) {
   std::snprintf(buf, sizeof buf, "%.0f", v);
   return buf;
 }
+
+class SilentErrors : public google::protobuf::io::ErrorCollector {
+ public:
+  void AddError(int, google::protobuf::io::ColumnNumber, const std::string&) override {}
+  void AddWarning(int, google::protobuf::io::ColumnNumber, const std::string&) override {}
+};
 
 constexpr std::uintmax_t kMaxCalibrationBytes = std::uintmax_t{64} * 1024;
 
@@ -88,7 +95,10 @@ std::optional<plan::HostCalibration> read_calibration(const fs::path& path, cons
     return std::nullopt;
   }
   plan::HostCalibration c;
-  if (!google::protobuf::TextFormat::ParseFromString(text, &c)) {
+  google::protobuf::TextFormat::Parser parser;
+  SilentErrors silent;  // a damaged file is said once, below, not logged by protobuf
+  parser.RecordErrorsTo(&silent);
+  if (!parser.ParseFromString(text, &c)) {
     why = path.string() + ": not a calibration (run swarm calibrate again)";
     return std::nullopt;
   }
@@ -137,30 +147,41 @@ plan::Load predict_load(const RunConfig& rc, double time_scale,
   const double particle = tick ? cal->tick_us_particle() : cal->tick_us_particle_threads();
   const double quad = tick ? cal->tick_us_quadcopter() : cal->tick_us_quadcopter_threads();
   // A quadcopter's tick is a point agent's plus its physics steps, measured at
-  // quadcopter_steps_per_tick and scaled to this run's.
-  const double tick_us = rc.agent.mode == AgentMode::kQuadcopter
-                             ? particle + std::max(0.0, quad - particle) *
-                                              rc.agent.steps_per_tick() /
-                                              static_cast<double>(cal->quadcopter_steps_per_tick())
-                             : particle;
+  // quadcopter_steps_per_tick: the steps' cost a second follows the physics rate, not the
+  // consensus rate.
+  const double step_us =
+      rc.agent.mode == AgentMode::kQuadcopter
+          ? std::max(0.0, quad - particle) / static_cast<double>(cal->quadcopter_steps_per_tick())
+          : 0.0;
   const double delivery_us = tick ? cal->delivery_us_tick() : cal->delivery_us_threads();
-  const double ticks_cores = load.ticks_per_s() * tick_us * 1e-6;
-  const double predicted = ticks_cores + load.deliveries_per_s() * delivery_us * 1e-6;
+  const double agents = static_cast<double>(n);
+  const double physics_cores = agents * rc.agent.physics_hz * time_scale * step_us * 1e-6;
+  // Everything else is per tick: CPU a second per consensus hertz.
+  const double per_hz_cores = (agents * particle + heard * delivery_us) * time_scale * 1e-6;
+  const double ticks_cores = load.ticks_per_s() * particle * 1e-6 + physics_cores;
+  const double predicted = physics_cores + per_hz_cores * rc.agent.consensus_hz;
   const double usable = kUsableCoreShare * cores;
   load.set_calibrated(true);
   load.set_usable_cores(usable);
   load.set_predicted_cores(predicted);
   load.set_sustained_deliveries_per_s(std::max(0.0, usable - ticks_cores) / (delivery_us * 1e-6));
   load.set_exceeds(predicted > usable);
-  const double share = predicted > 0 ? usable / predicted : 1.0;
-  load.set_holdable_time_scale(time_scale * share);
-  // The fastest consensus rate that holds and that the physics rate still divides (the resolver
-  // refuses others), as the scenario's rate when it holds.
+  // Everything scales with the time scale; below swarm run's least (0.01) none holds.
+  const double scale = predicted > 0 ? time_scale * usable / predicted : time_scale;
+  load.set_holdable_time_scale(scale >= 0.01 ? scale : 0.0);
+  // The fastest whole-hertz consensus rate that holds and that the physics rate divides (the
+  // resolver refuses others), at least 1 Hz; 0 when none does (the physics alone is too much).
   double hz = rc.agent.consensus_hz;
   if (load.exceeds()) {
-    const double raw = rc.agent.consensus_hz * share;
-    const double steps = std::ceil(rc.agent.physics_hz / raw - 1e-9);
-    hz = raw > 0 && std::isfinite(steps) ? rc.agent.physics_hz / steps : 0.0;
+    const double most = per_hz_cores > 0 ? (usable - physics_cores) / per_hz_cores : 0.0;
+    hz = 0.0;
+    for (int steps = 1; most >= 1.0 && steps <= static_cast<int>(rc.agent.physics_hz); ++steps) {
+      const double r = rc.agent.physics_hz / steps;
+      if (r <= most && r >= 1.0 && r == std::floor(r)) {
+        hz = r;
+        break;
+      }
+    }
   }
   load.set_holdable_consensus_hz(hz);
   return load;
@@ -174,6 +195,27 @@ plan::Load predict_load_here(const RunConfig& rc, double time_scale) {
       read_calibration(calibration_path(), host, cores, why);
   return predict_load(rc, time_scale, cal, cores, why);
 }
+
+namespace {
+
+// What holds instead: a consensus rate (whole hertz, 0: none) and a time scale (0: none of at
+// least swarm run's 0.01).
+std::string what_holds(const plan::Load& l) {
+  std::ostringstream o;
+  o.precision(3);
+  if (l.holdable_consensus_hz() > 0)
+    o << "consensus_hz " << l.holdable_consensus_hz();
+  else
+    o << "no consensus rate of 1 Hz or more";
+  o << ", or this rate at ";
+  if (l.holdable_time_scale() > 0)
+    o << "--time-scale " << l.holdable_time_scale();
+  else
+    o << "no --time-scale of 0.01 or more";
+  return o.str();
+}
+
+}  // namespace
 
 std::string describe_load(const plan::Load& l) {
   std::ostringstream o;
@@ -190,11 +232,8 @@ std::string describe_load(const plan::Load& l) {
     << " for agents; predicted agent CPU " << l.predicted_cores() << " cores; the host sustains "
     << per_s(l.sustained_deliveries_per_s()) << " samples/s beside these ticks (calibration "
     << l.calibration() << ")\n";
-  if (l.exceeds()) {
-    o << "  EXCEEDS this host: expect late ticks; it holds real time at consensus_hz "
-      << l.holdable_consensus_hz() << ", or this rate at --time-scale " << l.holdable_time_scale()
-      << "\n";
-  }
+  if (l.exceeds())
+    o << "  EXCEEDS this host: expect late ticks; real time holds at " << what_holds(l) << "\n";
   return o.str();
 }
 
@@ -204,8 +243,7 @@ std::string load_warning(const plan::Load& l) {
   o.precision(3);
   o << "warning: predicted agent CPU " << l.predicted_cores() << " cores exceeds the "
     << l.usable_cores() << " this host sustains (" << per_s(l.deliveries_per_s())
-    << " samples received/s): expect late ticks; real time holds at consensus_hz "
-    << l.holdable_consensus_hz() << " or --time-scale " << l.holdable_time_scale();
+    << " samples received/s): expect late ticks; real time holds at " << what_holds(l);
   return o.str();
 }
 

@@ -80,8 +80,12 @@ TEST(RunLoad, AHostThatSustainsTheRunSaysSoAndOneThatDoesNotNamesTheRateAndScale
   const plan::Load over = predict_load(big, 1.0, calibration(100, 10), 2, "cal");
   EXPECT_NEAR(over.predicted_cores(), 0.5 + 4.95, 1e-9);
   EXPECT_TRUE(over.exceeds());
-  // 50 Hz x 1.5 / 5.45 = 13.8 Hz; the fastest rate the 500 Hz physics divides below it: 500 / 37.
-  EXPECT_NEAR(over.holdable_consensus_hz(), 500.0 / 37.0, 1e-9);
+  // 50 Hz x 1.5 / 5.45 = 13.8 Hz; the fastest whole-hertz rate the 500 Hz physics divides below
+  // it: 10 Hz (500 / 37 would be refused as written). Flown at it, the run fits.
+  EXPECT_EQ(over.holdable_consensus_hz(), 10.0);
+  RunConfig slower = big;
+  slower.agent.consensus_hz = over.holdable_consensus_hz();
+  EXPECT_FALSE(predict_load(slower, 1.0, calibration(100, 10), 2, "cal").exceeds());
   EXPECT_NEAR(over.holdable_time_scale(), 1.5 / 5.45, 1e-9);
   const std::string w = load_warning(over);
   EXPECT_NE(w.find("exceeds"), std::string::npos) << w;
@@ -100,6 +104,14 @@ TEST(RunLoad, AQuadcoptersTickCostsItsPhysicsStepsAndThreadsTheirOwnSampleCost) 
       "transport { delivery: ALL receive: THREADS }");
   const plan::Load f = predict_load(fast, 1.0, calibration(100, 10), 2, "cal");
   EXPECT_NEAR(f.predicted_cores(), 400 * 250e-6 + 1200 * 20e-6, 1e-12);
+  // 100 quadcopters: their physics alone (100 x 500 steps/s x 30 us) takes the 1.5 cores, so no
+  // consensus rate holds, and the prediction says so rather than naming one that does not.
+  const RunConfig many = config(
+      "mode: QUADCOPTER\nrandom_agents { count: 100 }\ntransport { delivery: ALL receive: TICK }");
+  const plan::Load m = predict_load(many, 1.0, calibration(100, 10), 2, "cal");
+  ASSERT_TRUE(m.exceeds());
+  EXPECT_EQ(m.holdable_consensus_hz(), 0.0);
+  EXPECT_NE(load_warning(m).find("no consensus rate"), std::string::npos) << load_warning(m);
 }
 
 class CalibrationFile : public ::testing::Test {
