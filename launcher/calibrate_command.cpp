@@ -6,6 +6,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <csignal>
 #include <cstdlib>
 #include <ctime>
@@ -108,6 +109,10 @@ std::optional<CalibrationSample> fly(const Flight& f, const CalibrateOptions& op
     procs.reap();
     std::this_thread::sleep_for(std::chrono::milliseconds(50));
   }
+  if (g_calibrate_signal != 0) {  // came as the run ended: still not a calibration
+    why = "interrupted";
+    return std::nullopt;
+  }
   const int status = procs.children().front().status;
   // Exit 1: it flew its whole duration without agreeing, as it was made to.
   if (!WIFEXITED(status) || WEXITSTATUS(status) != 1) {
@@ -165,7 +170,7 @@ int calibrate(const CalibrateOptions& opt) {
               << std::endl;
     const std::optional<CalibrationSample> s = fly(f, opt, root, why);
     if (!s) {
-      code = g_calibrate_signal != 0 ? 130 : 1;
+      code = g_calibrate_signal != 0 ? 128 + g_calibrate_signal : 1;
       break;
     }
     samples.push_back(*s);
@@ -179,7 +184,7 @@ int calibrate(const CalibrateOptions& opt) {
       const std::optional<FittedCosts> fit = fit_costs({r[0], r[1]});
       const double quad =
           fit ? (r[2].cpu_s - r[2].received * fit->delivery_us * 1e-6) / r[2].ticks * 1e6 : 0.0;
-      if (!fit || !(quad > 0)) {
+      if (!fit || !(quad > 0) || !std::isfinite(quad)) {
         why = std::string("the runs ") + (mode == 0 ? "at the tick" : "on threads") +
               " do not tell CPU per tick from CPU per sample (a busy host? try again, or "
               "--seconds longer)";
@@ -198,6 +203,10 @@ int calibrate(const CalibrateOptions& opt) {
     }
   }
   if (opt.keep.empty()) fs::remove_all(root, ec);
+  if (code == 0 && g_calibrate_signal != 0) {  // a signal during the fit: nothing is kept
+    code = 128 + g_calibrate_signal;
+    why = "interrupted";
+  }
   if (code != 0) {
     std::cerr << "swarm calibrate: " << why << "; nothing written\n";
     return code;

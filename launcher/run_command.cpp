@@ -241,7 +241,7 @@ int run(const RunOptions& opt) {
   } catch (const std::exception& e) {
     std::cerr << "swarm run: " << e.what() << "\n";
     launcher.stop();
-    dir.write_fallback_summary(rc, e.what(), clock.now_s());
+    if (dir.write_fallback_summary(rc, e.what(), clock.now_s())) dir.note_load(*spec.load);
     return 1;
   }
   if (opt.view_port >= 0 && opt.quiet) {

@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <vector>
 
 #include "common/runtime/run_load.hpp"
 #include "tests/swarm/domain_lease.hpp"
@@ -111,17 +112,24 @@ TEST(Load, CalibrateFliesRealAgentsAndKeepsCostsThatRunsThenRead) {
   EXPECT_FALSE(fs::exists(cal));
   fs::create_directories(tmp);
   setenv("TMPDIR", tmp.c_str(), 1);
-  const Result r =
-      run({bin("swarm"), "calibrate", "--seconds", "2", "--domain", test_domain().str()}, 240.0);
+  const std::vector<std::string> calibrate = {bin("swarm"), "calibrate", "--seconds",
+                                              "2",          "--domain",  test_domain().str()};
+  Result r = run(calibrate, 240.0);
+  // A host too busy for 2-s flights to tell the costs apart says so (exit 1); once more, longer.
+  if (r.code == 1 && r.output.find("do not tell") != std::string::npos) {
+    std::vector<std::string> longer = calibrate;
+    longer[3] = "6";
+    r = run(longer, 240.0);
+  }
   ASSERT_EQ(r.code, 0) << r.output;
   std::string why;
   const auto c = read_calibration(cal, host_name(), host_cores(), why);
   ASSERT_TRUE(c) << why << "\n" << r.output;
-  // Hearing a sample costs something, and a quadcopter's tick at least a point agent's.
-  EXPECT_GT(c->delivery_us_tick(), 0.0);
-  EXPECT_GT(c->delivery_us_threads(), 0.0);
-  EXPECT_GT(c->tick_us_quadcopter(), 0.0);
-  EXPECT_EQ(c->seconds_per_run(), 2.0);
+  // Measured here, now, by the flights it named.
+  EXPECT_EQ(c->cores(), host_cores());
+  EXPECT_EQ(c->seconds_per_run(), r.output.find("for 6 s") != std::string::npos ? 6.0 : 2.0);
+  EXPECT_NE(r.output.find("flying 24 point agents all-to-all"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("flying 4 quadcopters"), std::string::npos) << r.output;
   // Its runs went into a temporary directory of their own, removed after.
   EXPECT_TRUE(fs::is_empty(tmp));
 
