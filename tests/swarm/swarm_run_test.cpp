@@ -738,9 +738,11 @@ TEST(SwarmRun, AnAgentStoppedWhenTheLauncherIsKilledStillStopsCleanlyAndLeavesNo
     const std::string proc = "/proc/" + std::to_string(p);
     std::string tasks;
     std::error_code ec;
-    for (const auto& t : std::filesystem::directory_iterator(proc + "/task", ec))
-      tasks += read_file(t.path() / "stat").substr(0, 60) + " wchan " +
-               read_file(t.path() / "wchan") + "\n";
+    // Never throws: the survivor may exit while its threads are listed.
+    for (auto t = std::filesystem::directory_iterator(proc + "/task", ec);
+         !ec && t != std::filesystem::directory_iterator(); t.increment(ec))
+      tasks += read_file(t->path() / "stat").substr(0, 60) + " wchan " +
+               read_file(t->path() / "wchan") + "\n";
     const std::string log = read_file(
         dir / (k == 0 ? std::string("supervisor.log") : "agent-" + std::to_string(k) + ".log"));
     ADD_FAILURE() << "orphan pid " << p << " (" << (k == 0 ? "supervisor" : "agent")
