@@ -128,17 +128,23 @@ Interest Neighbourhood::update(const Vec3& p_W, const Vec3& q, const std::set<Ag
   return in;
 }
 
+std::vector<Interest> Neighbourhood::interests_at_start(const RunConfig& rc) {
+  std::vector<Interest> out;
+  out.reserve(rc.agents.size());
+  for (const AgentSpec& a : rc.agents)
+    out.push_back(Neighbourhood(rc, a.id).update(a.position_W, a.q0(), {}));
+  return out;
+}
+
 std::set<AgentId> Neighbourhood::heard_at_start(const RunConfig& rc, AgentId id) {
   std::set<AgentId> out;
   const AgentSpec* me = rc.spec(id);
   if (!me) return out;
-  Neighbourhood mine(rc, id);
-  const Interest in = mine.update(me->position_W, me->q0(), {});
-  for (const AgentSpec& a : rc.agents) {
-    if (a.id == id) continue;
-    Neighbourhood theirs(rc, a.id);
-    if (Interest::hears(in, theirs.update(a.position_W, a.q0(), {}), a.q0(), a.position_W))
-      out.insert(a.id);
+  const std::vector<Interest> in = interests_at_start(rc);
+  const Interest& mine = in[static_cast<std::size_t>(me - rc.agents.data())];
+  for (std::size_t j = 0; j < rc.agents.size(); ++j) {
+    const AgentSpec& a = rc.agents[j];
+    if (a.id != id && Interest::hears(mine, in[j], a.q0(), a.position_W)) out.insert(a.id);
   }
   return out;
 }

@@ -55,6 +55,9 @@ class Neighbourhood {
   // The agents that agent `id` of `rc` hears at the start (at their start positions, before any
   // link): its start barrier waits for exactly these.
   static std::set<AgentId> heard_at_start(const RunConfig& rc, AgentId id);
+  // Every agent's interest at its start position, before any link, in the order of rc.agents:
+  // with Interest::hears, who hears whom at the start (heard_at_start; a run's predicted load).
+  static std::vector<Interest> interests_at_start(const RunConfig& rc);
 
   // The margin beyond the link reach a cell leaves for links about to form.
   static double margin_m(double reach_m);

@@ -124,11 +124,8 @@ plan::Load predict_load(const RunConfig& rc, double time_scale,
   load.set_agents(static_cast<std::uint32_t>(n));
   const double ticks_per_agent = rc.agent.consensus_hz * time_scale;
   load.set_ticks_per_s(ticks_per_agent * static_cast<double>(n));
-  // Every agent's interest at its start, once; then who hears whom, pair by pair.
-  std::vector<Interest> interests;
-  interests.reserve(n);
-  for (const AgentSpec& a : rc.agents)
-    interests.push_back(Neighbourhood(rc, a.id).update(a.position_W, a.q0(), {}));
+  // Who hears whom at the start, pair by pair.
+  const std::vector<Interest> interests = Neighbourhood::interests_at_start(rc);
   double heard = 0.0;
   for (std::size_t i = 0; i < n; ++i) {
     for (std::size_t j = 0; j < n; ++j) {
