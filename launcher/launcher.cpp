@@ -289,12 +289,13 @@ Launcher::Outcome Launcher::conclude(double wall_time_s) {
   // The prediction goes into whichever summary there is (the supervisor's, or the one written
   // below for it), before anything amends it.
   const auto note_load = [&] { return !spec_.load || dir.note_load(*spec_.load); };
-  if (dir.read_summary() && !note_load()) {
+  const bool supervisor_summary = dir.read_summary().has_value();
+  if (supervisor_summary && !note_load()) {
     out.lines.push_back("cannot write the predicted load into " + dir.summary().string());
     out.exit_code = 3;
     return out;
   }
-  if (!dir.read_summary()) {
+  if (!supervisor_summary) {
     // The supervisor died before it could write the summary (or a stranger's file is there): the
     // launcher says why.
     std::string reason = "supervisor " + describe_status(sup);

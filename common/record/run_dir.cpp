@@ -226,21 +226,24 @@ std::optional<records::Summary> RunDir::read_summary() const {
   return s;
 }
 
-bool RunDir::amend_summary(const std::vector<std::string>& problems) const {
+bool RunDir::edit_summary(const std::function<void(records::Summary&)>& change) const {
   std::optional<records::Summary> s = read_summary();
   if (!s) return false;
-  s->set_converged(false);
-  std::string reason = s->end_reason();
-  for (const std::string& p : problems) reason += "; " + p;
-  s->set_end_reason(reason);
+  change(*s);
   return write_summary(to_json(*s));
 }
 
+bool RunDir::amend_summary(const std::vector<std::string>& problems) const {
+  return edit_summary([&](records::Summary& s) {
+    s.set_converged(false);
+    std::string reason = s.end_reason();
+    for (const std::string& p : problems) reason += "; " + p;
+    s.set_end_reason(reason);
+  });
+}
+
 bool RunDir::note_load(const plan::Load& load) const {
-  std::optional<records::Summary> s = read_summary();
-  if (!s) return false;
-  *s->mutable_load() = load;
-  return write_summary(to_json(*s));
+  return edit_summary([&](records::Summary& s) { *s.mutable_load() = load; });
 }
 
 }  // namespace qswarm

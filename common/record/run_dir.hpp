@@ -2,6 +2,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -122,6 +123,8 @@ class RunDir {
   static constexpr const char* kViewUrl = "view.url";
 
  private:
+  // summary.json read, changed and written whole; false if there is none or it was not written.
+  bool edit_summary(const std::function<void(records::Summary&)>& change) const;
   std::filesystem::path file(const char* name) const { return path_ / name; }
   std::filesystem::path path_;
 };
