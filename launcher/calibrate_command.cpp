@@ -133,6 +133,17 @@ std::string utc_now() {
 int calibrate(const CalibrateOptions& opt) {
   const fs::path path = opt.out.empty() ? calibration_path() : fs::path(opt.out);
   std::error_code ec;
+  // Where it is kept is checked before a minute of flying: replaced whole at the end, it must be
+  // a regular file or nothing yet (a FIFO or /dev/zero would be replaced, not written), in a
+  // directory that can be made.
+  const fs::file_status at = fs::symlink_status(path, ec);
+  fs::create_directories(path.parent_path().empty() ? "." : path.parent_path(), ec);
+  if ((fs::exists(at) && !fs::is_regular_file(at)) || ec) {
+    std::cerr << "swarm calibrate: " << (opt.out.empty() ? "QSWARM_CALIBRATION" : "--out") << " "
+              << path.string() << ": expected a regular file, or none yet, in a directory that "
+              << "can be made" << (ec ? " (" + ec.message() + ")" : std::string()) << "\n";
+    return 2;
+  }
   fs::path root;
   if (!opt.keep.empty()) {
     root = opt.keep;
@@ -218,7 +229,6 @@ int calibrate(const CalibrateOptions& opt) {
   c.set_quadcopter_steps_per_tick(10);  // the default rates: 500 Hz physics, 50 Hz consensus
   std::string text;
   google::protobuf::TextFormat::PrintToString(c, &text);
-  fs::create_directories(path.parent_path().empty() ? "." : path.parent_path(), ec);
   if (!write_whole(path, "# swarm calibrate: what this host sustains (run_load.hpp)\n" + text)) {
     std::cerr << "swarm calibrate: cannot write " << path.string() << " (disk full?)\n";
     return 3;

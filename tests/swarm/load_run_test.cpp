@@ -4,6 +4,7 @@
 #include <google/protobuf/util/json_util.h>
 #include <gtest/gtest.h>
 #include <stdlib.h>
+#include <sys/stat.h>
 
 #include <filesystem>
 #include <fstream>
@@ -102,6 +103,15 @@ TEST(Load, CalibrateFliesRealAgentsAndKeepsCostsThatRunsThenRead) {
   EXPECT_EQ(kept.code, 2) << kept.output;
   EXPECT_NE(kept.output.find("--keep"), std::string::npos) << kept.output;
   EXPECT_FALSE(fs::exists(cal));
+  // Kept in a FIFO: refused before flying, and the FIFO left as it was.
+  const fs::path fifo = cal.parent_path().parent_path() / "calibrate-fifo";
+  fs::remove(fifo);
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  const Result into_fifo = run({bin("swarm"), "calibrate", "--out", fifo.string()});
+  EXPECT_EQ(into_fifo.code, 2) << into_fifo.output;
+  EXPECT_NE(into_fifo.output.find("--out"), std::string::npos) << into_fifo.output;
+  EXPECT_TRUE(fs::is_fifo(fifo));
+  fs::remove(fifo);
 
   // A TMPDIR that is not there is said, not a crash.
   const fs::path tmp = fresh_dir("calibrate-tmp");
