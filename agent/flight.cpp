@@ -50,7 +50,7 @@ int fly(const RunConfig& rc, AgentId id, AgentFlags& f, DdsBus& bus, Clock& cloc
   f.loop.host = host_label(rc.plan.hosts.interface);
   AgentLoop loop(rc, id, f.loop, bus, clock);
   log->info("agent {} up: domain {}, {} law, time scale {}", id, rc.transport.domain_id,
-            to_string(rc.agent.law.kind), f.process.time_scale);
+            rc.agent.law.law, f.process.time_scale);
   // Those it starts later run at the tick's: a reader's own multicast receive thread is started
   // by the thread that makes the reader.
   if (!bus.participant().threads_priority().empty())

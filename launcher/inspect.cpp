@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "common/core/graph.hpp"
+#include "common/core/law_registry.hpp"
 #include "common/runtime/run_load.hpp"
 #include "common/scenario/scenario.hpp"
 #include "proto/records.pb.h"
@@ -53,7 +54,7 @@ std::string as_json(const RunConfig& rc, const InitialGraph& g, double tau) {
   *ins.mutable_resolved() = rc.resolved;
   *ins.mutable_plan() = to_proto(rc.plan);
   *ins.mutable_load() = predict_load_here(rc, rc.plan.hosts.time_scale);
-  if (rc.agent.law.kind == LawKind::kWmsr) {
+  if (honest_hull_f(rc.agent.law) >= 0) {
     const ResilienceCheck c = resilience_of(rc, g);
     records::Resilience* r = ins.mutable_resilience();
     r->set_f(static_cast<std::uint32_t>(c.f));
@@ -71,8 +72,10 @@ std::string as_text(const RunConfig& rc, const InitialGraph& g, double tau) {
   std::ostringstream o;
   o.precision(6);
   o << "scenario " << rc.name << ": " << n << " agents, " << to_string(rc.agent.law.weight.policy)
-    << " weights, " << to_string(rc.agent.law.topology.policy) << " topology, "
-    << to_string(rc.agent.law.kind) << " law, gain " << rc.agent.law.gain << "\n";
+    << " weights, " << to_string(rc.agent.law.topology.policy) << " topology, " << rc.agent.law.law
+    << " law";
+  for (const auto& [name, value] : rc.agent.law.params) o << ", " << name << " " << value;
+  o << ", gain " << rc.agent.law.gain << "\n";
   o << "initial edges (" << g.edges.size() << "):";
   for (const Edge& e : g.edges)
     o << " " << rc.agents[e.i].id << "-" << rc.agents[e.j].id << " (w=" << e.weight << ")";
@@ -95,7 +98,7 @@ std::string as_text(const RunConfig& rc, const InitialGraph& g, double tau) {
     << (rc.has_formation() ? " of the agents' estimates of the centre" : "") << "): (" << avg.x()
     << ", " << avg.y() << ", " << avg.z() << ")\n";
   if (tau > 0) o << "time constant 1/(k lambda2) = " << tau << " s (exact for fixed weights)\n";
-  if (rc.agent.law.kind == LawKind::kWmsr) o << describe(resilience_of(rc, g), rc);
+  if (honest_hull_f(rc.agent.law) >= 0) o << describe(resilience_of(rc, g), rc);
   if (rc.agent.avoidance.enabled) {
     o << "collision avoidance on: every quadcopter keeps " << rc.agent.avoidance.safe_distance_m
       << " m from every agent it hears (the filter aims for "
@@ -155,7 +158,8 @@ std::string describe_plan(const RunPlan& p) {
 }
 
 ResilienceCheck resilience_of(const RunConfig& rc, const InitialGraph& g) {
-  return check_resilience(static_cast<int>(rc.agents.size()), g.edges, rc.agent.law.wmsr_f);
+  return check_resilience(static_cast<int>(rc.agents.size()), g.edges,
+                          std::max(0, honest_hull_f(rc.agent.law)));
 }
 
 std::string describe(const ResilienceCheck& c, const RunConfig& rc) {

@@ -9,6 +9,7 @@
 #include <random>
 
 #include "common/app/cli_checks.hpp"
+#include "common/core/law_registry.hpp"
 #include "common/record/run_dir.hpp"
 #include "common/runtime/run_load.hpp"
 #include "common/scenario/fault_flags.hpp"
@@ -97,10 +98,10 @@ RunConfig resolve_run(const RunOptions& opt) {
   // Checked here, before anything flies: an address not on this machine leaves every agent alone.
   if (const std::string problem = interface_problem(rc.transport.interface); !problem.empty())
     throw ScenarioError("scenario field 'transport.interface': " + problem);
-  if (rc.agent.law.kind == LawKind::kWmsr) {
+  if (honest_hull_f(rc.agent.law) >= 0) {
     const ResilienceCheck c = resilience_of(rc, initial_graph(rc));
     if (!c.ok() && rc.agent.law.topology.policy == TopologyPolicy::kFixed)
-      throw ScenarioError("scenario field 'wmsr_f': " + describe(c, rc));
+      throw ScenarioError("scenario field 'law_params[\"f\"]': " + describe(c, rc));
     if (!c.ok()) std::cerr << "swarm run: warning: " << describe(c, rc);
   }
   {

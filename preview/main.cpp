@@ -32,7 +32,7 @@ constexpr char kUsage[] =
     "ID:KIND[:X,Y,Z]]\n"
     "  SCENARIO       a scenario file (default scenarios/demo.txtpb, the paper's time-varying\n"
     "                 rendezvous, from the current directory or the build tree)\n"
-    "  --law L        the agreement law: edge-flow, laplacian or w-msr (overrides the scenario's)\n"
+    "  --law L        the agreement law, any `swarm laws` lists (overrides the scenario's)\n"
     "  --duration S   simulated seconds before giving up (overrides the scenario's duration_s);\n"
     "                 the flight ends earlier once the disagreement is below the scenario's\n"
     "                 convergence.tolerance_m\n"
@@ -246,9 +246,9 @@ int main(int argc, char** argv) {
   const LawConfig& law = flight.lockstep.law;
   const bool liar = opt.liar.has_value();
   std::printf("%s\n", flight.title.c_str());
-  std::printf("%d agents, %s law, %g Hz, %s weights, %s topology", swarm.size(),
-              to_string(law.kind).c_str(), flight.lockstep.consensus_rate_hz,
-              to_string(law.weight.policy).c_str(), to_string(law.topology.policy).c_str());
+  std::printf("%d agents, %s law, %g Hz, %s weights, %s topology", swarm.size(), law.law.c_str(),
+              flight.lockstep.consensus_rate_hz, to_string(law.weight.policy).c_str(),
+              to_string(law.topology.policy).c_str());
   if (law.topology.policy != TopologyPolicy::kFixed) {
     std::printf(" (threshold %g m)", law.topology.threshold_m);
   }

@@ -1,5 +1,7 @@
 #include "common/core/update_law.hpp"
 
+#include "common/core/law_registry.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <sstream>
@@ -28,26 +30,11 @@ std::string check_view(const NeighborView& v, double max_abs) {
   }
   for (const AgentId a : v.asking)
     if (a == 0 || a == v.id) return "asks agent 0 or itself";
+  if (v.payload.size() > kMaxLawPayload) return "law payload longer than the wire's bound";
+  for (const double x : v.payload)
+    if (!std::isfinite(x) || std::abs(x) > kMaxLawPayloadValue)
+      return "law payload not finite or absurd";
   return {};
-}
-
-std::string to_string(LawKind k) {
-  switch (k) {
-    case LawKind::kLaplacian:
-      return "laplacian";
-    case LawKind::kWmsr:
-      return "w-msr";
-    case LawKind::kEdgeFlow:
-      break;
-  }
-  return "edge-flow";
-}
-
-LawKind parse_law_kind(const std::string& s) {
-  if (s == "laplacian") return LawKind::kLaplacian;
-  if (s == "edge-flow" || s == "edge_flow") return LawKind::kEdgeFlow;
-  if (s == "w-msr" || s == "w_msr" || s == "wmsr") return LawKind::kWmsr;
-  throw std::invalid_argument("update law '" + s + "': expected laplacian, edge-flow or w-msr");
 }
 
 void LawConfig::validate() const {
@@ -59,17 +46,17 @@ void LawConfig::validate() const {
     throw std::invalid_argument("law.max_step_fraction = " + std::to_string(max_step_fraction) +
                                 ": expected a value in (0, 1]");
   }
-  if (wmsr_f < 0 || wmsr_f > 64) {
-    throw std::invalid_argument("law.wmsr_f = " + std::to_string(wmsr_f) +
-                                ": expected 0 to 64 lying neighbours");
-  }
   if (!std::isfinite(weight.scale) || weight.scale <= 0.0) {
     throw std::invalid_argument("weight.scale: expected a finite value > 0");
   }
 }
 
 UpdateLaw::UpdateLaw(AgentId self, const Vec3& q0, LawConfig cfg)
-    : self_(self), q0_(q0), cfg_(std::move(cfg)), tracker_(self, cfg_.topology) {
+    : self_(self),
+      q0_(q0),
+      cfg_(std::move(cfg)),
+      tracker_(self, cfg_.topology),
+      law_tag_(law_tag(cfg_.law)) {
   cfg_.validate();
   if (!q0.allFinite()) throw std::invalid_argument("initial state: expected finite coordinates");
 }
@@ -140,13 +127,17 @@ NeighborView UpdateLaw::message() const {
   v.copies = held_copies();
   v.asking = asking();
   v.seq = ticks_;
+  v.law = law_tag_;
+  v.payload = payload();
   return v;
 }
 
 std::unique_ptr<UpdateLaw> make_law(AgentId self, const Vec3& q0, const LawConfig& cfg) {
-  if (cfg.kind == LawKind::kLaplacian) return std::make_unique<LaplacianLaw>(self, q0, cfg);
-  if (cfg.kind == LawKind::kWmsr) return std::make_unique<WmsrLaw>(self, q0, cfg);
-  return std::make_unique<EdgeFlowLaw>(self, q0, cfg);
+  const LawSpec& spec = find_law(cfg.law);
+  LawConfig resolved = cfg;
+  resolved.law = spec.name;
+  resolved.params = resolve_law_params(spec, cfg.params, "law.params");
+  return spec.make(self, q0, resolved);
 }
 
 void LaplacianLaw::integrate(const Tick& t) {
@@ -155,8 +146,13 @@ void LaplacianLaw::integrate(const Tick& t) {
   q_ += dq;
 }
 
+WmsrLaw::WmsrLaw(AgentId self, const Vec3& q0, LawConfig cfg)
+    : UpdateLaw(self, q0, std::move(cfg)),
+      q_(q0),
+      f_(static_cast<std::size_t>(resolve_law_params(find_law("w-msr"), cfg_.params).at("f"))) {}
+
 void WmsrLaw::integrate(const Tick& t) {
-  const auto F = static_cast<std::size_t>(cfg_.wmsr_f);
+  const std::size_t F = f_;
   const double s = cfg_.max_step_fraction;
   trimmed_ = 0;
   Vec3 next = q_;

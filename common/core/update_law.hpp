@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "common/core/agent.hpp"
 #include "common/core/math.hpp"
 #include "common/core/topology.hpp"
 
@@ -34,6 +35,10 @@ struct NeighborView {
   // has not yet been told (edge-flow). Each answers with that entry, zero if it has none.
   std::vector<AgentId> asking;
   std::uint64_t seq = 0;  // sender's tick count: a new message has a larger one
+  // The sender's law (law_tag of its name) and what that law alone sends its neighbours (its
+  // LawSpec says how much): carried and checked like the fields above, read only by the same law.
+  std::uint32_t law = 0;
+  std::vector<double> payload;
   // Not on the wire: under TopologyPolicy::kRange the receiver's runtime sets the physical distance
   // between the two agents here, and links follow it instead of the states' distance.
   double link_distance_m = -1.0;
@@ -46,28 +51,26 @@ struct NeighborView {
   bool current = true;
 };
 
+// The most doubles a law's payload may carry (the wire's bound; a law declares its own below it).
+inline constexpr std::size_t kMaxLawPayload = 64;
+// The largest magnitude a payload value may have.
+inline constexpr double kMaxLawPayloadValue = 1e9;
+
 // Returns an empty string if a received view is usable, else why not (NaN, absurd magnitude, ...).
 // A law never sees a view that fails this: the runtime drops and counts it.
 std::string check_view(const NeighborView& v, double max_abs_coordinate_m = 1e6);
 
-enum class LawKind {
-  kLaplacian,  // dq_i/dt = -k sum_j w_ij (q_i - q_j), as the paper writes it
-  kEdgeFlow,   // DESIGN.md: each edge's exchange is integrated by its lower-id endpoint only
-  kWmsr,       // W-MSR: the Laplacian step after trimming up to F extreme values (WmsrLaw)
-};
-std::string to_string(LawKind k);
-LawKind parse_law_kind(const std::string& s);
-
 struct LawConfig {
-  LawKind kind = LawKind::kEdgeFlow;
+  // The law by name (common/laws/laws.inc lists them; find_law resolves aliases) and its
+  // parameters by name: make_law checks them and fills the rest from the law's LawSpec.
+  std::string law = "edge-flow";
+  std::map<std::string, double> params;
   WeightConfig weight;
   TopologyConfig topology;
   double gain = 1.0;  // k: time scale of the agreement [1/s per unit weight]
   // s: the most a tick may move an agent, as a fraction of the way to its neighbours' weighted
   // mean. Below 1/2 the step survives a tick or two of message delay (see UpdateLaw).
   double max_step_fraction = 0.3;
-  // W-MSR's F: the number of lying neighbours the law tolerates (kWmsr only).
-  int wmsr_f = 1;
   void validate() const;
 };
 
@@ -129,6 +132,9 @@ class UpdateLaw {
   virtual void links_observed() {}
   // What the agent asks its peers (NeighborView::asking).
   virtual std::vector<AgentId> asking() const { return {}; }
+  // What the law sends its neighbours beside the consensus state (NeighborView::payload), at most
+  // its LawSpec::payload_max values.
+  virtual std::vector<double> payload() const { return {}; }
   std::vector<double> update_links(const std::vector<NeighborView>& neighbors);
 
   AgentId self_;
@@ -139,8 +145,11 @@ class UpdateLaw {
   double published_total_weight_ = 0.0;
   bool observed_ = false;
   std::uint64_t ticks_ = 0;
+  std::uint32_t law_tag_ = 0;
 };
 
+// The law cfg.law names, from its LawSpec, with cfg.params checked and completed (throws
+// std::invalid_argument naming what is wrong).
 std::unique_ptr<UpdateLaw> make_law(AgentId self, const Vec3& q0, const LawConfig& cfg);
 
 class LaplacianLaw final : public UpdateLaw {
@@ -164,8 +173,7 @@ class LaplacianLaw final : public UpdateLaw {
 // average (trimming is not symmetric), so the agreed point depends on the run.
 class WmsrLaw final : public UpdateLaw {
  public:
-  WmsrLaw(AgentId self, const Vec3& q0, LawConfig cfg)
-      : UpdateLaw(self, q0, std::move(cfg)), q_(q0) {}
+  WmsrLaw(AgentId self, const Vec3& q0, LawConfig cfg);
   Vec3 state() const override { return q_; }
   // Neighbour values trimmed on the last tick (all coordinates together), and since the start.
   std::uint64_t trimmed() const { return trimmed_; }
@@ -174,6 +182,7 @@ class WmsrLaw final : public UpdateLaw {
  private:
   void integrate(const Tick& t) override;
   Vec3 q_;
+  std::size_t f_;  // the liars tolerated (parameter "f")
   std::uint64_t trimmed_ = 0;
   std::uint64_t trimmed_total_ = 0;
   struct Value {

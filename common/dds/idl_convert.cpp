@@ -12,6 +12,7 @@ std::array<double, 3> arr(const Vec3& v) { return {v.x(), v.y(), v.z()}; }
 }  // namespace
 
 static_assert(kMaxBarrierBytes == 64, "idl/swarm_state.idl bounds the barrier bitsets at 64");
+static_assert(kMaxLawPayload == 64, "idl/swarm_state.idl bounds a law's payload at 64");
 
 void to_idl(const StateMessage& m, qswarm_msgs::AgentState& s) {
   // The wire carries every entry or the sample is not sent: a silently cut flow list would break
@@ -93,6 +94,11 @@ void to_idl(const StateMessage& m, qswarm_msgs::AgentState& s) {
     s.copies().push_back(e);
   }
   s.asking(m.view.asking);
+  if (m.view.payload.size() > kMaxLawPayload)
+    throw std::length_error("a law's payload is at most " + std::to_string(kMaxLawPayload) +
+                            " values");
+  s.law(m.view.law);
+  s.payload(m.view.payload);
   if (m.barrier_known.size() > kMaxBarrierBytes || m.barrier_ready.size() > kMaxBarrierBytes)
     throw std::length_error("a start barrier bitset is at most " +
                             std::to_string(kMaxBarrierBytes) + " bytes");
@@ -148,6 +154,8 @@ void from_idl(const qswarm_msgs::AgentState& s, StateMessage& m) {
   for (const auto& e : s.flows())
     m.view.flows.push_back({e.peer(), vec(e.flow()), e.weight(), e.active()});
   m.view.asking.assign(s.asking().begin(), s.asking().end());
+  m.view.law = s.law();
+  m.view.payload.assign(s.payload().begin(), s.payload().end());
   m.barrier_known.assign(s.barrier_known().begin(), s.barrier_known().end());
   m.barrier_ready.assign(s.barrier_ready().begin(), s.barrier_ready().end());
   m.barrier_ready_at_s = s.barrier_ready_at_s();

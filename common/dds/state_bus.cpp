@@ -185,7 +185,7 @@ DdsStateBus::DdsStateBus(DdsParticipant& participant, const StateBusOptions& opt
   Impl& d = *impl_;
   d.opts = opts;
   d.clock = &clock;
-  d.gate = SampleGate(opts.run_id);
+  d.gate = SampleGate(opts.run_id, opts.law);
   d.participant = participant.get();
   d.writers = &participant.writers();
   d.bind = participant.secure();

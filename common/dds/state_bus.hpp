@@ -11,6 +11,7 @@
 #include "common/dds/participant.hpp"
 #include "common/transport/neighbor_bus.hpp"
 #include "common/transport/routing.hpp"
+#include "common/transport/sample_gate.hpp"
 
 namespace qswarm {
 
@@ -24,6 +25,8 @@ struct StateBusOptions {
   // The run: endpoints use the DDS partition qswarm-run-<hex id> and the gate refuses samples of
   // other runs (0: the partition qswarm-run-0, no check).
   std::uint64_t run_id = 0;
+  // The run's law: samples of another law, or with a longer payload, are refused.
+  ExpectedLaw law;
   // A reader on every run's partition (the supervisor): other runs' samples arrive, are refused
   // as foreign and counted, so that a run can say another one shares its domain.
   bool hear_all_runs = false;

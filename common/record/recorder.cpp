@@ -5,6 +5,7 @@
 #include <fstream>
 #include <tuple>
 
+#include "common/core/law_registry.hpp"
 #include "common/record/graph_metrics.hpp"
 
 #include "common/scenario/proto_util.hpp"
@@ -28,14 +29,14 @@ Recorder::Recorder(RunConfig rc, RunDir dir, double time_scale)
       sinks_(dir_, SceneSettings::of(rc_)),
       presence_(ids_of(rc_), rc_.plan.presence_timeout_s, rc_.plan.record_every),
       judge_(rc_.judge.tolerance_m, rc_.judge.hold_s, rc_.agent.neighbor_timeout_s,
-             rc_.agent.law.kind == LawKind::kEdgeFlow ? rc_.judge.tolerance_m : -1.0, rc_.faults,
-             rc_.agent.law.kind == LawKind::kWmsr ? rc_.agent.law.wmsr_f : 0),
+             find_law(rc_.agent.law.law).claims.exact_average ? rc_.judge.tolerance_m : -1.0,
+             rc_.faults, std::max(0, honest_hull_f(rc_.agent.law))),
       separation_(rc_.agent.avoidance.safe_distance_m),
       timeline_(rc_.faults.timeline()) {
   tally_.held = rc_.held_agents();
-  if (rc_.agent.law.kind == LawKind::kWmsr) {
+  if (honest_hull_f(rc_.agent.law) >= 0) {
     records::ResilienceOverTime r;
-    r.set_f(static_cast<std::uint32_t>(rc_.agent.law.wmsr_f));
+    r.set_f(static_cast<std::uint32_t>(honest_hull_f(rc_.agent.law)));
     r.set_min_degree(static_cast<std::uint32_t>(rc_.agents.size()));
     r.set_first_degree_short_s(-1.0);
     r.set_first_not_robust_s(-1.0);
@@ -258,7 +259,8 @@ void Recorder::snapshot() {
   std::vector<AgentId> ids;
   Positions q, p, offsets;
   std::vector<double> speed;
-  WmsrMeasure wmsr{rc_.agent.law.wmsr_f, rc_.judge.tolerance_m, {}};
+  const int hull_f = honest_hull_f(rc_.agent.law);
+  WmsrMeasure wmsr{std::max(0, hull_f), rc_.judge.tolerance_m, {}};
   for (const auto& [id, a] : presence_.tracks()) {
     if (presence_.running(id)) {
       ids.push_back(id);
@@ -284,8 +286,7 @@ void Recorder::snapshot() {
   last_ = measure_graph(
       t_s_, ids, q, p,
       [&](int i) -> const auto& { return presence_.track(ids[static_cast<size_t>(i)]).last.links; },
-      rc_.initial_average(), offsets, held, rc_.agent.law.kind == LawKind::kWmsr ? &wmsr : nullptr,
-      &spectrum_);
+      rc_.initial_average(), offsets, held, hull_f >= 0 ? &wmsr : nullptr, &spectrum_);
   last_->set_held_speed_mps(held_speed);
   // Judged once the whole swarm has started: a swarm still starting lacks links it will have.
   if (tally_.resilience && first_full_) judge_resilience(*last_, ids);
@@ -321,7 +322,7 @@ std::string Recorder::missing_text() const {
 
 void Recorder::judge_resilience(records::GraphSnapshot& g, const std::vector<AgentId>& ids) {
   records::ResilienceOverTime& r = *tally_.resilience;
-  const int f = rc_.agent.law.wmsr_f;
+  const int f = honest_hull_f(rc_.agent.law);
   // Each condition is timed from one snapshot to the next, in the state it was in.
   const double dt = resilience_t_s_ < 0.0 ? 0.0 : t_s_ - resilience_t_s_;
   resilience_t_s_ = t_s_;
@@ -393,16 +394,17 @@ std::string Recorder::outliers_text() const {
 }
 
 std::string Recorder::elsewhere_text() const {
-  char buf[160];
+  char buf[240];
   std::snprintf(buf, sizeof buf,
-                "agreed %.3g m from the initial average, which edge-flow keeps: forged states or "
+                "agreed %.3g m from the initial average, which %s keeps: forged states or "
                 "flows?",
-                judge_.agreed_elsewhere_m());
-  if (rc_.agent.law.kind == LawKind::kWmsr)
+                judge_.agreed_elsewhere_m(), rc_.agent.law.law.c_str());
+  if (honest_hull_f(rc_.agent.law) >= 0)
     std::snprintf(buf, sizeof buf,
-                  "agreed %.3g m outside the agents' initial bounding box, which W-MSR keeps: more "
+                  "agreed %.3g m outside the agents' initial bounding box, which %s keeps: more "
                   "than F = %d liars, or too few links?",
-                  judge_.agreed_elsewhere_m(), rc_.agent.law.wmsr_f);
+                  judge_.agreed_elsewhere_m(), rc_.agent.law.law.c_str(),
+                  honest_hull_f(rc_.agent.law));
   return buf;
 }
 

@@ -1,4 +1,5 @@
 #include "common/record/summary.hpp"
+#include "common/core/law_registry.hpp"
 
 #include <google/protobuf/struct.pb.h>
 
@@ -69,7 +70,7 @@ records::Summary build_summary(const RunConfig& rc, const Presence& presence,
   s.set_duration_s(end.t_s);
   s.set_seed(static_cast<std::uint32_t>(rc.seed));
   s.set_mode(rc.agent.mode == AgentMode::kQuadcopter ? "quadcopter" : "particle");
-  s.set_law(to_string(rc.agent.law.kind));
+  s.set_law(rc.agent.law.law);
   s.set_secure(!rc.transport.keystore.empty());
   s.set_agents_expected(static_cast<std::uint32_t>(rc.agents.size()));
   s.set_joins(tally.joins);
@@ -278,13 +279,15 @@ std::string summary_text(const records::Summary& s, const RunConfig& rc, const s
     }
     h << "\n";
   }
-  if (s.has_agreed_elsewhere_m() && rc.agent.law.kind == LawKind::kWmsr) {
+  if (s.has_agreed_elsewhere_m() && honest_hull_f(rc.agent.law) >= 0) {
     h << "MOVED: the agents agreed " << fmt("%.3g", s.agreed_elsewhere_m())
-      << " m outside their initial bounding box, which W-MSR keeps with at most F = "
-      << rc.agent.law.wmsr_f << " liars on a robust graph: more liars, or too few links?\n";
+      << " m outside their initial bounding box, which " << rc.agent.law.law
+      << " keeps with at most F = " << honest_hull_f(rc.agent.law)
+      << " liars on a robust graph: more liars, or too few links?\n";
   } else if (s.has_agreed_elsewhere_m()) {
     h << "MOVED: the agents agreed " << fmt("%.3g", s.agreed_elsewhere_m())
-      << " m from the initial average, which edge-flow keeps exactly: something outside the law "
+      << " m from the initial average, which " << rc.agent.law.law
+      << " keeps exactly: something outside the law "
          "moved it (a participant publishing forged states or flows?)\n";
   }
   for (const records::Forgery& f : s.forgeries()) {

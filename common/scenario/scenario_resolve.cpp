@@ -8,6 +8,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "common/core/law_registry.hpp"
 #include "common/scenario/scenario.hpp"
 #include "common/transport/port_plan.hpp"
 #include "common/transport/utf8.hpp"
@@ -122,6 +123,15 @@ void write_back_numbers(RunConfig& rc, scenario::Scenario& s) {
 
 Vec3 vec(const scenario::Vec3& v) { return Vec3(v.x(), v.y(), v.z()); }
 
+// The law a scenario names: `law` names the three shipped laws as an enum (scenario files from
+// before the law seam); any registered law goes by `law_name`.
+std::string law_named(const scenario::Scenario& s) {
+  if (!s.law_name().empty()) return s.law_name();
+  return s.law() == scenario::LAPLACIAN ? "laplacian"
+         : s.law() == scenario::W_MSR   ? "w-msr"
+                                        : "edge-flow";
+}
+
 void apply_overrides(scenario::Scenario& s, const ScenarioOverrides& o) {
   if (o.seed >= 0) s.set_seed(static_cast<std::uint64_t>(o.seed));
   if (o.duration_s >= 0) s.set_duration_s(o.duration_s);
@@ -129,15 +139,19 @@ void apply_overrides(scenario::Scenario& s, const ScenarioOverrides& o) {
     s.mutable_transport()->set_domain_id(static_cast<std::uint32_t>(o.domain_id));
   if (!o.keystore.empty()) s.mutable_transport()->set_keystore(o.keystore);
   if (!o.law.empty()) {
-    if (o.law == "laplacian") {
-      s.set_law(scenario::LAPLACIAN);
-    } else if (o.law == "edge-flow" || o.law == "edge_flow") {
-      s.set_law(scenario::EDGE_FLOW);
-    } else if (o.law == "w-msr" || o.law == "w_msr") {
-      s.set_law(scenario::W_MSR);
-    } else {
-      fail("--law", "laplacian, edge-flow or w-msr", o.law);
+    std::string name;
+    try {
+      name = find_law(o.law).name;
+    } catch (const std::invalid_argument&) {
+      fail("--law", "one of " + law_names(), o.law);
     }
+    // Another law than the scenario's: the scenario's parameters were its law's, not this one's.
+    if (name != law_named(s)) {
+      s.clear_wmsr_f();
+      s.mutable_law_params()->clear();
+    }
+    s.set_law(scenario::LAW_UNSPECIFIED);
+    s.set_law_name(name);
   }
   if (o.agents >= 0) {
     s.clear_agents();
@@ -291,13 +305,25 @@ void resolve_formation(scenario::Scenario& s, RunConfig& rc) {
 
 void resolve_law(const scenario::Scenario& s, RunConfig& rc) {
   LawConfig& law = rc.agent.law;
-  law.kind = s.law() == scenario::LAPLACIAN ? LawKind::kLaplacian
-             : s.law() == scenario::W_MSR   ? LawKind::kWmsr
-                                            : LawKind::kEdgeFlow;
+  if (!s.law_name().empty() && s.law() != scenario::LAW_UNSPECIFIED)
+    fail("law_name", "either law or law_name", "both");
+  std::string name;
+  try {
+    name = find_law(law_named(s)).name;
+  } catch (const std::invalid_argument&) {
+    fail("law_name", "one of " + law_names(), "'" + s.law_name() + "'");
+  }
+  law.law = name;
+  std::map<std::string, double> given(s.law_params().begin(), s.law_params().end());
   if (s.has_wmsr_f()) {
-    if (s.law() != scenario::W_MSR) fail("wmsr_f", "law: W_MSR (it is W-MSR's F)", "another law");
-    if (s.wmsr_f() > 64) fail("wmsr_f", "0..64 lying neighbours", std::to_string(s.wmsr_f()));
-    law.wmsr_f = static_cast<int>(s.wmsr_f());
+    if (name != "w-msr") fail("wmsr_f", "law: W_MSR (it is W-MSR's F)", "another law");
+    if (given.count("f")) fail("wmsr_f", "wmsr_f or law_params[\"f\"]", "both");
+    given["f"] = s.wmsr_f();
+  }
+  try {
+    law.params = resolve_law_params(find_law(name), given);
+  } catch (const std::invalid_argument& e) {
+    throw ScenarioError(std::string("scenario ") + e.what());
   }
   switch (s.weight().policy()) {
     case scenario::UNWEIGHTED:
@@ -558,8 +584,9 @@ void resolve_faults(const scenario::Faults& f, RunConfig& rc) {
 void write_back_defaults(RunConfig& rc, scenario::Scenario& s) {
   write_back_numbers(rc, s);
   s.set_seed(rc.seed);
-  if (rc.agent.law.kind == LawKind::kWmsr)
-    s.set_wmsr_f(static_cast<std::uint32_t>(rc.agent.law.wmsr_f));
+  s.clear_wmsr_f();
+  s.mutable_law_params()->clear();
+  for (const auto& [name, value] : rc.agent.law.params) (*s.mutable_law_params())[name] = value;
   s.mutable_transport()->set_domain_id(rc.transport.domain_id);
   s.mutable_transport()->set_interface(rc.transport.interface);
   s.mutable_transport()->set_shared_memory(rc.transport.shared_memory);

@@ -141,6 +141,13 @@ SampleGate::Result SampleGate::admit(const StateMessage& m, const std::string& w
     r.first_from = foreign_runs_.insert(m.run_id).second;
     return r;
   }
+  if (why.empty() && law_.tag != 0 &&
+      (m.view.law != law_.tag || m.view.payload.size() > law_.payload_max)) {
+    return admit(m,
+                 m.view.law != law_.tag ? "a sample of another law"
+                                        : "law payload longer than the law's bound",
+                 0, writer);
+  }
   if (!why.empty()) {
     ++counters_.dropped;
     r.verdict = Verdict::kInvalid;

@@ -22,6 +22,13 @@ struct WriterId {
   std::uint64_t hash() const;
 };
 
+// The law a run flies, as its samples must show it: a sample of another law, or whose payload is
+// longer than the law's bound, is invalid (tag 0: no check).
+struct ExpectedLaw {
+  std::uint32_t tag = 0;  // law_tag of its name
+  std::size_t payload_max = kMaxLawPayload;
+};
+
 // What every transport does with an incoming sample, in one place: check it (check_message),
 // refuse it if it is not newer than the one held from that agent, keep the newest per agent, and
 // count. Not thread-safe: the transport holds its own lock around it.
@@ -46,7 +53,8 @@ class SampleGate {
  public:
   enum class Verdict { kAccepted, kInvalid, kStale, kForeign, kContested };
   // run_id: the run this endpoint belongs to; a sample of another run is foreign (0: no check).
-  explicit SampleGate(std::uint64_t run_id = 0) : run_id_(run_id) {}
+  explicit SampleGate(std::uint64_t run_id = 0, ExpectedLaw law = {})
+      : run_id_(run_id), law_(law) {}
   struct Result {
     Verdict verdict = Verdict::kAccepted;
     std::string why;  // for kInvalid and kContested
@@ -125,6 +133,7 @@ class SampleGate {
   std::set<AgentId> warned_;
   BusCounters counters_;
   std::uint64_t run_id_;
+  ExpectedLaw law_;
   std::set<std::uint64_t> foreign_runs_;
   std::map<AgentId, std::uint8_t> suspects_;
 };

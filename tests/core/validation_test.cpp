@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "common/core/airframe.hpp"
+#include "common/core/law_registry.hpp"
 #include "common/core/primitives.hpp"
 #include "common/core/topology.hpp"
 #include "common/core/tracking_controller.hpp"
@@ -67,7 +68,7 @@ TEST(Validation, LawAndTopologyRefuseBadConfiguration) {
             std::string::npos);
   EXPECT_NE(error_of([] { parse_weight_policy("strong"); }).find("expected unweighted"),
             std::string::npos);
-  EXPECT_NE(error_of([] { parse_law_kind("gossip"); }).find("laplacian, edge-flow or w-msr"),
+  EXPECT_NE(error_of([] { find_law("gossip"); }).find("edge-flow, laplacian, w-msr"),
             std::string::npos);
   TrackingGains g;
   g.max_tilt_rad = 2.0;
@@ -127,7 +128,7 @@ TEST(Topology, RangeLinksFollowThePhysicalDistanceAndWeightsTheStates) {
   // Two agents whose consensus states are 1 m apart but whose quadcopters are 20 m apart (a
   // formation's slots): under kRange they are not linked until the runtime says they are close.
   LawConfig cfg;
-  cfg.kind = LawKind::kEdgeFlow;
+  cfg.law = std::string("edge-flow");
   cfg.weight.policy = WeightPolicy::kDistance;
   cfg.topology.policy = TopologyPolicy::kRange;
   cfg.topology.threshold_m = 8.0;

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <limits>
 
+#include "common/core/law_registry.hpp"
 #include "common/transport/sample_gate.hpp"
 
 namespace qswarm {
@@ -281,6 +282,42 @@ TEST(SampleGate, WithoutWritersKnownANewerLifeTakesOverAtOnceAsBefore) {
   EXPECT_EQ(gate.admit(sample(6, 9, 100), "").verdict, SampleGate::Verdict::kStale);
   EXPECT_EQ(gate.admit(sample(6, 1, 200), "").verdict, SampleGate::Verdict::kAccepted);
   EXPECT_TRUE(gate.suspects().empty());
+}
+
+}  // namespace
+}  // namespace qswarm
+
+namespace qswarm {
+namespace {
+
+TEST(SampleGate, ASampleOfAnotherLawOrWithALongerPayloadNeverReachesTheLaw) {
+  Feed f{SampleGate(0, {law_tag("metropolis"), 1})};
+  StateMessage ok = sample(3, 1, kLife, 1.0);
+  ok.view.law = law_tag("metropolis");
+  ok.view.payload = {2.0};
+  EXPECT_EQ(f.admit(ok, writer(3)).verdict, SampleGate::Verdict::kAccepted);
+  StateMessage other = sample(3, 2, kLife, 50.0);
+  other.view.law = law_tag("edge-flow");
+  SampleGate::Result r = f.admit(other, writer(3));
+  EXPECT_EQ(r.verdict, SampleGate::Verdict::kInvalid);
+  EXPECT_EQ(r.why, "a sample of another law");
+  EXPECT_TRUE(r.first_from);  // named once
+  StateMessage longer = sample(3, 3, kLife, 60.0);
+  longer.view.law = law_tag("metropolis");
+  longer.view.payload = {2.0, 7.0};
+  r = f.admit(longer, writer(3));
+  EXPECT_EQ(r.verdict, SampleGate::Verdict::kInvalid);
+  EXPECT_EQ(r.why, "law payload longer than the law's bound");
+  EXPECT_FALSE(r.first_from);  // counted, not named again
+  StateMessage nan = sample(3, 4, kLife, 70.0);
+  nan.view.law = law_tag("metropolis");
+  nan.view.payload = {std::nan("")};
+  EXPECT_EQ(f.admit(nan, writer(3)).why, "law payload not finite or absurd");
+  EXPECT_EQ(f.gate.counters().dropped, 3u);
+  EXPECT_EQ(f.held_x(3), 1.0);  // the law still reads the last good sample
+  // A gate that expects no law (the supervisor's record reader) checks only the wire's bounds.
+  Feed any;
+  EXPECT_EQ(any.admit(other, writer(3)).verdict, SampleGate::Verdict::kAccepted);
 }
 
 }  // namespace

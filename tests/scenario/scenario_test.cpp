@@ -39,6 +39,13 @@ TEST(Scenario, EveryBadFieldIsRefusedWithItsName) {
       {kTwo + "topology { policy: FIXED edges { a: 1 b: 9 } }\n", "topology.edges[0].b"},
       {kTwo + "mode: QUADCOPTER\nrates { physics_hz: 100 }\n", "rates.physics_hz"},
       {kTwo + "law: GOSSIP\n", "GOSSIP"},
+      {kTwo + "law_name: \"gossip\"\n", "law_name"},
+      {kTwo + "law: LAPLACIAN\nlaw_name: \"w-msr\"\n", "law_name"},
+      {kTwo + "law_name: \"w-msr\"\nlaw_params { key: \"f\" value: 2.5 }\n", "law_params[\"f\"]"},
+      {kTwo + "law_name: \"w-msr\"\nlaw_params { key: \"f\" value: nan }\n", "law_params[\"f\"]"},
+      {kTwo + "law_params { key: \"f\" value: 1 }\n", "law_params[\"f\"]"},  // edge-flow's
+      {kTwo + "law: W_MSR\nwmsr_f: 1\nlaw_params { key: \"f\" value: 1 }\n", "wmsr_f"},
+      {kTwo + "law: LAPLACIAN\nwmsr_f: 1\n", "wmsr_f"},
       {"", "agents"},
       {kTwo + "faults { loss { probability: 1.5 } }\n", "faults.loss[0].probability"},
       {kTwo + "faults { cut { a: 1 b: 7 start_s: 1 end_s: 2 } }\n", "faults.cut[0].b"},
@@ -197,6 +204,41 @@ TEST(Scenario, DefaultsAreWrittenBackSoTheRecordSaysWhatRan) {
   EXPECT_EQ(rc.resolved.transport().interface(), "127.0.0.1");
   const RunConfig again = resolve_scenario(parse_scenario_text(to_text(rc.resolved), "again"));
   EXPECT_EQ(to_text(again.resolved), to_text(rc.resolved));
+}
+
+TEST(Scenario, ALawIsNamedWithItsParametersAndTheScenarioAsRunSaysThemAll) {
+  // The enum of the shipped laws and law_name are two spellings of one choice.
+  const RunConfig by_enum = resolve_scenario(parse_scenario_text(kTwo + "law: W_MSR\n", "s"));
+  const RunConfig by_name = resolve_scenario(
+      parse_scenario_text(kTwo + "law_name: \"wmsr\"\nlaw_params { key: \"f\" value: 2 }\n", "s"));
+  EXPECT_EQ(by_enum.agent.law.law, "w-msr");
+  EXPECT_EQ(by_enum.agent.law.params, (std::map<std::string, double>{{"f", 1.0}}));
+  EXPECT_EQ(by_name.agent.law.law, "w-msr");
+  EXPECT_EQ(by_name.agent.law.params.at("f"), 2.0);
+  // The legacy field still says F.
+  const RunConfig legacy =
+      resolve_scenario(parse_scenario_text(kTwo + "law: W_MSR\nwmsr_f: 3\n", "s"));
+  EXPECT_EQ(legacy.agent.law.params.at("f"), 3.0);
+  // Written back: every parameter, read again to the same run.
+  EXPECT_EQ(legacy.resolved.law_params().at("f"), 3.0);
+  EXPECT_FALSE(legacy.resolved.has_wmsr_f());
+  const RunConfig again = resolve_scenario(parse_scenario_text(to_text(legacy.resolved), "again"));
+  EXPECT_EQ(again.agent.law.law, "w-msr");
+  EXPECT_EQ(again.agent.law.params, legacy.agent.law.params);
+  // --law overrides the scenario's law, and drops parameters that were another law's.
+  ScenarioOverrides o;
+  o.law = "laplacian";
+  const RunConfig over =
+      resolve_scenario(parse_scenario_text(kTwo + "law: W_MSR\nwmsr_f: 3\n", "s"), o);
+  EXPECT_EQ(over.agent.law.law, "laplacian");
+  EXPECT_TRUE(over.agent.law.params.empty());
+  o.law = "gossip";
+  try {
+    resolve_scenario(parse_scenario_text(kTwo, "s"), o);
+    ADD_FAILURE() << "--law gossip accepted";
+  } catch (const ScenarioError& e) {
+    EXPECT_NE(std::string(e.what()).find("'--law'"), std::string::npos) << e.what();
+  }
 }
 
 // proto/scenario.proto is the users' reference for every default ("// default 50"); the defaults

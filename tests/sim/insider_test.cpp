@@ -130,7 +130,7 @@ TEST(Insider, TwoLiarsAgainstFEqualOneDragTheOthersAndTheRecordSaysTheBoxWasLeft
   }
   EXPECT_GT(outside_box_m(q, q0), 1000.0);
   // and everyone "agreed", but outside where W-MSR keeps agents that do not lie: not converged
-  EXPECT_NE(reason.find("outside the agents' initial bounding box, which W-MSR keeps: more than "
+  EXPECT_NE(reason.find("outside the agents' initial bounding box, which w-msr keeps: more than "
                         "F = 1 liars, or too few links?"),
             std::string::npos)
       << reason;
