@@ -15,6 +15,7 @@
 #include <system_error>
 
 #include "common/core/graph.hpp"
+#include "common/core/law_registry.hpp"
 #include "common/dds/dds_bus.hpp"
 #include "common/mcap/file_check.hpp"
 #include "common/scenario/scenario.hpp"
@@ -604,6 +605,63 @@ TEST(SwarmRun, BadSamplesFromATestParticipantAreDroppedByEveryAgentAndChangeNoth
   EXPECT_EQ(noted, 1);
   expect_met_at(s, Vec3(10.25, 9.75, 29.25), 0.01, true);
   EXPECT_LT(s.average_drift_m(), 1e-3);
+}
+
+TEST(SwarmRun, AUsersLawFliesAgentProcessesAndSamplesNotOfItNeverReachIt) {
+  // The example law written only through the law seam, by name, in four agent processes
+  const auto dir = fresh_dir("metropolis");
+  Child launcher({bin("swarm"), "run", scenario("paper/unweighted"), "--law", "metropolis", "--out",
+                  dir.string(), "--domain", test_domain().str(), "--time-scale", "1", "--quiet"},
+                 dir.parent_path() / "metropolis.log");
+  ASSERT_TRUE(wait_for([&] { return std::filesystem::exists(dir / "processes.csv"); }, 30.0));
+  const std::uint64_t run_id = load_scenario((dir / "scenario.txtpb").string()).transport.run_id;
+  DdsOptions opt;
+  opt.participant.domain_id = static_cast<std::uint32_t>(test_domain().domain());
+  opt.participant.name = "test-saboteur";
+  opt.state.run_id = run_id;
+  DdsBus saboteur(opt);
+  // while an insider of the run sends samples of agents 2, 3 and 4 that are well formed but for
+  // another law, or carry a longer payload than metropolis's, or a NaN in it
+  std::uint64_t seq = 1u << 30;
+  int published = 0;
+  while (launcher.running()) {
+    for (const AgentId id : {2u, 3u, 4u}) {
+      StateMessage m;
+      m.view.id = id;
+      m.view.q = Vec3(500, 500, 500);
+      m.view.law = law_tag(id == 2 ? "edge-flow" : "metropolis");
+      m.view.payload = id == 3 ? std::vector<double>{1.0, 1.0} : std::vector<double>{1.0};
+      if (id == 4) m.view.payload = {std::nan("")};
+      m.phase = Phase::kRunning;
+      m.seq = ++seq;
+      m.incarnation = system_clock().wall_ns();
+      m.run_id = run_id;
+      saboteur.publish(m);
+    }
+    ++published;
+    wait_for([&] { return !launcher.running(); }, 0.05);
+  }
+  const Result r = launcher.wait(10.0);
+  ASSERT_EQ(r.code, 0) << r.output;
+  ASSERT_GT(published, 5);
+  // then the swarm agreed, the record says which law flew, and agent 1 named each refusal once
+  const records::Summary s = read_summary(dir);
+  EXPECT_TRUE(s.converged());
+  EXPECT_EQ(s.law(), "metropolis");
+  // A convex combination every tick: the agreed point lies inside the starts' box. It is not the
+  // average (10.25, 9.75, 29.25): over DDS a neighbour's value is a tick old, and the two ends of
+  // an edge then move by different amounts (`swarm check-law metropolis` measures it).
+  const Positions starts = {{4, 17, 24}, {18, 10, 32}, {15, 10, 26}, {4, 2, 35}};
+  for (const auto& a : s.agents()) {
+    EXPECT_LT(outside_box_m({vec(a.final_consensus())}, starts), 1e-9) << a.id();
+    if (a.id() == 1) EXPECT_GE(a.dropped_by_agent(), 3u);
+  }
+  const std::string log = read_file(dir / "agent-1.log");
+  for (const char* why : {"from agent 2: a sample of another law",
+                          "from agent 3: law payload longer than the law's bound",
+                          "from agent 4: law payload not finite or absurd"}) {
+    EXPECT_NE(log.find(why), std::string::npos) << why << " not in:\n" << log;
+  }
 }
 
 // `swarm run` of the paper's time-varying rendezvous into `dir`, interrupted with SIGINT (Ctrl-C)
