@@ -3,6 +3,7 @@
 #include <filesystem>
 #include <functional>
 #include <optional>
+#include <string>
 
 namespace CLI {
 class App;
@@ -24,8 +25,14 @@ Command add_paper_command(CLI::App& app);       // ... `swarm paper`
 Command add_resilience_command(CLI::App& app);  // ... `swarm resilience`
 Command add_deploy_command(CLI::App& app);      // deploy_command.cpp: `swarm deploy k8s`
 Command add_calibrate_command(CLI::App& app);   // calibrate_command.cpp: `swarm calibrate`
+Command add_laws_command(CLI::App& app);        // law_commands.cpp: `swarm laws`
+Command add_check_law_command(CLI::App& app);   // ... `swarm check-law`
 
 // Where this executable is, with swarm-agent, swarm-supervisor and the Python package beside it.
 std::filesystem::path bin_dir();
+// A default path of the repository's (`rel`, as in "scenarios/paper"): where the command runs,
+// when it is run from the repository, else in the source tree the build came from, so that the
+// defaults work from any directory.
+std::string in_repository(const std::string& rel);
 
 }  // namespace qswarm

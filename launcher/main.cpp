@@ -2,8 +2,9 @@
 // its run plan without flying (`swarm inspect`), make a keystore (`swarm keys`), draw a run
 // (`swarm plot`), rebuild its run.mcap (`swarm export`), replay it (`swarm view`), regenerate the
 // paper's figures and report (`swarm paper`), or draw the laws under an insider's attacks (`swarm
-// resilience`), or measure what this host sustains (`swarm calibrate`). Each subcommand, with its
-// flags, is a file of its own (launcher/commands.hpp).
+// resilience`), or measure what this host sustains (`swarm calibrate`), list the agreement laws
+// (`swarm laws`) or fly one through the promises it claims (`swarm check-law`). Each subcommand,
+// with its flags, is a file of its own (launcher/commands.hpp).
 #include <CLI/CLI.hpp>
 
 #include <cstdlib>
@@ -21,11 +22,11 @@ int main(int argc, char** argv) {
     unsetenv(v);
   CLI::App app{"swarm: a quadcopter swarm that agrees over DDS"};
   app.require_subcommand(1);
-  const std::vector<Command> commands = {add_run_command(app),     add_view_command(app),
-                                         add_inspect_command(app), add_keys_command(app),
-                                         add_plot_command(app),    add_export_command(app),
-                                         add_paper_command(app),   add_resilience_command(app),
-                                         add_deploy_command(app),  add_calibrate_command(app)};
+  const std::vector<Command> commands = {
+      add_run_command(app),       add_view_command(app),       add_inspect_command(app),
+      add_keys_command(app),      add_plot_command(app),       add_export_command(app),
+      add_paper_command(app),     add_resilience_command(app), add_deploy_command(app),
+      add_calibrate_command(app), add_laws_command(app),       add_check_law_command(app)};
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -26,17 +26,14 @@ namespace fs = std::filesystem;
 
 fs::path bin_dir() { return fs::read_symlink("/proc/self/exe").parent_path(); }
 
-namespace {
-
-// A default path of the repository's (`rel`, as in "scenarios/paper"): where the command runs,
-// when it is run from the repository, else in the source tree the build came from, so that the
-// defaults work from any directory.
 std::string in_repository(const std::string& rel) {
   std::error_code ec;
   if (fs::exists(rel, ec)) return rel;
   const fs::path source = fs::path(QSWARM_SOURCE_DIR) / rel;
   return fs::exists(source.parent_path(), ec) ? source.string() : rel;
 }
+
+namespace {
 
 // Runs a module of the Python package qswarm (python/qswarm/), whose copy the build keeps beside
 // this binary in python/, with Debian's interpreter first, where python3-matplotlib lives. Returns
