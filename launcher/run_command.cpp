@@ -300,7 +300,11 @@ Command add_run_command(CLI::App& app) {
   cmd->add_option("--secure", o->secure,
                   "DDS-Security with this keystore (swarm keys SCENARIO --out DIR writes one)");
   cmd->add_option("--law", o->law,
-                  "update law: edge-flow, laplacian or w-msr (overrides the scenario)");
+                  "agreement law, any `swarm laws` lists (overrides the scenario's and its "
+                  "parameters)")
+      ->check(CLI::Validator(
+          [](const std::string& v) { return v.empty() ? std::string("an empty law name") : ""; },
+          "LAW"));
   cmd->add_option("--loss", o->loss, "fault: drop each received message with this probability")
       ->check(finite_range(0.0, 1.0))
       ->allow_extra_args(false)

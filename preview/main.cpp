@@ -121,6 +121,10 @@ std::optional<int> parse(int argc, char** argv, Options& opt) {
     }
     if (a == "--law") {
       opt.overrides.law = argv[++i];
+      if (opt.overrides.law.empty()) {
+        std::fprintf(stderr, "swarm-preview: --law: an empty law name (swarm laws lists them)\n");
+        return 2;
+      }
     } else if (a == "--duration") {
       opt.overrides.duration_s = parse_seconds(a, argv[++i]);
     } else if (a == "--csv") {

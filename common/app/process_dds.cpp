@@ -7,7 +7,6 @@
 
 #include <unistd.h>
 
-#include "common/core/law_registry.hpp"
 #include "common/security/keystore.hpp"
 #include "common/transport/port_plan.hpp"
 #include "common/transport/state_message.hpp"
@@ -43,7 +42,7 @@ DdsOptions dds_options(const RunConfig& rc, const std::string& participant_name,
   StateBusOptions& s = d.state;
   s.max_agents = plan.reader_agents;
   s.run_id = rc.transport.run_id;
-  s.law = {law_tag(rc.agent.law.law), find_law(rc.agent.law.law).payload_max};
+  s.law = expected_law(rc.agent.law.law);
   for (const auto& a : rc.agents) s.roster.push_back(a.id);
   s.routing = plan.routing;
   s.multicast_group = plan.multicast_group;

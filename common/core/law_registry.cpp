@@ -23,7 +23,7 @@ std::string number(double x) {
 
 // A law that breaks the seam's own rules is a programming error found at the first lookup, in
 // every test that flies a law, not a run that misbehaves later.
-void check_spec(const LawSpec& s, std::set<std::string>& names) {
+void check_spec(const LawSpec& s, std::set<std::string>& names, std::set<std::uint32_t>& tags) {
   const auto bad = [&](const std::string& why) {
     throw std::logic_error("law '" + s.name + "': " + why);
   };
@@ -31,6 +31,7 @@ void check_spec(const LawSpec& s, std::set<std::string>& names) {
   for (const std::string& n : s.aliases)
     if (n.empty()) bad("an empty alias");
   if (!names.insert(s.name).second) bad("its name is taken");
+  if (!tags.insert(law_tag(s.name)).second) bad("its tag (a hash of its name) is another law's");
   for (const std::string& n : s.aliases)
     if (!names.insert(n).second) bad("alias '" + n + "' is taken");
   if (s.payload_max > kMaxLawPayload) bad("payload_max beyond kMaxLawPayload");
@@ -51,7 +52,8 @@ const std::vector<LawSpec>& registered_laws() {
 #include "common/laws/laws.inc"
 #undef QSWARM_LAW
     std::set<std::string> names;
-    for (const LawSpec& s : v) check_spec(s, names);
+    std::set<std::uint32_t> tags;
+    for (const LawSpec& s : v) check_spec(s, names, tags);
     return v;
   }();
   return all;
@@ -86,7 +88,8 @@ std::map<std::string, double> resolve_law_params(const LawSpec& spec,
                                                  const std::string& field) {
   std::map<std::string, double> out;
   for (const auto& [name, value] : given) {
-    const std::string where = "field '" + field + "[\"" + name + "\"]' of law " + spec.name;
+    std::string where = "field '";
+    where.append(field).append("[\"").append(name).append("\"]' of law ").append(spec.name);
     const LawParam* p = nullptr;
     for (const LawParam& q : spec.params)
       if (q.name == name) p = &q;

@@ -129,6 +129,17 @@ NeighborView UpdateLaw::message() const {
   v.seq = ticks_;
   v.law = law_tag_;
   v.payload = payload();
+  // A law that sends what its receivers' gates refuse would fly alone: a programming error, said
+  // where it is made (the agent exits, the kit marks the flight).
+  if (v.payload.size() > payload_max_) {
+    throw std::logic_error("law " + cfg_.law + " sent " + std::to_string(v.payload.size()) +
+                           " payload values, more than the " + std::to_string(payload_max_) +
+                           " its LawSpec declares");
+  }
+  for (const double x : v.payload) {
+    if (!std::isfinite(x) || std::abs(x) > kMaxLawPayloadValue)
+      throw std::logic_error("law " + cfg_.law + " sent a payload value not finite or beyond 1e9");
+  }
   return v;
 }
 
@@ -137,7 +148,9 @@ std::unique_ptr<UpdateLaw> make_law(AgentId self, const Vec3& q0, const LawConfi
   LawConfig resolved = cfg;
   resolved.law = spec.name;
   resolved.params = resolve_law_params(spec, cfg.params, "law.params");
-  return spec.make(self, q0, resolved);
+  std::unique_ptr<UpdateLaw> law = spec.make(self, q0, resolved);
+  law->payload_max_ = spec.payload_max;
+  return law;
 }
 
 void LaplacianLaw::integrate(const Tick& t) {
@@ -149,7 +162,7 @@ void LaplacianLaw::integrate(const Tick& t) {
 WmsrLaw::WmsrLaw(AgentId self, const Vec3& q0, LawConfig cfg)
     : UpdateLaw(self, q0, std::move(cfg)),
       q_(q0),
-      f_(static_cast<std::size_t>(resolve_law_params(find_law("w-msr"), cfg_.params).at("f"))) {}
+      f_(static_cast<std::size_t>(resolve_law_params(find_law(cfg_.law), cfg_.params).at("f"))) {}
 
 void WmsrLaw::integrate(const Tick& t) {
   const std::size_t F = f_;

@@ -146,6 +146,10 @@ class UpdateLaw {
   bool observed_ = false;
   std::uint64_t ticks_ = 0;
   std::uint32_t law_tag_ = 0;
+  std::size_t payload_max_ = kMaxLawPayload;  // its LawSpec's, set by make_law
+
+ private:
+  friend std::unique_ptr<UpdateLaw> make_law(AgentId self, const Vec3& q0, const LawConfig& cfg);
 };
 
 // The law cfg.law names, from its LawSpec, with cfg.params checked and completed (throws

@@ -146,7 +146,13 @@ void apply_overrides(scenario::Scenario& s, const ScenarioOverrides& o) {
       fail("--law", "one of " + law_names(), o.law);
     }
     // Another law than the scenario's: the scenario's parameters were its law's, not this one's.
-    if (name != law_named(s)) {
+    std::string before;
+    try {
+      before = find_law(law_named(s)).name;
+    } catch (const std::invalid_argument&) {
+      // The scenario's own law is unknown: resolve_law names it.
+    }
+    if (name != before) {
       s.clear_wmsr_f();
       s.mutable_law_params()->clear();
     }

@@ -18,7 +18,8 @@ RunConfig planned(RunConfig rc, double time_scale) {
 InProcessSwarm::InProcessSwarm(RunConfig rc, double time_scale, RunDir record_in)
     : rc_(planned(std::move(rc), time_scale)), time_scale_(time_scale), restarts_(rc_.faults) {
   if (!record_in.empty()) {
-    supervisor_bus_ = std::make_unique<InMemoryBus>(net_, InMemoryBus::Role::kRecorder);
+    supervisor_bus_ = std::make_unique<InMemoryBus>(net_, InMemoryBus::Role::kRecorder,
+                                                    expected_law(rc_.agent.law.law));
     SupervisorOptions o;
     o.time_scale = time_scale_;
     supervisor_ =
@@ -43,7 +44,9 @@ void InProcessSwarm::spawn(AgentId id, Slot& slot, std::optional<double> join_at
     o.restarted = true;
   }
   slot.loop.reset();
-  slot.bus = std::make_unique<InMemoryBus>(net_);  // a new process has a new transport
+  // A new process has a new transport.
+  slot.bus = std::make_unique<InMemoryBus>(net_, InMemoryBus::Role::kAgent,
+                                           expected_law(rc_.agent.law.law));
   slot.loop = std::make_unique<AgentLoop>(rc_, id, o, *slot.bus, clock_);
   slot.wake_at_s = clock_.now_s();
 }

@@ -49,7 +49,8 @@ int InMemoryNetwork::endpoints(InMemoryRole role) const {
                     [role](const InMemoryBus* b) { return b->role() == role; }));
 }
 
-InMemoryBus::InMemoryBus(InMemoryNetwork& net, Role role) : net_(net), role_(role) {
+InMemoryBus::InMemoryBus(InMemoryNetwork& net, Role role, ExpectedLaw law)
+    : net_(net), role_(role), gate_(0, law) {
   net_.attach(this);
 }
 

@@ -48,8 +48,9 @@ class InMemoryNetwork {
 class InMemoryBus final : public NeighborBus {
  public:
   using Role = InMemoryRole;
-  // An agent's endpoint hears samples; a recorder's (the supervisor's) hears records.
-  explicit InMemoryBus(InMemoryNetwork& net, Role role = Role::kAgent);
+  // An agent's endpoint hears samples; a recorder's (the supervisor's) hears records. `law`: the
+  // run's law, whose samples alone the gate admits (as the DDS bus's gate does).
+  explicit InMemoryBus(InMemoryNetwork& net, Role role = Role::kAgent, ExpectedLaw law = {});
   ~InMemoryBus() override;
   InMemoryBus(const InMemoryBus&) = delete;
   InMemoryBus& operator=(const InMemoryBus&) = delete;

@@ -5,6 +5,8 @@
 #include <cstdio>
 #include <limits>
 
+#include "common/core/law_registry.hpp"
+
 namespace qswarm {
 
 bool WriterId::known() const {
@@ -123,6 +125,10 @@ double ArrivalAges::quantile_ms(double q) const {
 void SampleGate::count_accepted(const StateMessage& m, std::int64_t now_wall_ns) {
   ++counters_.received;
   if (now_wall_ns > 0 && m.wall_ns > 0) counters_.ages.add(now_wall_ns - m.wall_ns);
+}
+
+ExpectedLaw expected_law(const std::string& law_name) {
+  return {law_tag(law_name), find_law(law_name).payload_max};
 }
 
 SampleGate::Result SampleGate::admit(const StateMessage& m, const std::string& why,

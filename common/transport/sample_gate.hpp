@@ -28,6 +28,8 @@ struct ExpectedLaw {
   std::uint32_t tag = 0;  // law_tag of its name
   std::size_t payload_max = kMaxLawPayload;
 };
+// What the registered law `law_name` sends (find_law: throws std::invalid_argument if none).
+ExpectedLaw expected_law(const std::string& law_name);
 
 // What every transport does with an incoming sample, in one place: check it (check_message),
 // refuse it if it is not newer than the one held from that agent, keep the newest per agent, and

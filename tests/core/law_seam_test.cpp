@@ -74,6 +74,31 @@ TEST(LawSeam, ParametersAreCheckedByNameAndFilledFromTheirDefaults) {
             std::string::npos);
 }
 
+// A law that sends more payload than its LawSpec declares, or NaN in it, would be refused by every
+// receiver and fly alone: its own message says so at once.
+class Chatty final : public UpdateLaw {
+ public:
+  Chatty(std::vector<double> payload)
+      : UpdateLaw(1, Vec3::Zero(), {}), payload_(std::move(payload)) {}
+  Vec3 state() const override { return Vec3::Zero(); }
+
+ private:
+  void integrate(const Tick&) override {}
+  std::vector<double> payload() const override { return payload_; }
+  std::vector<double> payload_;
+};
+
+TEST(LawSeam, ALawSendingWhatItsReceiversWouldRefuseFailsAtOnce) {
+  EXPECT_NO_THROW(Chatty(std::vector<double>(kMaxLawPayload, 1.0)).message());
+  EXPECT_NE(error_of([] {
+              Chatty(std::vector<double>(kMaxLawPayload + 1, 1.0)).message();
+            }).find("more than the 64 its LawSpec declares"),
+            std::string::npos);
+  EXPECT_NE(error_of([] { Chatty({std::nan("")}).message(); }).find("not finite"),
+            std::string::npos);
+  EXPECT_NE(error_of([] { Chatty({2e9}).message(); }).find("beyond 1e9"), std::string::npos);
+}
+
 TEST(LawSeam, AHostilePayloadNeverPassesTheViewCheck) {
   NeighborView v;
   v.id = 2;

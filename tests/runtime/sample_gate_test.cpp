@@ -315,7 +315,7 @@ TEST(SampleGate, ASampleOfAnotherLawOrWithALongerPayloadNeverReachesTheLaw) {
   EXPECT_EQ(f.admit(nan, writer(3)).why, "law payload not finite or absurd");
   EXPECT_EQ(f.gate.counters().dropped, 3u);
   EXPECT_EQ(f.held_x(3), 1.0);  // the law still reads the last good sample
-  // A gate that expects no law (the supervisor's record reader) checks only the wire's bounds.
+  // A gate that expects no law (tag 0) checks only the wire's bounds.
   Feed any;
   EXPECT_EQ(any.admit(other, writer(3)).verdict, SampleGate::Verdict::kAccepted);
 }

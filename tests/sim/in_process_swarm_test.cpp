@@ -8,6 +8,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "common/core/law_registry.hpp"
 #include "common/runtime/neighbourhood.hpp"
 #include "common/scenario/scenario.hpp"
 #include "common/sim/in_process_swarm.hpp"
@@ -154,6 +155,33 @@ TEST(InProcessSwarm, AStrangerSendingNanAndImpersonationsIsDroppedAndChangesNoth
   EXPECT_LT(relative_error_of_mean(swarm), 1e-12);
   for (AgentId id = 1; id <= 6; ++id) {
     if (id == 2) continue;  // agent 2 does not listen where it publishes itself
+    EXPECT_GT(swarm.agent(id)->transport_counters().dropped, 10u) << "agent " << id;
+  }
+}
+
+TEST(InProcessSwarm, AnotherLawsSamplesNeverReachTheLawInProcessEither) {
+  // The in-process swarm's gates expect the run's law, as the DDS bus's do: a well-formed sample
+  // of agent 2 from another law, with a far-off state, is dropped and moves nothing.
+  InProcessSwarm swarm(six());
+  InMemoryBus stranger(swarm.network());
+  stranger.set_interest({swarm.agent(2)->interest().publish, {}, {}});
+  std::uint64_t seq = 1u << 30;
+  ASSERT_TRUE(swarm.run_until(
+      [&] {
+        StateMessage other;
+        other.view.id = 2;
+        other.view.q = Vec3(500, 500, 500);
+        other.view.law = law_tag("laplacian");
+        other.phase = Phase::kRunning;
+        other.seq = ++seq;
+        other.incarnation = 99;
+        stranger.publish(other);
+        return swarm.wall_s() > 1.0 && swarm.disagreement_running() < 1e-8;
+      },
+      20.0));
+  EXPECT_LT(relative_error_of_mean(swarm), 1e-12);
+  for (AgentId id = 1; id <= 6; ++id) {
+    if (id == 2) continue;
     EXPECT_GT(swarm.agent(id)->transport_counters().dropped, 10u) << "agent " << id;
   }
 }
