@@ -165,9 +165,10 @@ ResilienceCheck resilience_of(const RunConfig& rc, const InitialGraph& g) {
 std::string describe(const ResilienceCheck& c, const RunConfig& rc) {
   std::ostringstream o;
   const int f = c.f;
-  o << "W-MSR tolerates " << f << " lying neighbour(s) if every agent has at least " << 2 * f + 1
-    << " neighbours and the graph is (" << f + 1 << ", " << f + 1 << ")-robust:\n  degree "
-    << c.min_degree << (c.degree_ok ? " (enough)" : " (TOO FEW)") << ", robustness ";
+  o << rc.agent.law.law << " tolerates " << f << " lying neighbour(s) if every agent has at least "
+    << 2 * f + 1 << " neighbours and the graph is (" << f + 1 << ", " << f + 1
+    << ")-robust:\n  degree " << c.min_degree << (c.degree_ok ? " (enough)" : " (TOO FEW)")
+    << ", robustness ";
   if (!c.robust) {
     o << "not decided (more than " << kMaxExactRobustness << " agents)";
   } else {

@@ -333,8 +333,9 @@ void Recorder::judge_resilience(records::GraphSnapshot& g, const std::vector<Age
     char buf[160];
     if (short_now) {
       if (r.first_degree_short_s() < 0.0) r.set_first_degree_short_s(t_s_);
-      std::snprintf(buf, sizeof buf, "an agent reads %u neighbour%s; W-MSR with F = %d needs %d",
-                    g.min_degree(), g.min_degree() == 1 ? "" : "s", f, 2 * f + 1);
+      std::snprintf(buf, sizeof buf, "an agent reads %u neighbour%s; %s with F = %d needs %d",
+                    g.min_degree(), g.min_degree() == 1 ? "" : "s", rc_.agent.law.law.c_str(), f,
+                    2 * f + 1);
     } else {
       std::snprintf(buf, sizeof buf, "every agent reads at least %d neighbours again", 2 * f + 1);
     }
@@ -382,8 +383,8 @@ std::string Recorder::outliers_text() const {
   std::string ids;
   for (const AgentId id : judge_.outliers()) ids += (ids.empty() ? "" : ", ") + std::to_string(id);
   std::string text = "agreed except agent" +
-                     std::string(judge_.outliers().size() > 1 ? "s " : " ") + ids +
-                     " (a liar W-MSR ignored, or an agent cut off)";
+                     std::string(judge_.outliers().size() > 1 ? "s " : " ") + ids + " (a liar " +
+                     rc_.agent.law.law + " ignored, or an agent cut off)";
   if (judge_.agreed_elsewhere_m() >= 0.0) {
     char buf[120];
     std::snprintf(buf, sizeof buf, ", %.3g m outside the others' initial bounding box",

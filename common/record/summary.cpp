@@ -303,12 +303,13 @@ std::string summary_text(const records::Summary& s, const RunConfig& rc, const s
   if (s.outlier_agents_size() > 0) {
     h << "OUTLIERS: the others agreed, but not agent(s)";
     for (const auto id : s.outlier_agents()) h << " " << id;
-    h << " (a liar W-MSR ignored, or an agent cut off: the record cannot tell which)\n";
+    h << " (a liar " << rc.agent.law.law
+      << " ignored, or an agent cut off: the record cannot tell which)\n";
   }
   if (s.has_resilience()) {
     const records::ResilienceOverTime& r = s.resilience();
-    h << "W-MSR, F = " << r.f() << ": fewest neighbours " << r.min_degree() << " (needs "
-      << 2 * r.f() + 1 << ")";
+    h << rc.agent.law.law << ", F = " << r.f() << ": fewest neighbours " << r.min_degree()
+      << " (needs " << 2 * r.f() + 1 << ")";
     if (r.degree_short_s() > 0.0) h << ", short for " << fmt("%.2f", r.degree_short_s()) << " s";
     if (r.has_robust_always())
       h << ", (" << r.f() + 1 << ", " << r.f() + 1 << ")-robust "

@@ -62,7 +62,7 @@ TEST(Insider, WmsrKeepsTheHonestAgentsInTheirBoxAndTheRecordNamesWhoStayedAway) 
     EXPECT_LT(disagreement(h.q), 1e-6);
     EXPECT_LT(outside_box_m(h.q, h.q0), 1e-9);
     // and the record says the others agreed without agent 7, which is no convergence
-    EXPECT_EQ(reason, "agreed except agent 7 (a liar W-MSR ignored, or an agent cut off)");
+    EXPECT_EQ(reason, "agreed except agent 7 (a liar w-msr ignored, or an agent cut off)");
     EXPECT_EQ(swarm.supervisor()->exit_code(), 1);
     const records::Summary s = summary_of(dir);
     EXPECT_FALSE(s.converged());
@@ -181,7 +181,7 @@ TEST(ResilienceOverTime, ACrashThatLeavesTooFewNeighboursIsInTheRecordWhenItHapp
   ASSERT_EQ(count_kind(ev, "resilience_lost"), 1);
   for (const auto& [kind, detail] : ev) {
     if (kind != "resilience_lost") continue;
-    EXPECT_NE(detail.find("an agent reads 2 neighbours; W-MSR with F = 1 needs 3"),
+    EXPECT_NE(detail.find("an agent reads 2 neighbours; w-msr with F = 1 needs 3"),
               std::string::npos)
         << detail;
   }
