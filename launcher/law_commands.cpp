@@ -92,7 +92,10 @@ Command add_check_law_command(CLI::App& app) {
         std::cerr << "swarm check-law: --param '" << p << "': expected NAME=NUMBER\n";
         return 2;
       }
-      k.params[kv->first] = kv->second;
+      if (!k.params.emplace(kv->first, kv->second).second) {
+        std::cerr << "swarm check-law: --param '" << kv->first << "' given twice\n";
+        return 2;
+      }
     }
     try {
       resolve_law_params(*spec, k.params, "--param");
@@ -107,6 +110,10 @@ Command add_check_law_command(CLI::App& app) {
     } catch (const ScenarioError& e) {
       std::cerr << "swarm check-law: " << e.what() << "\n";
       return 2;
+    } catch (const std::exception& e) {
+      // Not the user's input: the law (or its LawSpec) is wrong.
+      std::cerr << "swarm check-law: the law failed before its flights: " << e.what() << "\n";
+      return 1;
     }
   };
 }

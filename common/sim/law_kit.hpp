@@ -35,6 +35,9 @@ struct KitOptions {
   std::filesystem::path scenarios = "scenarios";
   // Its parameters (unnamed ones: the law's defaults), as a scenario's law_params.
   std::map<std::string, double> params;
+  // Off: the separation flight without collision avoidance, the control that shows the flight
+  // can find a violation (claimed then by no law).
+  bool avoidance = true;
 };
 
 // Flies `spec`'s law (built by the registered law of its name; its claims are the spec's, so a

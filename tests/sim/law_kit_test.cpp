@@ -54,8 +54,41 @@ TEST(LawKit, ALawClaimingTheExactAverageItLosesUnderLossFailsItsKit) {
 TEST(LawKit, WmsrKeepsTheHonestAgentsInTheirBoxAgainstEachLiar) {
   const KitReport r = check_law(find_law("w-msr"), repository());
   EXPECT_TRUE(r.passed()) << r.table();
-  for (const char* attack : {"one liar, constant", "one liar, drift", "one liar, split"})
+  for (const char* attack : {"1 liar, constant", "1 liar, drift", "1 liar, split"})
     EXPECT_TRUE(row(r, "honest hull", attack).kept) << row(r, "honest hull", attack).measured;
+}
+
+TEST(LawKit, TheHonestHullIsFlownAgainstTheLawsFLiarsAndClaimedOnlyWhereItHolds) {
+  KitOptions o = repository();
+  o.params["f"] = 2;  // K7 is (3, 3)-robust: two liars, agents 7 and 6
+  KitReport r = check_law(find_law("w-msr"), o);
+  EXPECT_TRUE(r.passed()) << r.table();
+  EXPECT_TRUE(row(r, "honest hull", "2 liars, drift").claimed);
+  EXPECT_TRUE(row(r, "honest hull", "2 liars, drift").kept) << r.table();
+  o.params["f"] = 0;  // trims nothing: it follows the one liar, and claims nothing against it
+  r = check_law(find_law("w-msr"), o);
+  EXPECT_TRUE(r.passed()) << r.table();
+  EXPECT_FALSE(row(r, "honest hull", "1 liar, constant").claimed);
+  EXPECT_FALSE(row(r, "honest hull", "1 liar, constant").kept);
+  o.params["f"] = 4;  // K7 is not (5, 5)-robust: the claim does not apply
+  r = check_law(find_law("w-msr"), o);
+  EXPECT_FALSE(row(r, "honest hull", "4 liars, split").claimed);
+  EXPECT_NE(row(r, "honest hull", "4 liars, split").measured.find("not robust enough"),
+            std::string::npos);
+}
+
+TEST(LawKit, TheSeparationFlightFindsViolationsWithAvoidanceOff) {
+  // The control: the same flight without avoidance brings the quadcopters closer than 1 m.
+  KitOptions o = repository();
+  o.avoidance = false;
+  const KitReport r = check_law(find_law("edge-flow"), o);
+  const KitRow& s = row(r, "separation", "paper, unweighted, quadcopters, avoidance off");
+  EXPECT_FALSE(s.claimed);
+  EXPECT_FALSE(s.kept) << s.measured;
+  EXPECT_EQ(s.measured.find(" 0 violations"), std::string::npos) << s.measured;
+  EXPECT_TRUE(row(check_law(find_law("edge-flow"), repository()), "separation",
+                  "paper, unweighted, quadcopters, avoidance on")
+                  .kept);
 }
 
 TEST(LawKit, ParametersAreTheLawsOwnAndChecked) {
