@@ -11,19 +11,10 @@
 #include "common/core/topology.hpp"
 #include "common/core/tracking_controller.hpp"
 #include "common/core/update_law.hpp"
+#include "tests/support/error_of.hpp"
 
 namespace qswarm {
 namespace {
-
-template <typename F>
-std::string error_of(F&& f) {
-  try {
-    f();
-  } catch (const std::invalid_argument& e) {
-    return e.what();
-  }
-  return "";
-}
 
 TEST(Validation, AirframeRefusesBadParametersNamingTheField) {
   EXPECT_EQ(error_of([] { Airframe::paper().validate(); }), "");

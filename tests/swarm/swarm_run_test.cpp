@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
+#include <functional>
 #include <map>
 #include <set>
 #include <sstream>
@@ -531,57 +532,72 @@ TEST(SwarmRun, MalformedScenariosExit2NamingTheProblem) {
       << both.output;
 }
 
-TEST(SwarmRun, BadSamplesFromATestParticipantAreDroppedByEveryAgentAndChangeNothing) {
-  const auto dir = fresh_dir("bad-samples");
-  Child launcher({bin("swarm"), "run", scenario("paper/unweighted"), "--out", dir.string(),
-                  "--domain", test_domain().str(), "--time-scale", "1", "--quiet"},
-                 dir.parent_path() / "bad-samples.log");
-  // The saboteur is inside the run: it knows the run's id (its DDS partition) from the record.
-  ASSERT_TRUE(wait_for([&] { return std::filesystem::exists(dir / "processes.csv"); }, 30.0));
+// `swarm run` of the paper's unweighted scenario (with `extra` flags) into `dir` beside a saboteur
+// inside the run: a participant on its partition, which knows the run's id from the record.
+// `round(saboteur, run_id)` publishes every 50 ms while the run flies. Returns the launcher's
+// result and the rounds published.
+std::pair<Result, int> fly_beside_saboteur(
+    const std::filesystem::path& dir, const std::vector<std::string>& extra,
+    const std::function<void(DdsBus&, std::uint64_t)>& round) {
+  std::vector<std::string> argv = {
+      bin("swarm"), "run",      scenario("paper/unweighted"), "--out",
+      dir.string(), "--domain", test_domain().str(),          "--time-scale",
+      "1",          "--quiet"};
+  argv.insert(argv.end(), extra.begin(), extra.end());
+  Child launcher(argv, dir.parent_path() / (dir.filename().string() + ".log"));
+  EXPECT_TRUE(wait_for([&] { return std::filesystem::exists(dir / "processes.csv"); }, 30.0));
   const std::uint64_t run_id = load_scenario((dir / "scenario.txtpb").string()).transport.run_id;
-  ASSERT_NE(run_id, 0u);
+  EXPECT_NE(run_id, 0u);
   DdsOptions opt;
   opt.participant.domain_id = static_cast<std::uint32_t>(test_domain().domain());
   opt.participant.name = "test-saboteur";
   opt.state.run_id = run_id;
   DdsBus saboteur(opt);
+  int rounds = 0;
+  while (launcher.running()) {
+    round(saboteur, run_id);
+    ++rounds;
+    wait_for([&] { return !launcher.running(); }, 0.05);
+  }
+  return {launcher.wait(10.0), rounds};
+}
+
+TEST(SwarmRun, BadSamplesFromATestParticipantAreDroppedByEveryAgentAndChangeNothing) {
+  const auto dir = fresh_dir("bad-samples");
   // It publishes where the agents listen: a swarm of four hears the whole run's partition.
   std::uint64_t seq = 1u << 30;
   std::int64_t life =
       system_clock().wall_ns() + 1'000'000'000'000LL;  // "newer" than any agent's incarnation
-  int published = 0;
-  while (launcher.running()) {
-    StateMessage nan_msg;  // a stranger with NaN consensus
-    nan_msg.view.id = 99;
-    nan_msg.view.q = Vec3(std::nan(""), 0, 0);
-    nan_msg.phase = Phase::kRunning;
-    nan_msg.seq = ++seq;
-    nan_msg.incarnation = life;
-    nan_msg.run_id = run_id;
-    saboteur.publish(nan_msg);
-    StateMessage absurd;  // impersonates agent 2 with an absurd position and flow
-    absurd.view.id = 2;
-    absurd.view.q = Vec3(1e12, 0, 0);
-    absurd.view.flows.push_back({3, Vec3(0, 1e300 * 10, 0), 1.0, true});
-    absurd.phase = Phase::kRunning;
-    absurd.seq = ++seq;
-    absurd.incarnation = life;
-    absurd.run_id = run_id;
-    saboteur.publish(absurd);
-    StateMessage stranger;  // well-formed, but not an agent of the scenario
-    stranger.view.id = 77;
-    stranger.view.q = Vec3(100, 100, 100);
-    stranger.p_W = stranger.view.q;
-    stranger.phase = Phase::kRunning;
-    stranger.seq = ++seq;
-    stranger.incarnation =
-        system_clock().wall_ns();  // plausible: a far-future one is refused as such
-    stranger.run_id = run_id;
-    saboteur.publish(stranger);
-    ++published;
-    wait_for([&] { return !launcher.running(); }, 0.05);
-  }
-  const Result r = launcher.wait(10.0);
+  const auto [r, published] =
+      fly_beside_saboteur(dir, {}, [&](DdsBus& saboteur, std::uint64_t run_id) {
+        StateMessage nan_msg;  // a stranger with NaN consensus
+        nan_msg.view.id = 99;
+        nan_msg.view.q = Vec3(std::nan(""), 0, 0);
+        nan_msg.phase = Phase::kRunning;
+        nan_msg.seq = ++seq;
+        nan_msg.incarnation = life;
+        nan_msg.run_id = run_id;
+        saboteur.publish(nan_msg);
+        StateMessage absurd;  // impersonates agent 2 with an absurd position and flow
+        absurd.view.id = 2;
+        absurd.view.q = Vec3(1e12, 0, 0);
+        absurd.view.flows.push_back({3, Vec3(0, 1e300 * 10, 0), 1.0, true});
+        absurd.phase = Phase::kRunning;
+        absurd.seq = ++seq;
+        absurd.incarnation = life;
+        absurd.run_id = run_id;
+        saboteur.publish(absurd);
+        StateMessage stranger;  // well-formed, but not an agent of the scenario
+        stranger.view.id = 77;
+        stranger.view.q = Vec3(100, 100, 100);
+        stranger.p_W = stranger.view.q;
+        stranger.phase = Phase::kRunning;
+        stranger.seq = ++seq;
+        stranger.incarnation =
+            system_clock().wall_ns();  // plausible: a far-future one is refused as such
+        stranger.run_id = run_id;
+        saboteur.publish(stranger);
+      });
   ASSERT_EQ(r.code, 0) << r.output;
   ASSERT_GT(published, 10);
   const records::Summary s = read_summary(dir);
@@ -608,40 +624,27 @@ TEST(SwarmRun, BadSamplesFromATestParticipantAreDroppedByEveryAgentAndChangeNoth
 }
 
 TEST(SwarmRun, AUsersLawFliesAgentProcessesAndSamplesNotOfItNeverReachIt) {
-  // The example law written only through the law seam, by name, in four agent processes
+  // The example law written only through the law seam, by name, in four agent processes,
   const auto dir = fresh_dir("metropolis");
-  Child launcher({bin("swarm"), "run", scenario("paper/unweighted"), "--law", "metropolis", "--out",
-                  dir.string(), "--domain", test_domain().str(), "--time-scale", "1", "--quiet"},
-                 dir.parent_path() / "metropolis.log");
-  ASSERT_TRUE(wait_for([&] { return std::filesystem::exists(dir / "processes.csv"); }, 30.0));
-  const std::uint64_t run_id = load_scenario((dir / "scenario.txtpb").string()).transport.run_id;
-  DdsOptions opt;
-  opt.participant.domain_id = static_cast<std::uint32_t>(test_domain().domain());
-  opt.participant.name = "test-saboteur";
-  opt.state.run_id = run_id;
-  DdsBus saboteur(opt);
   // while an insider of the run sends samples of agents 2, 3 and 4 that are well formed but for
   // another law, or carry a longer payload than metropolis's, or a NaN in it
   std::uint64_t seq = 1u << 30;
-  int published = 0;
-  while (launcher.running()) {
-    for (const AgentId id : {2u, 3u, 4u}) {
-      StateMessage m;
-      m.view.id = id;
-      m.view.q = Vec3(500, 500, 500);
-      m.view.law = law_tag(id == 2 ? "edge-flow" : "metropolis");
-      m.view.payload = id == 3 ? std::vector<double>{1.0, 1.0} : std::vector<double>{1.0};
-      if (id == 4) m.view.payload = {std::nan("")};
-      m.phase = Phase::kRunning;
-      m.seq = ++seq;
-      m.incarnation = system_clock().wall_ns();
-      m.run_id = run_id;
-      saboteur.publish(m);
-    }
-    ++published;
-    wait_for([&] { return !launcher.running(); }, 0.05);
-  }
-  const Result r = launcher.wait(10.0);
+  const auto [r, published] = fly_beside_saboteur(
+      dir, {"--law", "metropolis"}, [&](DdsBus& saboteur, std::uint64_t run_id) {
+        for (const AgentId id : {2u, 3u, 4u}) {
+          StateMessage m;
+          m.view.id = id;
+          m.view.q = Vec3(500, 500, 500);
+          m.view.law = law_tag(id == 2 ? "edge-flow" : "metropolis");
+          m.view.payload = id == 3 ? std::vector<double>{1.0, 1.0} : std::vector<double>{1.0};
+          if (id == 4) m.view.payload = {std::nan("")};
+          m.phase = Phase::kRunning;
+          m.seq = ++seq;
+          m.incarnation = system_clock().wall_ns();
+          m.run_id = run_id;
+          saboteur.publish(m);
+        }
+      });
   ASSERT_EQ(r.code, 0) << r.output;
   ASSERT_GT(published, 5);
   // then the swarm agreed, the record says which law flew, and agent 1 named each refusal once
