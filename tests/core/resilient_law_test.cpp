@@ -138,7 +138,7 @@ std::vector<Attack> attacks() {
 }
 
 // One insider (agent 7) of a 7-agent complete graph lies for 120 s; the honest six run `law`.
-LockstepLaws attacked(std::string law, const Liar& liar) {
+LockstepLaws attacked(const std::string& law, const Liar& liar) {
   LockstepConfig cfg;
   cfg.agents = LockstepLaws::random_agents(7, 5, 20.0);
   cfg.law = wmsr(1);
@@ -162,9 +162,9 @@ TEST(WmsrLaw, OneLiarOnSevenCannotDragTheHonestOutOfTheirInitialRange) {
 TEST(WmsrLaw, TheSameLiarDragsTheLawsThatTrustEveryone) {
   // Side by side: the laws that take every neighbour's value as given follow the liar out of the
   // honest range (drift: 0.5 m/s for 120 s, far beyond the 20 m box).
-  for (const std::string law : {std::string("laplacian"), std::string("edge-flow")}) {
+  for (const char* law : {"laplacian", "edge-flow"}) {
     for (const Attack& a : attacks()) {
-      SCOPED_TRACE(law + " / " + a.name);
+      SCOPED_TRACE(std::string(law) + " / " + a.name);
       const LockstepLaws s = attacked(law, a.liar);
       EXPECT_FALSE(inside_honest_box(s, 1.0));
     }
