@@ -775,10 +775,20 @@ TEST(SwarmRun, AnAgentStoppedWhenTheLauncherIsKilledStillStopsCleanlyAndLeavesNo
   for (unsigned id = 1; id <= 6; ++id) pids.push_back(pid_of(dir, "agent", id));
   const pid_t stopped = pid_of(dir, "agent", 2);
   ASSERT_EQ(::kill(stopped, SIGSTOP), 0);
+  // Stopped means every thread stopped: the kernel sends an orphaned group SIGHUP and SIGCONT only
+  // if its stop is complete when the launcher dies, and a thread at nice 15 on a busy host can
+  // take its time to stop after the main thread shows T (then the agent stayed stopped forever).
   ASSERT_TRUE(wait_for(
       [&] {
-        return read_file("/proc/" + std::to_string(stopped) + "/stat").find(") T ") !=
-               std::string::npos;
+        const std::string proc = "/proc/" + std::to_string(stopped) + "/task";
+        std::error_code ec;
+        int threads = 0;
+        for (auto t = std::filesystem::directory_iterator(proc, ec);
+             !ec && t != std::filesystem::directory_iterator(); t.increment(ec)) {
+          if (read_file(t->path() / "stat").find(") T ") == std::string::npos) return false;
+          ++threads;
+        }
+        return !ec && threads > 0;
       },
       10.0));
   launcher.signal(SIGKILL);
