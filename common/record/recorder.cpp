@@ -24,19 +24,20 @@ std::vector<AgentId> ids_of(const RunConfig& rc) {
 
 Recorder::Recorder(RunConfig rc, RunDir dir, double time_scale)
     : rc_(std::move(rc)),
+      hull_f_(honest_hull_f(rc_.agent.law)),
       dir_(std::move(dir)),
       time_scale_(time_scale),
       sinks_(dir_, SceneSettings::of(rc_)),
       presence_(ids_of(rc_), rc_.plan.presence_timeout_s, rc_.plan.record_every),
       judge_(rc_.judge.tolerance_m, rc_.judge.hold_s, rc_.agent.neighbor_timeout_s,
              find_law(rc_.agent.law.law).claims.exact_average ? rc_.judge.tolerance_m : -1.0,
-             rc_.faults, std::max(0, honest_hull_f(rc_.agent.law))),
+             rc_.faults, std::max(0, hull_f_)),
       separation_(rc_.agent.avoidance.safe_distance_m),
       timeline_(rc_.faults.timeline()) {
   tally_.held = rc_.held_agents();
-  if (honest_hull_f(rc_.agent.law) >= 0) {
+  if (hull_f_ >= 0) {
     records::ResilienceOverTime r;
-    r.set_f(static_cast<std::uint32_t>(honest_hull_f(rc_.agent.law)));
+    r.set_f(static_cast<std::uint32_t>(hull_f_));
     r.set_min_degree(static_cast<std::uint32_t>(rc_.agents.size()));
     r.set_first_degree_short_s(-1.0);
     r.set_first_not_robust_s(-1.0);
@@ -259,8 +260,7 @@ void Recorder::snapshot() {
   std::vector<AgentId> ids;
   Positions q, p, offsets;
   std::vector<double> speed;
-  const int hull_f = honest_hull_f(rc_.agent.law);
-  WmsrMeasure wmsr{std::max(0, hull_f), rc_.judge.tolerance_m, {}};
+  WmsrMeasure wmsr{std::max(0, hull_f_), rc_.judge.tolerance_m, {}};
   for (const auto& [id, a] : presence_.tracks()) {
     if (presence_.running(id)) {
       ids.push_back(id);
@@ -286,7 +286,7 @@ void Recorder::snapshot() {
   last_ = measure_graph(
       t_s_, ids, q, p,
       [&](int i) -> const auto& { return presence_.track(ids[static_cast<size_t>(i)]).last.links; },
-      rc_.initial_average(), offsets, held, hull_f >= 0 ? &wmsr : nullptr, &spectrum_);
+      rc_.initial_average(), offsets, held, hull_f_ >= 0 ? &wmsr : nullptr, &spectrum_);
   last_->set_held_speed_mps(held_speed);
   // Judged once the whole swarm has started: a swarm still starting lacks links it will have.
   if (tally_.resilience && first_full_) judge_resilience(*last_, ids);
@@ -322,7 +322,7 @@ std::string Recorder::missing_text() const {
 
 void Recorder::judge_resilience(records::GraphSnapshot& g, const std::vector<AgentId>& ids) {
   records::ResilienceOverTime& r = *tally_.resilience;
-  const int f = honest_hull_f(rc_.agent.law);
+  const int f = hull_f_;
   // Each condition is timed from one snapshot to the next, in the state it was in.
   const double dt = resilience_t_s_ < 0.0 ? 0.0 : t_s_ - resilience_t_s_;
   resilience_t_s_ = t_s_;
@@ -400,12 +400,11 @@ std::string Recorder::elsewhere_text() const {
                 "agreed %.3g m from the initial average, which %s keeps: forged states or "
                 "flows?",
                 judge_.agreed_elsewhere_m(), rc_.agent.law.law.c_str());
-  if (honest_hull_f(rc_.agent.law) >= 0)
+  if (hull_f_ >= 0)
     std::snprintf(buf, sizeof buf,
                   "agreed %.3g m outside the agents' initial bounding box, which %s keeps: more "
                   "than F = %d liars, or too few links?",
-                  judge_.agreed_elsewhere_m(), rc_.agent.law.law.c_str(),
-                  honest_hull_f(rc_.agent.law));
+                  judge_.agreed_elsewhere_m(), rc_.agent.law.law.c_str(), hull_f_);
   return buf;
 }
 

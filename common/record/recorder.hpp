@@ -89,6 +89,8 @@ class Recorder {
   Vec3 offset_of(AgentId id) const;
 
   RunConfig rc_;
+  // The F the run's law claims to keep honest agents in their box against (-1: no such claim).
+  int hull_f_;
   RunDir dir_;
   double time_scale_;
   RecordSinks sinks_;

@@ -313,12 +313,13 @@ void resolve_law(const scenario::Scenario& s, RunConfig& rc) {
   LawConfig& law = rc.agent.law;
   if (!s.law_name().empty() && s.law() != scenario::LAW_UNSPECIFIED)
     fail("law_name", "either law or law_name", "both");
-  std::string name;
+  const LawSpec* spec = nullptr;
   try {
-    name = find_law(law_named(s)).name;
+    spec = &find_law(law_named(s));
   } catch (const std::invalid_argument&) {
     fail("law_name", "one of " + law_names(), "'" + s.law_name() + "'");
   }
+  const std::string& name = spec->name;
   law.law = name;
   std::map<std::string, double> given(s.law_params().begin(), s.law_params().end());
   if (s.has_wmsr_f()) {
@@ -327,7 +328,7 @@ void resolve_law(const scenario::Scenario& s, RunConfig& rc) {
     given["f"] = s.wmsr_f();
   }
   try {
-    law.params = resolve_law_params(find_law(name), given);
+    law.params = resolve_law_params(*spec, given);
   } catch (const std::invalid_argument& e) {
     throw ScenarioError(std::string("scenario ") + e.what());
   }
