@@ -27,6 +27,7 @@ Command add_deploy_command(CLI::App& app);      // deploy_command.cpp: `swarm de
 Command add_calibrate_command(CLI::App& app);   // calibrate_command.cpp: `swarm calibrate`
 Command add_laws_command(CLI::App& app);        // law_commands.cpp: `swarm laws`
 Command add_check_law_command(CLI::App& app);   // ... `swarm check-law`
+Command add_plants_command(CLI::App& app);      // ... `swarm plants`
 
 // Where this executable is, with swarm-agent, swarm-supervisor and the Python package beside it.
 std::filesystem::path bin_dir();

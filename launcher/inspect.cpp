@@ -76,6 +76,9 @@ std::string as_text(const RunConfig& rc, const InitialGraph& g, double tau) {
     << " law";
   for (const auto& [name, value] : rc.agent.law.params) o << ", " << name << " " << value;
   o << ", gain " << rc.agent.law.gain << "\n";
+  o << "plant " << rc.agent.plant_spec().name;
+  for (const auto& [name, value] : rc.agent.plant.params) o << ", " << name << " " << value;
+  o << ": " << rc.agent.plant_spec().summary << "\n";
   o << "initial edges (" << g.edges.size() << "):";
   for (const Edge& e : g.edges)
     o << " " << rc.agents[e.i].id << "-" << rc.agents[e.j].id << " (w=" << e.weight << ")";
@@ -109,10 +112,10 @@ std::string as_text(const RunConfig& rc, const InitialGraph& g, double tau) {
         << " agents have slots closer than that to another's: they end in a cluster about "
            "their slots, not on them\n";
     }
-  } else if (rc.agent.mode == AgentMode::kQuadcopter) {
-    o << "collision avoidance off: nothing keeps the quadcopters apart (the record counts "
-         "approaches closer than "
-      << rc.agent.avoidance.safe_distance_m << " m)\n";
+  } else if (rc.agent.plant_spec().follows_reference) {
+    o << "collision avoidance off: nothing keeps the " << rc.agent.plant_spec().name
+      << "s apart (the record counts approaches closer than " << rc.agent.avoidance.safe_distance_m
+      << " m)\n";
   }
   o << describe_plan(rc.plan) << describe_load(predict_load_here(rc, rc.plan.hosts.time_scale));
   if (rc.has_formation()) {

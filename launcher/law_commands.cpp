@@ -1,5 +1,6 @@
-// `swarm laws` (the registered agreement laws, their parameters and claims) and `swarm check-law
-// NAME` (the conformance kit: common/sim/law_kit.hpp).
+// `swarm laws` (the registered agreement laws, their parameters and claims), `swarm plants` (the
+// registered plants and their parameters) and `swarm check-law NAME` (the conformance kit:
+// common/sim/law_kit.hpp).
 #include <CLI/CLI.hpp>
 
 #include <iostream>
@@ -7,6 +8,7 @@
 #include <string>
 
 #include "common/core/law_registry.hpp"
+#include "common/core/plant.hpp"
 #include "common/scenario/scenario.hpp"
 #include "common/sim/law_kit.hpp"
 #include "launcher/commands.hpp"
@@ -26,13 +28,29 @@ std::string claims_text(const LawClaims& c) {
   return out.empty() ? "none" : out;
 }
 
+void print_params(const std::vector<SeamParam>& params, const char* field) {
+  for (const SeamParam& p : params) {
+    std::cout << "  " << field << " \"" << p.name << "\": " << p.doc << " (" << p.min << " to "
+              << p.max << (p.integer ? ", whole" : "") << ", default " << p.fallback << ")\n";
+  }
+}
+
 int list_laws() {
   for (const LawSpec& s : registered_laws()) {
     std::cout << s.name << ": " << s.summary << "\n  claims: " << claims_text(s.claims) << "\n";
-    for (const LawParam& p : s.params) {
-      std::cout << "  law_params \"" << p.name << "\": " << p.doc << " (" << p.min << " to "
-                << p.max << (p.integer ? ", whole" : "") << ", default " << p.fallback << ")\n";
-    }
+    print_params(s.params, "law_params");
+  }
+  return 0;
+}
+
+int list_plants() {
+  for (const PlantSpec& s : registered_plants()) {
+    std::cout << s.name << ": " << s.summary << "\n  "
+              << (s.follows_reference ? "follows the reference, collision avoidance on by default"
+                                      : "is where its law puts it, no collision avoidance");
+    if (s.min_physics_hz > 0.0) std::cout << ", rates.physics_hz >= " << s.min_physics_hz;
+    std::cout << "\n";
+    print_params(s.params, "plant_params");
   }
   return 0;
 }
@@ -59,6 +77,14 @@ Command add_laws_command(CLI::App& app) {
   return [cmd]() -> std::optional<int> {
     if (!*cmd) return std::nullopt;
     return list_laws();
+  };
+}
+
+Command add_plants_command(CLI::App& app) {
+  CLI::App* cmd = app.add_subcommand("plants", "the vehicles (plants) a scenario may fly");
+  return [cmd]() -> std::optional<int> {
+    if (!*cmd) return std::nullopt;
+    return list_plants();
   };
 }
 

@@ -26,7 +26,8 @@ int main(int argc, char** argv) {
       add_run_command(app),       add_view_command(app),       add_inspect_command(app),
       add_keys_command(app),      add_plot_command(app),       add_export_command(app),
       add_paper_command(app),     add_resilience_command(app), add_deploy_command(app),
-      add_calibrate_command(app), add_laws_command(app),       add_check_law_command(app)};
+      add_calibrate_command(app), add_laws_command(app),       add_check_law_command(app),
+      add_plants_command(app)};
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

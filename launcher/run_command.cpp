@@ -56,7 +56,7 @@ struct RunOptions {
   bool stop_on_agent_exit = false;
   std::vector<unsigned> ignore_sigterm;  // (tests) agents started with --ignore-sigterm
   // Fault shortcuts (added to the scenario's fault plan).
-  std::string law;
+  std::string law, plant;
   std::string secure;  // --secure KEYSTORE
   double loss = -1.0;
   std::vector<std::string> cuts, partitions, kills;
@@ -78,6 +78,7 @@ RunConfig resolve_run(const RunOptions& opt) {
   o.duration_s = opt.duration;
   o.domain_id = opt.domain;
   o.law = opt.law;
+  o.plant = opt.plant;
   o.keystore = opt.secure;
   scenario::Scenario s =
       opt.scenario.empty() ? random_scenario() : read_scenario_file(opt.scenario);
@@ -305,6 +306,12 @@ Command add_run_command(CLI::App& app) {
       ->check(CLI::Validator(
           [](const std::string& v) { return v.empty() ? std::string("an empty law name") : ""; },
           "LAW"));
+  cmd->add_option("--plant", o->plant,
+                  "the vehicle, any `swarm plants` lists (overrides the scenario's and its "
+                  "parameters)")
+      ->check(CLI::Validator(
+          [](const std::string& v) { return v.empty() ? std::string("an empty plant name") : ""; },
+          "PLANT"));
   cmd->add_option("--loss", o->loss, "fault: drop each received message with this probability")
       ->check(finite_range(0.0, 1.0))
       ->allow_extra_args(false)

@@ -11,8 +11,8 @@ using AgentId = std::uint32_t;
 // (links, flows, copies) has at most kMaxSwarmAgents - 1 entries, and the wire carries them all.
 inline constexpr std::size_t kMaxSwarmAgents = 512;
 
-// What an agent flies: the paper's point (section 2: its position is its consensus state) or a
-// quadcopter tracking its consensus state (sections 3-4).
-enum class AgentMode : std::uint8_t { kParticle = 0, kQuadcopter = 1 };
+// What an agent's samples say of its pose (wire and record field `mode`): a position only, or also
+// an attitude and four rotor speeds (a plant with PlantSpec::oriented: the paper's quadcopter).
+enum class PoseKind : std::uint8_t { kPosition = 0, kOriented = 1 };
 
 }  // namespace qswarm

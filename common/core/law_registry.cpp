@@ -1,8 +1,7 @@
 #include "common/core/law_registry.hpp"
 
-#include <cmath>
+#include <algorithm>
 #include <set>
-#include <sstream>
 #include <stdexcept>
 
 namespace qswarm {
@@ -14,12 +13,6 @@ namespace laws {
 }  // namespace laws
 
 namespace {
-
-std::string number(double x) {
-  std::ostringstream o;
-  o << x;
-  return o.str();
-}
 
 // A law that breaks the seam's own rules is a programming error found at the first lookup, in
 // every test that flies a law, not a run that misbehaves later.
@@ -35,12 +28,10 @@ void check_spec(const LawSpec& s, std::set<std::string>& names, std::set<std::ui
   for (const std::string& n : s.aliases)
     if (!names.insert(n).second) bad("alias '" + n + "' is taken");
   if (s.payload_max > kMaxLawPayload) bad("payload_max beyond kMaxLawPayload");
-  std::set<std::string> params;
-  for (const LawParam& p : s.params) {
-    if (p.name.empty() || !params.insert(p.name).second) bad("a parameter without a unique name");
-    if (!(p.min <= p.fallback && p.fallback <= p.max)) bad(p.name + "'s fallback is out of range");
-  }
-  if (s.claims.honest_hull && !params.count("f")) bad("claims the honest hull without an \"f\"");
+  if (const std::string why = seam_params_problem(s.params); !why.empty()) bad(why);
+  if (s.claims.honest_hull && std::none_of(s.params.begin(), s.params.end(),
+                                           [](const LawParam& p) { return p.name == "f"; }))
+    bad("claims the honest hull without an \"f\"");
 }
 
 }  // namespace
@@ -74,41 +65,12 @@ const LawSpec& find_law(const std::string& name) {
   throw std::invalid_argument("update law '" + name + "': expected one of " + law_names());
 }
 
-std::uint32_t law_tag(const std::string& name) {
-  std::uint32_t h = 2166136261u;  // FNV-1a
-  for (const char c : name) {
-    h ^= static_cast<unsigned char>(c);
-    h *= 16777619u;
-  }
-  return h == 0 ? 1 : h;
-}
+std::uint32_t law_tag(const std::string& name) { return seam_tag(name); }
 
 std::map<std::string, double> resolve_law_params(const LawSpec& spec,
                                                  const std::map<std::string, double>& given,
                                                  const std::string& field) {
-  std::map<std::string, double> out;
-  for (const auto& [name, value] : given) {
-    std::string where = "field '";
-    where.append(field).append("[\"").append(name).append("\"]' of law ").append(spec.name);
-    const LawParam* p = nullptr;
-    for (const LawParam& q : spec.params)
-      if (q.name == name) p = &q;
-    if (p == nullptr) {
-      std::string known;
-      for (const LawParam& q : spec.params) known += (known.empty() ? "" : ", ") + q.name;
-      throw std::invalid_argument(where + ": no such parameter (it takes " +
-                                  (known.empty() ? std::string("none") : known) + ")");
-    }
-    if (!std::isfinite(value) || value < p->min || value > p->max ||
-        (p->integer && std::floor(value) != value)) {
-      throw std::invalid_argument(where + ": expected " + (p->integer ? "a whole number " : "") +
-                                  "in [" + number(p->min) + ", " + number(p->max) + "], got " +
-                                  number(value));
-    }
-    out[name] = value;
-  }
-  for (const LawParam& p : spec.params) out.emplace(p.name, p.fallback);
-  return out;
+  return resolve_seam_params(spec.params, given, field, "law " + spec.name);
 }
 
 int honest_hull_f(const LawConfig& cfg) {

@@ -8,20 +8,13 @@
 #include <string>
 #include <vector>
 
+#include "common/core/seam_params.hpp"
 #include "common/core/update_law.hpp"
 
 namespace qswarm {
 
-// One parameter a law takes: a scenario names it in `law_params`, validated against [min, max]
-// (and whole numbers where `integer`), `fallback` when unnamed.
-struct LawParam {
-  std::string name;
-  double min = 0.0;
-  double max = 0.0;
-  double fallback = 0.0;
-  bool integer = false;
-  std::string doc;  // one line: what it means, with its unit
-};
+// One parameter a law takes, named in a scenario's `law_params`.
+using LawParam = SeamParam;
 
 // The promises a law makes, which the record judges and `swarm check-law` flies it through. A law
 // claims only what holds on a graph the scenario's topology keeps connected.

@@ -124,7 +124,7 @@ void from_idl(const qswarm_msgs::AgentState& s, StateMessage& m) {
   m.wall_ns = s.wall_ns();
   m.incarnation = s.incarnation();
   m.run_id = s.run_id();
-  m.mode = static_cast<AgentMode>(s.mode());
+  m.mode = static_cast<PoseKind>(s.mode());
   m.phase = static_cast<Phase>(s.phase());
   m.view.q = vec(s.consensus());
   m.view.q0 = vec(s.initial());

@@ -209,7 +209,7 @@ bool RunDir::write_fallback_summary(const RunConfig& rc, const std::string& reas
   s.set_agents_expected(static_cast<std::uint32_t>(rc.agents.size()));
   s.set_secure(!rc.transport.keystore.empty());
   s.set_law(rc.agent.law.law);
-  s.set_mode(rc.agent.mode == AgentMode::kQuadcopter ? "quadcopter" : "particle");
+  s.set_mode(rc.agent.plant_spec().name);
   for (int k = 0; k < 3; ++k) s.add_initial_average(rc.initial_average()[k]);
   return write_summary(to_json(s));
 }

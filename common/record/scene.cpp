@@ -169,7 +169,7 @@ std::string scene_update_json(const std::vector<records::AgentSample>& agents,
     e.id = "agent/" + std::to_string(s.id());
     e.metadata = {{"id", std::to_string(s.id())}, {"seq", std::to_string(s.seq())}};
     e.spheres = sphere(p, kAgentDiameterM, kAgent);
-    if (s.mode() == static_cast<std::uint32_t>(AgentMode::kQuadcopter)) {
+    if (s.mode() == static_cast<std::uint32_t>(PoseKind::kOriented)) {
       JsonWriter a(e.arrows);
       a.raw("{\"pose\":");
       pose(a, p, orientation_of(s));

@@ -69,7 +69,7 @@ records::Summary build_summary(const RunConfig& rc, const Presence& presence,
   s.set_wall_time_s(end.wall_time_s);
   s.set_duration_s(end.t_s);
   s.set_seed(static_cast<std::uint32_t>(rc.seed));
-  s.set_mode(rc.agent.mode == AgentMode::kQuadcopter ? "quadcopter" : "particle");
+  s.set_mode(rc.agent.plant_spec().name);
   s.set_law(rc.agent.law.law);
   s.set_secure(!rc.transport.keystore.empty());
   s.set_agents_expected(static_cast<std::uint32_t>(rc.agents.size()));
@@ -230,7 +230,7 @@ std::string summary_text(const records::Summary& s, const RunConfig& rc, const s
       << " at t = " << fmt("%.2f", s.min_separation_t_s()) << " s)";
   }
   h << "\n";
-  if (rc.agent.mode == AgentMode::kQuadcopter || s.avoidance()) {
+  if (rc.agent.plant_spec().follows_reference || s.avoidance()) {
     h << "safe distance " << fmt("%g", s.safe_distance_m()) << " m, collision avoidance "
       << (s.avoidance() ? "on" : "off") << ": " << s.separation_violations()
       << (s.separation_violations() == 1 ? " violation" : " violations") << "\n";

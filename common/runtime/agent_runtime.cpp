@@ -3,14 +3,14 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
-
-#include "common/core/primitives.hpp"
+#include <string>
 
 namespace qswarm {
 AgentRuntime::AgentRuntime(AgentParams p, NeighborBus& bus)
     : p_(std::move(p)),
       bus_(bus),
       law_(make_law(p_.spec.id, p_.spec.position_W - p_.spec.offset_W, p_.config.law)),
+      plant_spec_(p_.config.plant_spec()),
       reference_(p_.spec.position_W, p_.config.reference_speed_mps,
                  p_.config.reference_accel_mps2) {
   if (!(p_.config.physics_hz > 0.0) || !(p_.config.consensus_hz > 0.0) ||
@@ -23,10 +23,11 @@ AgentRuntime::AgentRuntime(AgentParams p, NeighborBus& bus)
   if (p_.config.law.topology.policy == TopologyPolicy::kFixed) {
     listen_to_ = listed_peers(p_.config.law.topology, p_.spec.id);
   }
-  quad_.p_W = p_.spec.position_W;
-  quad_.R_WB = rotation_from_tait_bryan({0.0, 0.0, p_.spec.yaw_rad});
-  if (p_.config.mode == AgentMode::kQuadcopter) rotors_ = hover_rotors(p_.config.airframe);
   if (p_.config.avoidance.enabled) p_.config.avoidance.validate();
+  plant_ = make_plant(
+      p_.config.plant,
+      {p_.spec.id, p_.spec.position_W, p_.spec.yaw_rad, p_.config.airframe, p_.config.gains, {}});
+  plant_->aim(goal());
 }
 
 void AgentRuntime::set_start_time(double t_s) {
@@ -38,11 +39,6 @@ void AgentRuntime::join_running(double t_s) {
   set_start_time(t_s);
   p_.start.expected_peers = 0;
   p_.start.recover_flows = true;
-}
-
-Vec3 AgentRuntime::position() const {
-  return p_.config.mode == AgentMode::kQuadcopter ? quad_.p_W
-                                                  : Vec3(law_->state() + p_.spec.offset_W);
 }
 
 bool AgentRuntime::publish(Phase phase, bool record) {
@@ -61,12 +57,12 @@ bool AgentRuntime::publish(Phase phase, bool record) {
   }
   m.seq = ++seq_;
   m.stamp_s = time_s();
-  m.mode = p_.config.mode;
+  m.mode = plant_spec_.oriented ? PoseKind::kOriented : PoseKind::kPosition;
   m.phase = phase;
-  m.p_W = position();
-  m.v_W = p_.config.mode == AgentMode::kQuadcopter ? quad_.velocity_W() : Vec3::Zero();
-  m.q_WB = Eigen::Quaterniond(quad_.R_WB);
-  m.rotors_radps = rotors_;
+  m.p_W = plant_->position();
+  m.v_W = plant_->velocity();
+  m.q_WB = plant_->attitude();
+  m.rotors_radps = plant_->rotors();
   const auto add_links = [&] {
     for (const auto& [peer, w] : law_->links()) m.links.emplace_back(peer, w);
   };
@@ -170,20 +166,21 @@ void AgentRuntime::consensus_tick(std::vector<AgentEvent>& events) {
     }
     if (p_.start.recover_flows) law_->recover(views);
     law_->observe(views);
+    plant_->aim(goal());
     for (const auto& [peer, w] : law_->links()) initial_links_.emplace_back(peer, w);
     started_ = true;
     law_start_s_ = t;
   } else {
     law_->step(static_cast<double>(steps_per_tick_) / p_.config.physics_hz, views);
+    plant_->aim(goal());
   }
   publish(Phase::kRunning);
 }
 
 void AgentRuntime::physics(double dt) {
-  if (p_.config.mode != AgentMode::kQuadcopter) return;
-  // The consensus state is the goal; the reference moves toward it within speed and acceleration
-  // limits so that it stays flyable, and the controller tracks the reference.
-  const Vec3 goal = law_->state() + p_.spec.offset_W;  // its slot about its estimate of the centre
+  if (!plant_spec_.follows_reference) return;
+  // The reference moves toward the law's goal within speed and acceleration limits so that it
+  // stays flyable, and the plant's controller tracks it.
   obstacles_.clear();
   if (p_.config.avoidance.enabled) {
     // Every agent heard within the neighbour timeout, whatever the graph: a radio hears everyone
@@ -194,11 +191,15 @@ void AgentRuntime::physics(double dt) {
       obstacles_.push_back({peer, project_position(h.p_W, h.v_W, t - h.at_s)});
     }
   }
-  TrackingReference ref =
-      reference_.step(goal, dt, p_.spec.id, quad_.p_W, obstacles_, p_.config.avoidance);
-  ref.yaw_rad = p_.spec.yaw_rad;
-  rotors_ = track(p_.config.airframe, p_.config.gains, quad_, ref).allocation.omega_radps;
-  quad_ = rk4_step(p_.config.airframe, quad_, rotors_, dt);
+  plant_->step(
+      reference_.step(goal(), dt, p_.spec.id, plant_->position(), obstacles_, p_.config.avoidance),
+      dt);
+  // A plant that diverged would send samples every gate drops: the agent would fall silent with
+  // no word why. It ends here instead, naming its plant (the process exits 1).
+  if (!plant_->position().allFinite() || !plant_->velocity().allFinite())
+    throw std::runtime_error("plant " + plant_spec_.name + " of agent " +
+                             std::to_string(p_.spec.id) + ": its state is not finite at t = " +
+                             std::to_string(time_s()) + " s");
 }
 
 std::vector<AgentEvent> AgentRuntime::step() {

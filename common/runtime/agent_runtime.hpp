@@ -11,8 +11,7 @@
 #include "common/clock/clock.hpp"
 #include "common/core/airframe.hpp"
 #include "common/core/avoidance.hpp"
-#include "common/core/dynamics.hpp"
-#include "common/core/tracking_controller.hpp"
+#include "common/core/plant.hpp"
 #include "common/core/update_law.hpp"
 #include "common/runtime/link_faults.hpp"
 #include "common/scenario/run_config.hpp"
@@ -61,10 +60,10 @@ struct AgentEvent {
   double t_s;
 };
 
-// One agent: its quadcopter (or particle), its tracking controller and its agreement law, stepped
-// in simulated time. No I/O, and no clock but the one it reads the wall time its samples carry
-// from: AgentLoop paces it (in real time in swarm-agent, on a manual clock in the in-process
-// swarm).
+// One agent: its agreement law, its plant (common/plants/: the paper's point agent or quadcopter)
+// and, between them, the reference with collision avoidance, stepped in simulated time. No I/O, and
+// no clock but the one it reads the wall time its samples carry from: AgentLoop paces it (in real
+// time in swarm-agent, on a manual clock in the in-process swarm).
 class AgentRuntime {
  public:
   AgentRuntime(AgentParams p, NeighborBus& bus);
@@ -88,12 +87,13 @@ class AgentRuntime {
   double time_s() const {
     return p_.start.start_time_s + static_cast<double>(steps_) / p_.config.physics_hz;
   }
-  const QuadState& quad() const { return quad_; }
+  const Plant& plant() const { return *plant_; }
   Vec3 consensus() const { return law_->state(); }
   // Whether this agent heard a new sample of the peer since its last tick or the one before (the
   // view its law then gets is current: NeighborView::current).
   bool hears(AgentId peer) const;
-  Vec3 position() const;
+  Vec3 position() const { return plant_->position(); }
+  Vec3 velocity() const { return plant_->velocity(); }
   const UpdateLaw& law() const { return *law_; }
   const AgentParams& params() const { return p_; }
   std::uint64_t published() const { return seq_; }
@@ -130,6 +130,8 @@ class AgentRuntime {
   // The wall time a sample handed over now carries (0 without a clock).
   std::int64_t wall_now_ns() const { return wall_clock_ ? wall_clock_->wall_ns() : 0; }
   void physics(double dt);
+  // Its slot about its consensus estimate: where the law puts it.
+  Vec3 goal() const { return law_->state() + p_.spec.offset_W; }
 
   AgentParams p_;
   NeighborBus& bus_;
@@ -141,9 +143,9 @@ class AgentRuntime {
   bool published_running_ = false;
   bool started_ = false;
   double law_start_s_ = -1.0;
-  QuadState quad_;
-  RotorSpeeds rotors_ = RotorSpeeds::Zero();
-  ReferenceGenerator reference_;     // the rate-limited reference the quadcopter tracks
+  const PlantSpec& plant_spec_;
+  std::unique_ptr<Plant> plant_;
+  ReferenceGenerator reference_;     // the rate-limited reference the plant tracks
   std::vector<Obstacle> obstacles_;  // scratch, reused every physics step
   // The law's views of the neighbours, refilled at every consensus tick into the storage its
   // elements already have (a tick then allocates nothing once the lists have grown).

@@ -76,9 +76,9 @@ Neighbourhood::Neighbourhood(const RunConfig& rc, AgentId self) : self_(self) {
   if (t.policy == TopologyPolicy::kProximity || t.policy == TopologyPolicy::kStickyProximity)
     space('q', reach);
   double physical = t.policy == TopologyPolicy::kRange ? reach : 0.0;
-  // The avoidance filter acts on quadcopters within its distance; its reach here also covers a
+  // The avoidance filter acts on the plants within its distance; its reach here also covers a
   // second of closing at the reference's top speed.
-  if (rc.agent.avoidance.enabled && rc.agent.mode == AgentMode::kQuadcopter)
+  if (rc.agent.avoidance.enabled && rc.agent.plant_spec().follows_reference)
     physical = std::max(
         physical, rc.agent.avoidance.filter_distance_m() + 2.0 * rc.agent.reference_speed_mps);
   if (physical > 0.0) space('p', physical);

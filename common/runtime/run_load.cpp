@@ -145,9 +145,9 @@ plan::Load predict_load(const RunConfig& rc, double time_scale,
   const double quad = tick ? cal->tick_us_quadcopter() : cal->tick_us_quadcopter_threads();
   // A quadcopter's tick is a point agent's plus its physics steps, measured at
   // quadcopter_steps_per_tick: the steps' cost a second follows the physics rate, not the
-  // consensus rate.
+  // consensus rate. Any plant that is stepped is costed as the quadcopter (the one calibrated).
   const double step_us =
-      rc.agent.mode == AgentMode::kQuadcopter
+      rc.agent.plant_spec().follows_reference
           ? std::max(0.0, quad - particle) / static_cast<double>(cal->quadcopter_steps_per_tick())
           : 0.0;
   const double delivery_us = tick ? cal->delivery_us_tick() : cal->delivery_us_threads();

@@ -9,6 +9,7 @@
 #include "common/core/agent.hpp"
 #include "common/core/airframe.hpp"
 #include "common/core/avoidance.hpp"
+#include "common/core/plant.hpp"
 #include "common/core/tracking_controller.hpp"
 #include "common/core/update_law.hpp"
 #include "common/scenario/fault_plan.hpp"
@@ -30,7 +31,7 @@ struct AgentSpec {
 // field's default is written here once; the resolver keeps it when the scenario leaves the field
 // unset and writes it back into the scenario as run.
 struct AgentConfig {
-  AgentMode mode = AgentMode::kParticle;
+  PlantConfig plant;  // the vehicle (common/plants/): the paper's point agent by default
   LawConfig law;
   double physics_hz = 500.0;
   double consensus_hz = 50.0;
@@ -38,12 +39,14 @@ struct AgentConfig {
   TrackingGains gains;
   double reference_speed_mps = 3.0;   // how fast the tracked reference may move
   double reference_accel_mps2 = 2.0;  // and accelerate
-  // Collision avoidance (enabled: quadcopters filter their references) and the safe distance the
-  // record judges separation by, in every mode.
+  // Collision avoidance (enabled: a plant that follows a reference has it filtered) and the safe
+  // distance the record judges separation by, for every plant.
   AvoidanceConfig avoidance;
   double neighbor_timeout_s = 1.0;  // a neighbour silent this long (simulated) leaves the graph
   // Physics steps per consensus tick (the resolver refuses rates that do not divide).
   int steps_per_tick() const;
+  // The plant's registered spec (find_plant).
+  const PlantSpec& plant_spec() const { return find_plant(plant.name); }
 };
 
 // How the record judges the run.

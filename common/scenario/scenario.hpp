@@ -24,6 +24,7 @@ inline constexpr std::size_t kMaxScenarioBytes = 4u << 20;
 struct ScenarioOverrides {
   int agents = -1;         // --agents N: replace the agent list with N seeded random agents
   std::string law;         // --law: a registered law's name (swarm laws)
+  std::string plant;       // --plant: a registered plant's name (swarm plants)
   std::int64_t seed = -1;  // --seed S
   double duration_s = -1;  // --duration S
   int domain_id = -1;      // --domain D

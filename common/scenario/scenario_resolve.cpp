@@ -132,6 +132,31 @@ std::string law_named(const scenario::Scenario& s) {
                                         : "edge-flow";
 }
 
+// The plant a scenario names: `mode` names the two shipped plants as an enum (scenario files from
+// before the plant seam); any registered plant goes by `plant`.
+std::string plant_named(const scenario::Scenario& s) {
+  if (!s.plant().empty()) return s.plant();
+  return s.mode() == scenario::QUADCOPTER ? "quadcopter" : "particle";
+}
+
+void resolve_plant(const scenario::Scenario& s, RunConfig& rc) {
+  if (!s.plant().empty() && s.mode() != scenario::MODE_UNSPECIFIED)
+    fail("plant", "either mode or plant", "both");
+  const PlantSpec* spec = nullptr;
+  try {
+    spec = &find_plant(plant_named(s));
+  } catch (const std::invalid_argument&) {
+    fail("plant", "one of " + plant_names(), "'" + s.plant() + "'");
+  }
+  rc.agent.plant.name = spec->name;
+  try {
+    rc.agent.plant.params = resolve_plant_params(
+        *spec, std::map<std::string, double>(s.plant_params().begin(), s.plant_params().end()));
+  } catch (const std::invalid_argument& e) {
+    throw ScenarioError(std::string("scenario ") + e.what());
+  }
+}
+
 void apply_overrides(scenario::Scenario& s, const ScenarioOverrides& o) {
   if (o.seed >= 0) s.set_seed(static_cast<std::uint64_t>(o.seed));
   if (o.duration_s >= 0) s.set_duration_s(o.duration_s);
@@ -158,6 +183,24 @@ void apply_overrides(scenario::Scenario& s, const ScenarioOverrides& o) {
     }
     s.set_law(scenario::LAW_UNSPECIFIED);
     s.set_law_name(name);
+  }
+  if (!o.plant.empty()) {
+    std::string name;
+    try {
+      name = find_plant(o.plant).name;
+    } catch (const std::invalid_argument&) {
+      fail("--plant", "one of " + plant_names(), o.plant);
+    }
+    // Another plant than the scenario's: its parameters were that plant's.
+    std::string before;
+    try {
+      before = find_plant(plant_named(s)).name;
+    } catch (const std::invalid_argument&) {
+      // The scenario's own plant is unknown: resolve_plant names it.
+    }
+    if (name != before) s.mutable_plant_params()->clear();
+    s.set_mode(scenario::MODE_UNSPECIFIED);
+    s.set_plant(name);
   }
   if (o.agents >= 0) {
     s.clear_agents();
@@ -225,25 +268,27 @@ void resolve_agents(const scenario::Scenario& s, RunConfig& rc) {
   }
 }
 
-// Avoidance is on by default for quadcopters and refused for point agents; its safe distance keeps
-// two airframes apart.
+// Avoidance is on by default for a plant that follows a reference and refused for one that is
+// where its law puts it (the point agent); its safe distance keeps two airframes apart.
 void resolve_avoidance(const scenario::Scenario& s, RunConfig& rc) {
   const scenario::Avoidance& a = s.avoidance();
-  const bool quad = s.mode() == scenario::QUADCOPTER;
-  if (a.has_enabled() && a.enabled() && !quad) {
+  const PlantSpec& plant = rc.agent.plant_spec();
+  const bool follows = plant.follows_reference;
+  if (a.has_enabled() && a.enabled() && !follows) {
     fail("avoidance.enabled",
-         "false or unset in PARTICLE mode (a point agent flies its consensus state, which the "
-         "filter must never change; use mode: QUADCOPTER)",
+         "false or unset for plant " + plant.name +
+             " (a point agent flies its consensus state, which the filter must never change; use "
+             "mode: QUADCOPTER)",
          "true");
   }
-  rc.agent.avoidance.enabled = a.has_enabled() ? a.enabled() : quad;
+  rc.agent.avoidance.enabled = a.has_enabled() ? a.enabled() : follows;
   // Quadcopters closer than two arms overlap: a smaller safe distance would let the record call a
   // collision safe.
   const double span = 2.0 * rc.agent.airframe.arm_m;
-  if (quad && rc.agent.avoidance.safe_distance_m < span)
+  if (plant.oriented && rc.agent.avoidance.safe_distance_m < span)
     fail("avoidance.safe_distance_m",
-         "at least " + quoted_number(span) +
-             " m in QUADCOPTER mode (two airframes' arms: closer, their rotors overlap)",
+         "at least " + quoted_number(span) + " m for plant " + plant.name +
+             " (two airframes' arms: closer, their rotors overlap)",
          quoted_number(rc.agent.avoidance.safe_distance_m));
 }
 
@@ -380,8 +425,11 @@ void resolve_law(const scenario::Scenario& s, RunConfig& rc) {
 // neighbour can meet.
 void check_agent(RunConfig& rc) {
   AgentConfig& a = rc.agent;
-  if (a.mode == AgentMode::kQuadcopter && a.physics_hz < 500.0)
-    fail("rates.physics_hz", ">= 500 in QUADCOPTER mode", quoted_number(a.physics_hz));
+  const PlantSpec& plant = a.plant_spec();
+  if (a.physics_hz < plant.min_physics_hz)
+    fail("rates.physics_hz",
+         ">= " + quoted_number(plant.min_physics_hz) + " for plant " + plant.name,
+         quoted_number(a.physics_hz));
   if (a.consensus_hz > a.physics_hz)
     fail("rates.consensus_hz", "at most rates.physics_hz", quoted_number(a.consensus_hz));
   // Each consensus tick runs a whole number of physics steps; a rate that does not divide the
@@ -594,6 +642,8 @@ void write_back_defaults(RunConfig& rc, scenario::Scenario& s) {
   s.clear_wmsr_f();
   s.mutable_law_params()->clear();
   for (const auto& [name, value] : rc.agent.law.params) (*s.mutable_law_params())[name] = value;
+  s.mutable_plant_params()->clear();
+  for (const auto& [name, value] : rc.agent.plant.params) (*s.mutable_plant_params())[name] = value;
   s.mutable_transport()->set_domain_id(rc.transport.domain_id);
   s.mutable_transport()->set_interface(rc.transport.interface);
   s.mutable_transport()->set_shared_memory(rc.transport.shared_memory);
@@ -619,7 +669,7 @@ RunConfig resolve_scenario(scenario::Scenario s, const ScenarioOverrides& o) {
        {std::pair{"name", &s.name()}, std::pair{"description", &s.description()}})
     if (!valid_utf8(*text)) fail(field, "text in UTF-8", "bytes that are not UTF-8");
   if (!s.name().empty()) rc.name = s.name();
-  rc.agent.mode = s.mode() == scenario::QUADCOPTER ? AgentMode::kQuadcopter : AgentMode::kParticle;
+  resolve_plant(s, rc);
   resolve_numbers(s, rc);
   resolve_avoidance(s, rc);
   const AvoidanceConfig& av = rc.agent.avoidance;

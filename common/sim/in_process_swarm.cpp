@@ -114,7 +114,7 @@ void InProcessSwarm::add_liar(const Liar& liar) {
       if (s.bus.get() == &to) to_id = id;
     m.view.q = lying->claim(to_id, m.view.q0, m.stamp_s);
     // A point agent's position is its consensus state: a consistent liar says both.
-    if (m.mode == AgentMode::kParticle) m.p_W = m.view.q;
+    if (!rc_.agent.plant_spec().follows_reference) m.p_W = m.view.q;
   });
 }
 

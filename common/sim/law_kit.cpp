@@ -170,8 +170,8 @@ KitRow separation(const LawSpec& spec, const KitOptions& o) {
         [&] {
           for (const AgentSpec& a : rc.agents)
             if (const AgentLoop* l = swarm.agent(a.id)) {
-              const QuadState& q = l->runtime().quad();
-              monitor.on_sample(a.id, q.p_W, q.velocity_W(), swarm.wall_s());
+              monitor.on_sample(a.id, l->runtime().position(), l->runtime().velocity(),
+                                swarm.wall_s());
             }
           return false;
         },

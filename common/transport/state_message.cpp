@@ -22,7 +22,7 @@ std::string check_message(const StateMessage& m) {
   }
   if (!std::isfinite(m.stamp_s) || m.stamp_s < 0.0 || m.stamp_s > 1e7)
     return "stamp not finite or outside [0, 1e7] s";
-  if (m.mode != AgentMode::kParticle && m.mode != AgentMode::kQuadcopter) return "unknown mode";
+  if (m.mode != PoseKind::kPosition && m.mode != PoseKind::kOriented) return "unknown mode";
   if (m.phase > Phase::kReady) return "unknown phase";
   if (m.strangers.size() > kMaxStrangers) return "too many strangers reported";
   if (m.suspects.size() > kMaxSuspects) return "too many suspects reported";

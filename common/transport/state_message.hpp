@@ -70,8 +70,8 @@ const char* suspect_text(SuspectKind k);
 struct StateMessage {
   NeighborView view;  // id, consensus state, total weight, owned flows
   std::uint64_t seq = 0;
-  double stamp_s = 0.0;  // sender's run time
-  AgentMode mode = AgentMode::kParticle;
+  double stamp_s = 0.0;                 // sender's run time
+  PoseKind mode = PoseKind::kPosition;  // whether q_WB and rotors_radps say anything
   Vec3 p_W = Vec3::Zero();
   Vec3 v_W = Vec3::Zero();
   Eigen::Quaterniond q_WB = Eigen::Quaterniond::Identity();

@@ -67,7 +67,7 @@ std::string run_info_json(const RunConfig& rc) {
   std::string out;
   JsonWriter w(out);
   w.raw("{").key("name").str(rc.name).raw(",");
-  w.key("mode").str(rc.agent.mode == AgentMode::kQuadcopter ? "quadcopter" : "particle").raw(",");
+  w.key("mode").str(rc.agent.plant_spec().name).raw(",");
   w.key("law").str(rc.agent.law.law).raw(",");
   w.key("run_id").str(std::to_string(rc.transport.run_id)).raw(",");
   w.key("formation").boolean(rc.has_formation()).raw(",");

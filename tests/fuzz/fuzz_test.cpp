@@ -145,7 +145,7 @@ TEST(Fuzz, TheSampleGateRefusesEveryHostileSampleAndAdmitsOnlySaneOnes) {
     m.incarnation = static_cast<std::int64_t>(rng() % 3);
     m.stamp_s = hostile(rng);
     m.phase = static_cast<Phase>(rng() % 6);
-    m.mode = static_cast<AgentMode>(rng() % 3);
+    m.mode = static_cast<PoseKind>(rng() % 3);
     m.view.q = Vec3(hostile(rng), hostile(rng), hostile(rng)) * (rng() % 2 ? 1e-3 : 1.0);
     m.view.q0 = Vec3(hostile(rng), 0, 0) * 1e-3;
     m.view.total_weight = hostile(rng);

@@ -241,6 +241,51 @@ TEST(Scenario, ALawIsNamedWithItsParametersAndTheScenarioAsRunSaysThemAll) {
   }
 }
 
+TEST(Scenario, APlantIsNamedWithItsParametersAndChecksTheRatesAndAvoidanceItNeeds) {
+  // The enum of the shipped plants and `plant` are two spellings of one choice.
+  const RunConfig by_enum = resolve_scenario(parse_scenario_text(kTwo + "mode: QUADCOPTER\n", "s"));
+  const RunConfig by_name =
+      resolve_scenario(parse_scenario_text(kTwo + "plant: \"quadcopter\"\n", "s"));
+  EXPECT_EQ(by_enum.agent.plant.name, "quadcopter");
+  EXPECT_EQ(by_name.agent.plant.name, "quadcopter");
+  EXPECT_TRUE(by_name.agent.avoidance.enabled);  // on by default for a plant that flies
+  EXPECT_EQ(resolve_scenario(parse_scenario_text(kTwo, "s")).agent.plant.name, "particle");
+  EXPECT_EQ(
+      resolve_scenario(parse_scenario_text(kTwo + "plant: \"point\"\n", "s")).agent.plant.name,
+      "particle");
+  // Read again from the scenario as run: the same plant.
+  const RunConfig again = resolve_scenario(parse_scenario_text(to_text(by_name.resolved), "again"));
+  EXPECT_EQ(again.agent.plant.name, "quadcopter");
+  // --plant overrides the scenario's plant (and `mode`).
+  ScenarioOverrides o;
+  o.plant = "point";
+  EXPECT_EQ(
+      resolve_scenario(parse_scenario_text(kTwo + "mode: QUADCOPTER\n", "s"), o).agent.plant.name,
+      "particle");
+  o.plant = "hexacopter";
+  try {
+    resolve_scenario(parse_scenario_text(kTwo, "s"), o);
+    ADD_FAILURE() << "--plant hexacopter accepted";
+  } catch (const ScenarioError& e) {
+    EXPECT_NE(std::string(e.what()).find("'--plant'"), std::string::npos) << e.what();
+  }
+  // What it needs is checked by its spec, named by field.
+  for (const auto& [text, field] : std::vector<std::pair<std::string, std::string>>{
+           {"plant: \"hexacopter\"\n", "'plant'"},
+           {"plant: \"quadcopter\"\nmode: PARTICLE\n", "'plant'"},
+           {"plant: \"quadcopter\"\nrates { physics_hz: 100 }\n", "'rates.physics_hz'"},
+           {"plant: \"particle\"\navoidance { enabled: true }\n", "'avoidance.enabled'"},
+           {"plant: \"quadcopter\"\nplant_params { key: \"mass_kg\" value: 1 }\n",
+            "'plant_params[\"mass_kg\"]' of plant quadcopter"}}) {
+    try {
+      resolve_scenario(parse_scenario_text(kTwo + text, "s"));
+      ADD_FAILURE() << text << " accepted";
+    } catch (const ScenarioError& e) {
+      EXPECT_NE(std::string(e.what()).find(field), std::string::npos) << e.what();
+    }
+  }
+}
+
 // proto/scenario.proto is the users' reference for every default ("// default 50"); the defaults
 // themselves live once, in RunConfig's structs. Every number the schema documents must be what an
 // unset field resolves to, so the comment cannot drift from the code.

@@ -298,33 +298,35 @@ struct QuadFlight {
   double max_speed_end = 0.0;
 };
 
-QuadFlight fly_paper_quadcopters(const std::string& extra, double seconds) {
-  RunConfig rc = resolve_scenario(
-      parse_scenario_text("mode: QUADCOPTER\nweight { policy: UNWEIGHTED }\ntopology { policy: "
-                          "FIXED edges { a: 1 b: 3 } "
-                          "edges { a: 1 b: 4 } edges { a: 2 b: 3 } edges { a: 2 b: 4 } }\n"
-                          "agents { id: 1 position { x: 3 y: 12 z: 30 } }\nagents { id: 2 position "
-                          "{ x: 15 y: 6 z: 26 } }\n"
-                          "agents { id: 3 position { x: 17 y: 15 z: 35 } }\nagents { id: 4 "
-                          "position { x: 6 y: 6 z: 26 } }\n" +
-                              extra,
-                          "quads"));
+QuadFlight fly_paper_quadcopters(const std::string& extra, double seconds,
+                                 const std::string& plant = "mode: QUADCOPTER\n") {
+  RunConfig rc = resolve_scenario(parse_scenario_text(
+      plant +
+          "weight { policy: UNWEIGHTED }\ntopology { policy: "
+          "FIXED edges { a: 1 b: 3 } "
+          "edges { a: 1 b: 4 } edges { a: 2 b: 3 } edges { a: 2 b: 4 } }\n"
+          "agents { id: 1 position { x: 3 y: 12 z: 30 } }\nagents { id: 2 position "
+          "{ x: 15 y: 6 z: 26 } }\n"
+          "agents { id: 3 position { x: 17 y: 15 z: 35 } }\nagents { id: 4 "
+          "position { x: 6 y: 6 z: 26 } }\n" +
+          extra,
+      "quads"));
   InProcessSwarm swarm(rc);
   QuadFlight f;
   while (swarm.wall_s() < seconds) {
     swarm.step();
     std::vector<Vec3> p;
     for (const AgentSpec& a : rc.agents)
-      if (const AgentLoop* l = swarm.agent(a.id)) p.push_back(l->runtime().quad().p_W);
+      if (const AgentLoop* l = swarm.agent(a.id)) p.push_back(l->runtime().position());
     if (p.size() == rc.agents.size())
       f.min_separation_m = std::min(f.min_separation_m, min_pairwise(p));
   }
   f.centre = average(swarm.running_states());
   for (const AgentSpec& a : rc.agents) {
-    const QuadState& q = swarm.agent(a.id)->runtime().quad();
-    f.from_point.push_back((q.p_W - rc.initial_average()).norm());
-    f.end.push_back(q.p_W);
-    f.max_speed_end = std::max(f.max_speed_end, q.velocity_W().norm());
+    const AgentRuntime& r = swarm.agent(a.id)->runtime();
+    f.from_point.push_back((r.position() - rc.initial_average()).norm());
+    f.end.push_back(r.position());
+    f.max_speed_end = std::max(f.max_speed_end, r.velocity().norm());
   }
   return f;
 }
