@@ -80,5 +80,42 @@ TEST(PlantSeam, TheQuadcopterPlantIsThePapersControllerAndDynamicsStepForStep) {
   EXPECT_GT(plant->position().x(), 1.5);
 }
 
+TEST(PlantSeam, APointMassTracksAStepWithinItsAccelerationBound) {
+  // Given the plant written only through the seam, asked for a 5 m step,
+  const auto plant =
+      make_plant({"double-integrator", {{"max_accel_mps2", 2.0}}}, start_at(Vec3::Zero(), 0.0));
+  TrackingReference ref;
+  ref.p_W = Vec3(3, 4, 0);
+  Vec3 v_before = Vec3::Zero();
+  double max_accel = 0.0, overshoot = 0.0, settled_s = -1.0;
+  for (int i = 1; i <= 10000; ++i) {
+    plant->step(ref, 0.002);
+    max_accel = std::max(max_accel, (plant->velocity() - v_before).norm() / 0.002);
+    v_before = plant->velocity();
+    overshoot = std::max(overshoot, plant->position().dot(ref.p_W.normalized()) - 5.0);
+    const bool inside = (plant->position() - ref.p_W).norm() < 0.01;
+    if (inside && settled_s < 0.0) settled_s = i * 0.002;
+    if (!inside) settled_s = -1.0;
+  }
+  // then it never commands more than its bound, and settles there (critically damped: no
+  // overshoot beyond the saturation's).
+  EXPECT_LE(max_accel, 2.0 + 1e-9);
+  EXPECT_GT(settled_s, 0.0);
+  EXPECT_LT(overshoot, 0.25);
+  EXPECT_EQ(plant->rotors(), RotorSpeeds::Zero());
+  EXPECT_FALSE(find_plant("point-mass").oriented);
+  // Its parameters are checked by name, like a law's.
+  EXPECT_NE(error_of([] {
+              make_plant({"point-mass", {{"max_accel_mps2", 0.0}}}, start_at(Vec3::Zero(), 0));
+            })
+                .find("field 'plant_params[\"max_accel_mps2\"]' of plant point-mass: expected in "
+                      "[0.1, 50], got 0"),
+            std::string::npos);
+  EXPECT_NE(error_of([] {
+              make_plant({"point-mass", {{"damping", std::nan("")}}}, start_at(Vec3::Zero(), 0));
+            }).find("plant_params[\"damping\"]"),
+            std::string::npos);
+}
+
 }  // namespace
 }  // namespace qswarm

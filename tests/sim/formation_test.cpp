@@ -357,5 +357,22 @@ TEST(AvoidanceSwarm, FourQuadcoptersToOnePointAgreeExactlyAndNeverComeCloserThan
   for (double d : off.from_point) EXPECT_LT(d, 0.1);
 }
 
+TEST(PlantSeam, FourPointMassesAgreeExactlyAndKeepTheSafeDistanceBehindTheSameAvoidance) {
+  // The plant written only through the seam, in the agent runtime: the law, the reference and
+  // collision avoidance are the quadcopters', the vehicle a double integrator.
+  const std::string plant = "plant: \"point-mass\"\n";
+  const QuadFlight on = fly_paper_quadcopters("", 30.0, plant);
+  const QuadFlight off = fly_paper_quadcopters("avoidance { enabled: false }\n", 30.0, plant);
+  std::printf("point masses, avoidance on: closest %.3f m; off: closest %.3f m\n",
+              on.min_separation_m, off.min_separation_m);
+  EXPECT_GE(on.min_separation_m, 1.0);
+  EXPECT_LT(off.min_separation_m, 0.2);
+  const Vec3 q_star(10.25, 9.75, 29.25);
+  EXPECT_LT((on.centre - q_star).norm(), 1e-9);
+  EXPECT_LT((off.centre - q_star).norm(), 1e-9);
+  for (std::size_t i = 0; i < off.end.size(); ++i) EXPECT_LT(off.from_point[i], 0.05) << i;
+  EXPECT_LT(on.max_speed_end, 0.05);
+}
+
 }  // namespace
 }  // namespace qswarm

@@ -171,6 +171,33 @@ TEST(SwarmRun, WithAvoidanceOffFourQuadcoptersMeetOnThePointAndTheRecordCountsTh
       << text.str();
 }
 
+TEST(SwarmRun, AUsersPlantFliesAgentProcessesBehindTheSameLawAndAvoidance) {
+  // The plant written only through the plant seam, chosen over the scenario's quadcopters, in four
+  // agent processes,
+  const auto dir = fresh_dir("point-mass");
+  const Result r = swarm_run(scenario("paper/unweighted_quadcopter"), dir, 2.0,
+                             {"--plant", "double-integrator"});
+  ASSERT_EQ(r.code, 0) << r.output;
+  // agrees on the paper's point and keeps the safe distance about it, as the quadcopters do;
+  const records::Summary s = read_summary(dir);
+  EXPECT_TRUE(s.converged());
+  EXPECT_EQ(s.mode(), "point-mass");
+  expect_met_at(s, {10.25, 9.75, 29.25}, 0.10, /*physical=*/false);
+  EXPECT_TRUE(s.avoidance());
+  EXPECT_GE(s.min_separation_m(), s.safe_distance_m());
+  EXPECT_EQ(s.separation_violations(), 0u);
+  // its samples carry no attitude or rotors, and the scenario as run names it with its parameters.
+  const auto rows = read_csv(dir / "telemetry.csv");
+  ASSERT_FALSE(rows.empty());
+  for (const auto& row : rows) {
+    ASSERT_EQ(row.at("mode"), "0");
+    ASSERT_EQ(std::stod(row.at("w1")), 0.0);
+  }
+  const std::string as_run = read_file(dir / "scenario.txtpb");
+  EXPECT_NE(as_run.find("plant: \"point-mass\""), std::string::npos) << as_run;
+  EXPECT_NE(as_run.find("key: \"max_accel_mps2\""), std::string::npos) << as_run;
+}
+
 TEST(SwarmRun, TwelveSeededRandomAgentsConvergeToTheirInitialAverage) {
   const auto dir = fresh_dir("random12");
   const Result r = run({bin("swarm"), "run", "--agents", "12", "--seed", "7", "--out", dir.string(),
