@@ -198,8 +198,8 @@ void AgentRuntime::physics(double dt) {
   // no word why. It ends here instead, naming its plant (the process exits 1).
   if (!plant_->position().allFinite() || !plant_->velocity().allFinite())
     throw std::runtime_error("plant " + plant_spec_.name + " of agent " +
-                             std::to_string(p_.spec.id) + ": its state is not finite at t = " +
-                             std::to_string(time_s()) + " s");
+                             std::to_string(p_.spec.id) +
+                             ": its state is not finite at t = " + std::to_string(time_s()) + " s");
 }
 
 std::vector<AgentEvent> AgentRuntime::step() {
