@@ -4,6 +4,8 @@
 #include <set>
 #include <stdexcept>
 
+#include "common/core/seam_lookup.hpp"
+
 namespace qswarm {
 
 namespace laws {
@@ -20,13 +22,9 @@ void check_spec(const LawSpec& s, std::set<std::string>& names, std::set<std::ui
   const auto bad = [&](const std::string& why) {
     throw std::logic_error("law '" + s.name + "': " + why);
   };
-  if (s.name.empty() || !s.make) bad("no name or no factory");
-  for (const std::string& n : s.aliases)
-    if (n.empty()) bad("an empty alias");
-  if (!names.insert(s.name).second) bad("its name is taken");
+  if (!s.make) bad("no factory");
+  if (const std::string why = seam_names_problem(s, names); !why.empty()) bad(why);
   if (!tags.insert(law_tag(s.name)).second) bad("its tag (a hash of its name) is another law's");
-  for (const std::string& n : s.aliases)
-    if (!names.insert(n).second) bad("alias '" + n + "' is taken");
   if (s.payload_max > kMaxLawPayload) bad("payload_max beyond kMaxLawPayload");
   if (const std::string why = seam_params_problem(s.params); !why.empty()) bad(why);
   if (s.claims.honest_hull && std::none_of(s.params.begin(), s.params.end(),
@@ -50,19 +48,10 @@ const std::vector<LawSpec>& registered_laws() {
   return all;
 }
 
-std::string law_names() {
-  std::string out;
-  for (const LawSpec& s : registered_laws()) out += (out.empty() ? "" : ", ") + s.name;
-  return out;
-}
+std::string law_names() { return seam_names(registered_laws()); }
 
 const LawSpec& find_law(const std::string& name) {
-  for (const LawSpec& s : registered_laws()) {
-    if (s.name == name) return s;
-    for (const std::string& a : s.aliases)
-      if (a == name) return s;
-  }
-  throw std::invalid_argument("update law '" + name + "': expected one of " + law_names());
+  return find_in_seam(registered_laws(), name, "update law");
 }
 
 std::uint32_t law_tag(const std::string& name) { return seam_tag(name); }

@@ -3,6 +3,8 @@
 #include <set>
 #include <stdexcept>
 
+#include "common/core/seam_lookup.hpp"
+
 namespace qswarm {
 
 namespace plants {
@@ -18,10 +20,8 @@ void check_spec(const PlantSpec& s, std::set<std::string>& names) {
   const auto bad = [&](const std::string& why) {
     throw std::logic_error("plant '" + s.name + "': " + why);
   };
-  if (s.name.empty() || !s.make) bad("no name or no factory");
-  if (!names.insert(s.name).second) bad("its name is taken");
-  for (const std::string& n : s.aliases)
-    if (n.empty() || !names.insert(n).second) bad("alias '" + n + "' is empty or taken");
+  if (!s.make) bad("no factory");
+  if (const std::string why = seam_names_problem(s, names); !why.empty()) bad(why);
   if (const std::string why = seam_params_problem(s.params); !why.empty()) bad(why);
   if (!(s.min_physics_hz >= 0.0)) bad("a negative min_physics_hz");
 }
@@ -41,19 +41,10 @@ const std::vector<PlantSpec>& registered_plants() {
   return all;
 }
 
-std::string plant_names() {
-  std::string out;
-  for (const PlantSpec& s : registered_plants()) out += (out.empty() ? "" : ", ") + s.name;
-  return out;
-}
+std::string plant_names() { return seam_names(registered_plants()); }
 
 const PlantSpec& find_plant(const std::string& name) {
-  for (const PlantSpec& s : registered_plants()) {
-    if (s.name == name) return s;
-    for (const std::string& a : s.aliases)
-      if (a == name) return s;
-  }
-  throw std::invalid_argument("plant '" + name + "': expected one of " + plant_names());
+  return find_in_seam(registered_plants(), name, "plant");
 }
 
 std::map<std::string, double> resolve_plant_params(const PlantSpec& spec,
