@@ -113,8 +113,8 @@ std::string as_text(const RunConfig& rc, const InitialGraph& g, double tau) {
            "their slots, not on them\n";
     }
   } else if (rc.agent.plant_spec().follows_reference) {
-    o << "collision avoidance off: nothing keeps the " << rc.agent.plant_spec().name
-      << "s apart (the record counts approaches closer than " << rc.agent.avoidance.safe_distance_m
+    o << "collision avoidance off: nothing keeps the agents (plant " << rc.agent.plant_spec().name
+      << ") apart (the record counts approaches closer than " << rc.agent.avoidance.safe_distance_m
       << " m)\n";
   }
   o << describe_plan(rc.plan) << describe_load(predict_load_here(rc, rc.plan.hosts.time_scale));

@@ -307,8 +307,8 @@ Command add_run_command(CLI::App& app) {
           [](const std::string& v) { return v.empty() ? std::string("an empty law name") : ""; },
           "LAW"));
   cmd->add_option("--plant", o->plant,
-                  "the vehicle, any `swarm plants` lists (overrides the scenario's and its "
-                  "parameters)")
+                  "the vehicle, any `swarm plants` lists (overrides the scenario's; another "
+                  "plant drops its parameters and avoidance switch)")
       ->check(CLI::Validator(
           [](const std::string& v) { return v.empty() ? std::string("an empty plant name") : ""; },
           "PLANT"));

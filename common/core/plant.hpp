@@ -64,6 +64,13 @@ struct PlantSpec {
   // heading, `swarm plot` its attitude and rotors (wire and record field `mode` = 1).
   bool oriented = false;
   double min_physics_hz = 0.0;  // a slower rates.physics_hz is refused (its integration's step)
+  // It flies the scenario's airframe: the safe distance must clear two of its arm spans.
+  bool airframe = false;
+  // The largest acceleration it follows, from its parameters; unset: unbounded here (the
+  // quadcopter's thrust-to-weight of 3.2 is checked by its airframe). The resolver refuses a run
+  // whose reference asks more (limits.reference_accel_mps2, and avoidance's braking when on):
+  // a plant that cannot follow the filtered reference would break the safe distance.
+  std::function<double(const std::map<std::string, double>&)> max_accel_mps2;
   std::function<std::unique_ptr<Plant>(const PlantStart&)> make;
 };
 

@@ -30,7 +30,7 @@ std::map<std::string, double> resolve_seam_params(const std::vector<SeamParam>& 
 // its range), or empty.
 std::string seam_params_problem(const std::vector<SeamParam>& params);
 
-// The FNV-1a hash of a name, never 0: what a sample says of the law or plant that sent it.
+// The FNV-1a hash of a name, never 0: what a sample says of the law that sent it (law_tag).
 std::uint32_t seam_tag(const std::string& name);
 
 }  // namespace qswarm

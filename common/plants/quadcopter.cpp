@@ -42,6 +42,7 @@ PlantSpec quadcopter() {
   s.name = "quadcopter";
   s.summary = "the paper's quadcopter (section 3) under the tracking controller, RK4";
   s.oriented = true;
+  s.airframe = true;
   // RK4 of the attitude loop (22 rad/s natural frequency) and the rotors' allocation.
   s.min_physics_hz = 500.0;
   s.make = [](const PlantStart& start) { return std::make_unique<QuadcopterPlant>(start); };

@@ -140,6 +140,8 @@ std::string plant_named(const scenario::Scenario& s) {
 }
 
 void resolve_plant(const scenario::Scenario& s, RunConfig& rc) {
+  if (!scenario::Mode_IsValid(s.mode()))
+    fail("mode", "PARTICLE or QUADCOPTER", std::to_string(static_cast<int>(s.mode())));
   if (!s.plant().empty() && s.mode() != scenario::MODE_UNSPECIFIED)
     fail("plant", "either mode or plant", "both");
   const PlantSpec* spec = nullptr;
@@ -198,7 +200,12 @@ void apply_overrides(scenario::Scenario& s, const ScenarioOverrides& o) {
     } catch (const std::invalid_argument&) {
       // The scenario's own plant is unknown: resolve_plant names it.
     }
-    if (name != before) s.mutable_plant_params()->clear();
+    // Another plant: its parameters, and whether avoidance is on (a scenario as run says it for its
+    // own plant), were that plant's.
+    if (name != before) {
+      s.mutable_plant_params()->clear();
+      s.mutable_avoidance()->clear_enabled();
+    }
     s.set_mode(scenario::MODE_UNSPECIFIED);
     s.set_plant(name);
   }
@@ -277,15 +284,15 @@ void resolve_avoidance(const scenario::Scenario& s, RunConfig& rc) {
   if (a.has_enabled() && a.enabled() && !follows) {
     fail("avoidance.enabled",
          "false or unset for plant " + plant.name +
-             " (a point agent flies its consensus state, which the filter must never change; use "
-             "mode: QUADCOPTER)",
+             " (it is where its law puts it, which the filter must never change; a plant that "
+             "flies, e.g. plant: \"quadcopter\", keeps the safe distance)",
          "true");
   }
   rc.agent.avoidance.enabled = a.has_enabled() ? a.enabled() : follows;
   // Quadcopters closer than two arms overlap: a smaller safe distance would let the record call a
   // collision safe.
   const double span = 2.0 * rc.agent.airframe.arm_m;
-  if (plant.oriented && rc.agent.avoidance.safe_distance_m < span)
+  if (plant.airframe && rc.agent.avoidance.safe_distance_m < span)
     fail("avoidance.safe_distance_m",
          "at least " + quoted_number(span) + " m for plant " + plant.name +
              " (two airframes' arms: closer, their rotors overlap)",
@@ -430,6 +437,16 @@ void check_agent(RunConfig& rc) {
     fail("rates.physics_hz",
          ">= " + quoted_number(plant.min_physics_hz) + " for plant " + plant.name,
          quoted_number(a.physics_hz));
+  if (plant.max_accel_mps2) {
+    const double can = plant.max_accel_mps2(a.plant.params);
+    const double asked =
+        std::max(a.reference_accel_mps2, a.avoidance.enabled ? a.avoidance.brake_mps2 : 0.0);
+    if (can < asked)
+      fail("plant_params",
+           "a plant that follows its reference's " + quoted_number(asked) +
+               " m/s^2 (limits.reference_accel_mps2, or avoidance's braking when on)",
+           "plant " + plant.name + " accelerating at most " + quoted_number(can) + " m/s^2");
+  }
   if (a.consensus_hz > a.physics_hz)
     fail("rates.consensus_hz", "at most rates.physics_hz", quoted_number(a.consensus_hz));
   // Each consensus tick runs a whole number of physics steps; a rate that does not divide the

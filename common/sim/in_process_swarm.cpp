@@ -104,18 +104,21 @@ void InProcessSwarm::crash(AgentId id) {
 void InProcessSwarm::add_liar(const Liar& liar) {
   if (!slots_.count(liar.id)) throw std::invalid_argument("add_liar: the liar is no agent");
   liars_.push_back(liar);
-  net_.set_rewrite([this](const InMemoryBus& from, const InMemoryBus& to, StateMessage& m) {
-    const auto lying = std::find_if(liars_.begin(), liars_.end(), [&](const Liar& l) {
-      return slots_.at(l.id).bus.get() == &from;
-    });
-    if (lying == liars_.end()) return;
-    AgentId to_id = 0;  // the recorder
-    for (const auto& [id, s] : slots_)
-      if (s.bus.get() == &to) to_id = id;
-    m.view.q = lying->claim(to_id, m.view.q0, m.stamp_s);
-    // A point agent's position is its consensus state: a consistent liar says both.
-    if (!rc_.agent.plant_spec().follows_reference) m.p_W = m.view.q;
-  });
+  // A point agent's position is its consensus state (its slot about it): a consistent liar says
+  // both. (Each liar's own offset: one rewrite serves them all.)
+  const bool says_position = !rc_.agent.plant_spec().follows_reference;
+  net_.set_rewrite(
+      [this, says_position](const InMemoryBus& from, const InMemoryBus& to, StateMessage& m) {
+        const auto lying = std::find_if(liars_.begin(), liars_.end(), [&](const Liar& l) {
+          return slots_.at(l.id).bus.get() == &from;
+        });
+        if (lying == liars_.end()) return;
+        AgentId to_id = 0;  // the recorder
+        for (const auto& [id, s] : slots_)
+          if (s.bus.get() == &to) to_id = id;
+        m.view.q = lying->claim(to_id, m.view.q0, m.stamp_s);
+        if (says_position) m.p_W = m.view.q + rc_.spec(lying->id)->offset_W;
+      });
 }
 
 std::string InProcessSwarm::run_recorded(double max_wall_s) {

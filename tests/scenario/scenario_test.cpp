@@ -269,8 +269,39 @@ TEST(Scenario, APlantIsNamedWithItsParametersAndChecksTheRatesAndAvoidanceItNeed
   } catch (const ScenarioError& e) {
     EXPECT_NE(std::string(e.what()).find("'--plant'"), std::string::npos) << e.what();
   }
+  // Its parameters are kept by --plant naming the same plant (by an alias too) and dropped with the
+  // avoidance switch of a scenario as run when it names another.
+  const std::string pm =
+      kTwo + "plant: \"point-mass\"\nplant_params { key: \"damping\" value: 2 }\n";
+  const RunConfig as_run = resolve_scenario(parse_scenario_text(pm, "s"));
+  EXPECT_EQ(as_run.agent.plant.params.at("damping"), 2.0);
+  EXPECT_EQ(as_run.agent.plant.params.size(), 3u);  // every parameter written back
+  const scenario::Scenario written = parse_scenario_text(to_text(as_run.resolved), "as run");
+  EXPECT_EQ(resolve_scenario(written).agent.plant.params, as_run.agent.plant.params);
+  o.plant = "double-integrator";
+  EXPECT_EQ(resolve_scenario(written, o).agent.plant.params, as_run.agent.plant.params);
+  o.plant = "particle";
+  const RunConfig switched = resolve_scenario(written, o);
+  EXPECT_TRUE(switched.agent.plant.params.empty());
+  EXPECT_FALSE(switched.agent.avoidance.enabled);
+  // A mode beyond the enum is refused, not read as a point agent.
+  scenario::Scenario odd = parse_scenario_text(kTwo, "s");
+  odd.set_mode(static_cast<scenario::Mode>(7));
+  try {
+    resolve_scenario(odd);
+    ADD_FAILURE() << "mode 7 accepted";
+  } catch (const ScenarioError& e) {
+    EXPECT_NE(std::string(e.what()).find("'mode'"), std::string::npos) << e.what();
+  }
   // What it needs is checked by its spec, named by field.
   for (const auto& [text, field] : std::vector<std::pair<std::string, std::string>>{
+           {"plant: \"point-mass\"\nrates { physics_hz: 100 }\n", "'rates.physics_hz'"},
+           // It could not follow avoidance's braking (4.5 m/s^2), nor a reference of 8 m/s^2.
+           {"plant: \"point-mass\"\nplant_params { key: \"max_accel_mps2\" value: 3 }\n",
+            "'plant_params'"},
+           {"plant: \"point-mass\"\navoidance { enabled: false }\nlimits { "
+            "reference_accel_mps2: 8 }\n",
+            "accelerating at most 6 m/s^2"},
            {"plant: \"hexacopter\"\n", "'plant'"},
            {"plant: \"quadcopter\"\nmode: PARTICLE\n", "'plant'"},
            {"plant: \"quadcopter\"\nrates { physics_hz: 100 }\n", "'rates.physics_hz'"},

@@ -97,6 +97,25 @@ TEST(FormationScenario, SlotsGoByAscendingIdAndTheAgreedPointIsTheAverageOfTheEs
   for (const AgentSpec& a : rc.agents) EXPECT_EQ(again.spec(a.id)->offset_W, a.offset_W);
 }
 
+TEST(PlantSeam, APointAgentIsAtItsSlotAboutItsEstimateAtEveryStepOfAFormation) {
+  // The particle plant is told its goal after every change of its law's state: the position the
+  // agent publishes is its consensus state plus its slot, exactly, through the start barrier and
+  // every tick of sixteen agents flying into a grid.
+  const RunConfig rc = grid16();
+  InProcessSwarm swarm(rc);
+  std::size_t checked = 0;
+  while (swarm.wall_s() < 5.0) {
+    swarm.step();
+    for (const AgentSpec& a : rc.agents)
+      if (const AgentLoop* l = swarm.agent(a.id)) {
+        ASSERT_EQ(l->runtime().position(), Vec3(l->runtime().consensus() + a.offset_W))
+            << "agent " << a.id << " at " << swarm.wall_s() << " s";
+        ++checked;
+      }
+  }
+  EXPECT_GT(checked, 16u * 200u);
+}
+
 TEST(FormationScenario, AnAgentsOwnOffsetOverridesItsSlot) {
   const RunConfig rc = resolve_scenario(parse_scenario_text(R"(
     agents { id: 1 position { x: 0 y: 0 z: 0 } }
