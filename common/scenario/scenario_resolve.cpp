@@ -193,7 +193,6 @@ void apply_overrides(scenario::Scenario& s, const ScenarioOverrides& o) {
     } catch (const std::invalid_argument&) {
       fail("--plant", "one of " + plant_names(), o.plant);
     }
-    // Another plant than the scenario's: its parameters were that plant's.
     std::string before;
     try {
       before = find_plant(plant_named(s)).name;
