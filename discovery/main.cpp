@@ -59,6 +59,11 @@ int main(int argc, char** argv) {
                  "run this much nicer than started (negative: a higher priority, where the host "
                  "allows it; otherwise it says so and runs as started)")
       ->check(CLI::Range(-20, 19));
+  bool hang = false;
+  app.add_flag("--test-hang", hang,
+               "(tests) stop (SIGSTOP) once it listens: a hung server, which relays nothing and "
+               "ignores SIGTERM")
+      ->group("");
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -98,6 +103,11 @@ int main(int argc, char** argv) {
     if (!ready_file.empty() && !std::ofstream(ready_file)) {
       std::fprintf(stderr, "swarm-discovery: cannot write %s\n", ready_file.c_str());
       return 1;
+    }
+    if (hang) {
+      std::printf("swarm-discovery: hanging (--test-hang)\n");
+      std::fflush(stdout);
+      std::raise(SIGSTOP);
     }
     int last = -1;
     while (!g_stop) {

@@ -147,8 +147,10 @@ std::string describe_plan(const RunPlan& p) {
     << (p.multicast_group.empty() ? ", unicast" : ", multicast group " + p.multicast_group)
     << "; agents receive " << (p.tick_receive ? "at the tick" : "on Fast DDS's threads") << "\n"
     << "  discovery: " << to_string(p.discovery)
-    << (p.own_server ? " (the run's own Discovery Server)" : "") << ", " << p.participants
-    << " participants, announced every " << p.participant_announce_period_s << " s\n"
+    << (p.own_server ? " (the run's own " + std::to_string(p.own_servers) + " Discovery Servers)"
+                     : std::string())
+    << ", " << p.participants << " participants, announced every "
+    << p.participant_announce_period_s << " s\n"
     << "  ticks: " << p.tick_phases << " phase" << (p.tick_phases > 1 ? "s" : "")
     << "; record: " << p.record_hz << " Hz (every " << p.record_every << " ticks"
     << (p.spread_records ? ", spread over them by id" : "") << "), present for "

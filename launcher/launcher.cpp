@@ -59,7 +59,7 @@ std::vector<std::string> Launcher::supervisor_argv() const {
     a.push_back("--participant-id");
     a.push_back(std::to_string(spec_.rc.plan.supervisor_participant(spec_.participant_base)));
   }
-  if (spec_.discovery_id >= 0) {
+  if (!spec_.discovery_ids.empty()) {
     a.push_back("--discovery-server");
     a.push_back(discovery_address());
   }
@@ -76,26 +76,55 @@ void Launcher::add_unicast_peers(std::vector<std::string>& a) const {
 }
 
 std::string Launcher::discovery_address() const {
-  if (spec_.discovery_id < 0) return "";
-  return spec_.rc.transport.interface + ":" +
-         std::to_string(PortPlan::discovery_port(spec_.rc.transport.domain_id, spec_.discovery_id));
+  std::string list;
+  for (const int id : spec_.discovery_ids) {
+    if (!list.empty()) list += ',';
+    list += spec_.rc.transport.interface + ":" +
+            std::to_string(PortPlan::discovery_port(spec_.rc.transport.domain_id, id));
+  }
+  return list;
 }
 
-std::vector<std::string> Launcher::discovery_argv() const {
-  return {
-      spec_.bin_dir + "/swarm-discovery",
-      "--listen",
-      spec_.rc.transport.interface,
-      "--port",
-      std::to_string(PortPlan::discovery_port(spec_.rc.transport.domain_id, spec_.discovery_id)),
-      "--domain",
-      std::to_string(spec_.rc.transport.domain_id),
-      "--participant-id",
-      std::to_string(spec_.discovery_id),
-      "--ready-file",
-      spec_.dir.discovery_ready().string(),
-      "--nice",
-      std::to_string(spec_.rc.plan.server_nice)};
+std::vector<std::string> Launcher::discovery_argv(int server) const {
+  // Each server is told the whole list and its place in it: it connects to the others, and
+  // takes the GUID prefix every client expects at that place.
+  std::vector<std::string> a = {spec_.bin_dir + "/swarm-discovery",
+                                "--servers",
+                                discovery_address(),
+                                "--index",
+                                std::to_string(server),
+                                "--domain",
+                                std::to_string(spec_.rc.transport.domain_id),
+                                "--participant-id",
+                                std::to_string(spec_.discovery_ids.at(server)),
+                                "--ready-file",
+                                spec_.dir.discovery_ready(server).string(),
+                                "--nice",
+                                std::to_string(spec_.rc.plan.server_nice)};
+  if (std::count(spec_.hung_servers.begin(), spec_.hung_servers.end(), server))
+    a.push_back("--test-hang");
+  return a;
+}
+
+std::string Launcher::server_name(unsigned server) const {
+  return spec_.discovery_ids.size() > 1 ? "Discovery Server " + std::to_string(server)
+                                        : std::string("the Discovery Server");
+}
+
+void Launcher::lose_servers(const std::vector<std::pair<unsigned, std::string>>& lost,
+                            const std::string& consequence) {
+  for (const auto& l : lost) server_lost_.at(l.first) = true;
+  // Matched participants fly on whatever happens to the servers; one left relaying also
+  // introduces those that meet later (a restart, a late joiner, peers that come into range).
+  std::string relaying;
+  for (unsigned k = 0; k < server_lost_.size() && relaying.empty(); ++k)
+    if (!server_lost_[k]) relaying = server_name(k);
+  for (const auto& [server, what] : lost) {
+    if (relaying.empty())
+      problems_.push_back(server_name(server) + " " + what + consequence);
+    else
+      notes_.push_back(server_name(server) + " " + what + "; " + relaying + " relayed on");
+  }
 }
 
 const ChildProcesses::Child& Launcher::supervisor() const {
@@ -120,7 +149,7 @@ std::vector<std::string> Launcher::agent_argv(AgentId id, double join_at_s, bool
   }
   if (restart) a.push_back("--restart");
   a.push_back("--wait-supervisor");
-  if (spec_.discovery_id >= 0) {
+  if (!spec_.discovery_ids.empty()) {
     a.push_back("--discovery-server");
     a.push_back(discovery_address());
   }
@@ -140,30 +169,50 @@ std::vector<std::string> Launcher::agent_argv(AgentId id, double join_at_s, bool
 }
 
 void Launcher::start_discovery() {
-  procs_.spawn("discovery", 0, discovery_argv(), spec_.dir.discovery_out().string());
+  const int servers = static_cast<int>(spec_.discovery_ids.size());
+  server_lost_.assign(static_cast<std::size_t>(servers), false);
+  for (int k = 0; k < servers; ++k)
+    procs_.spawn("discovery", static_cast<unsigned>(k), discovery_argv(k),
+                 spec_.dir.discovery_out(k).string());
+  const auto server = [&](int k) -> const ChildProcesses::Child& {
+    for (const auto& c : procs_.children())
+      if (c.role == "discovery" && c.id == static_cast<unsigned>(k)) return c;
+    throw std::logic_error("launcher: no discovery server " + std::to_string(k));
+  };
   const double since = clock_.now_s(), ready_by = since + spec_.discovery_ready_timeout_s;
-  const auto ready = [&] { return !spec_.discovery_ready || spec_.discovery_ready(); };
-  // Once seen ready it is: a server that dies after that is a crash the run's record shows.
-  bool up = false;
-  while (!(up = ready()) && clock_.now_s() < ready_by && procs_.children().back().running) {
+  // Once seen ready a server is: one that dies after that is a loss the run's record shows. The
+  // run starts with every server or not at all (one that cannot come up is the host's problem).
+  std::vector<bool> up(static_cast<std::size_t>(servers), false);
+  for (;;) {
+    bool all = true, dead = false;
+    for (int k = 0; k < servers; ++k) {
+      if (!up[k]) up[k] = !spec_.discovery_ready || spec_.discovery_ready(k);
+      all = all && up[k];
+      dead = dead || (!up[k] && !server(k).running);
+    }
+    if (all || dead || clock_.now_s() >= ready_by) break;
     procs_.reap();
     clock_.sleep_until(clock_.now_s() + 0.005);
   }
   procs_.reap();
-  const ChildProcesses::Child server = procs_.children().back();
-  if (!up) {
-    throw std::runtime_error("the Discovery Server did not come up (" +
-                             (server.running
-                                  ? "not listening after " + num(clock_.now_s() - since) + " s"
-                                  : describe_status(server.status)) +
-                             "); see " + spec_.dir.discovery_out().string());
+  // A server that died is the reason, before one still starting.
+  int failed = -1;
+  for (int k = 0; k < servers; ++k) {
+    if (up[k]) continue;
+    if (failed < 0 || (server(failed).running && !server(k).running)) failed = k;
   }
+  if (failed < 0) return;
+  const ChildProcesses::Child c = server(failed);
+  throw std::runtime_error(server_name(static_cast<unsigned>(failed)) + " did not come up (" +
+                           (c.running ? "not listening after " + num(clock_.now_s() - since) + " s"
+                                      : describe_status(c.status)) +
+                           "); see " + spec_.dir.discovery_out(failed).string());
 }
 
 void Launcher::start() {
   started_s_ = clock_.now_s();
-  // The run's Discovery Server first: every participant finds the others through it.
-  if (spec_.discovery_id >= 0) start_discovery();
+  // The run's Discovery Servers first: every participant finds the others through them.
+  if (!spec_.discovery_ids.empty()) start_discovery();
   // Its errors reach the user even when its output goes to a file (that file may be what failed).
   procs_.spawn("supervisor", 0, supervisor_argv(),
                spec_.progress ? "" : spec_.dir.supervisor_out().string(), true);
@@ -194,7 +243,7 @@ void Launcher::start() {
 
 void Launcher::note_abnormal(const ChildProcesses::Child& c, bool at_teardown) {
   const std::string who = c.role == "agent"       ? "agent " + std::to_string(c.id)
-                          : c.role == "discovery" ? std::string("the Discovery Server")
+                          : c.role == "discovery" ? server_name(c.id)
                                                   : c.role;
   problems_.push_back(who + " " + describe_status(c.status) +
                       (at_teardown ? " at teardown" : " during the run"));
@@ -228,17 +277,19 @@ std::optional<std::string> Launcher::poll(bool interrupted) {
 }
 
 std::optional<std::string> Launcher::next_end(bool interrupted) {
+  std::vector<std::pair<unsigned, std::string>> servers_lost;
   for (const auto& c : procs_.reap()) {
     if (c.role == "agent") {
       std::fprintf(stderr, "swarm run: agent %u %s\n", c.id, describe_status(c.status).c_str());
       on_agent_exit(c);
     } else if (c.role == "discovery") {
-      // Participants already matched keep flying; one that starts later (a restart) finds nobody.
-      std::fprintf(stderr, "swarm run: the Discovery Server %s\n",
+      std::fprintf(stderr, "swarm run: %s %s\n", server_name(c.id).c_str(),
                    describe_status(c.status).c_str());
-      note_abnormal(c, false);
+      servers_lost.emplace_back(c.id, describe_status(c.status) + " during the run");
     }
   }
+  // With none left, participants already matched fly on; one that starts later finds nobody.
+  if (!servers_lost.empty()) lose_servers(servers_lost, "");
   if (!supervisor().running) return why_.empty() ? std::string(kFinished) : why_;
   if (interrupted) return "interrupted";
   if (!why_.empty()) return why_;
@@ -251,6 +302,7 @@ int Launcher::stop() {
   for (const auto& c : procs_.children()) was_running.push_back(c.running);
   const int killed = procs_.terminate_all(spec_.grace_s);
   const auto& children = procs_.children();
+  std::vector<std::pair<unsigned, std::string>> hung;
   for (std::size_t i = 0; i < children.size(); ++i) {
     const auto& c = children[i];
     if (!was_running[i]) continue;
@@ -258,14 +310,11 @@ int Launcher::stop() {
     if (c.killed_at_teardown && c.role == "discovery") {
       // An agent or supervisor killed so leaves its record incomplete, which conclude() says. A
       // server that ignores SIGTERM has hung: Fast DDS 2.9.1's server can spin with a writer's
-      // lock held, and from then on relays nothing (docs/fast-dds-workarounds.md, W5), so peers
-      // that should have met since never did. The record must say so.
+      // lock held, and from then on relays nothing (docs/fast-dds-workarounds.md, W5).
       char grace[32];
       std::snprintf(grace, sizeof grace, "%g", spec_.grace_s);
-      problems_.push_back(std::string("the Discovery Server hung: it did not stop within ") +
-                          grace +
-                          " s of SIGTERM (a hung server relays no discovery; peers that were to "
-                          "meet after it hung did not)");
+      hung.emplace_back(c.id,
+                        std::string("hung: it did not stop within ") + grace + " s of SIGTERM");
       continue;
     }
     if (c.killed_at_teardown) continue;
@@ -277,6 +326,12 @@ int Launcher::stop() {
         (WIFSIGNALED(c.status) && WTERMSIG(c.status) == SIGTERM);
     if (!clean) note_abnormal(c, true);
   }
+  // With no other server relaying, peers that should have met since it hung never did: the
+  // record must say so.
+  if (!hung.empty())
+    lose_servers(hung,
+                 " (a hung server relays no discovery; peers that were to meet after it hung did "
+                 "not)");
   return killed;
 }
 
@@ -286,12 +341,15 @@ Launcher::Outcome Launcher::conclude(double wall_time_s) {
   Outcome out;
   const int sup = supervisor_status();
   const RunDir& dir = spec_.dir;
-  // The prediction goes into whichever summary there is (the supervisor's, or the one written
-  // below for it), before anything amends it.
-  const auto note_load = [&] { return !spec_.load || dir.note_load(*spec_.load); };
+  // The prediction and the launcher's notes go into whichever summary there is (the supervisor's,
+  // or the one written below for it), before anything amends it; the notes are told the user too.
+  const auto note_launchers = [&] {
+    return (!spec_.load || dir.note_load(*spec_.load)) && (notes_.empty() || dir.add_notes(notes_));
+  };
+  out.lines = notes_;
   const bool supervisor_summary = dir.read_summary().has_value();
-  if (supervisor_summary && !note_load()) {
-    out.lines.push_back("cannot write the predicted load into " + dir.summary().string());
+  if (supervisor_summary && !note_launchers()) {
+    out.lines.push_back("cannot write the predicted load and notes into " + dir.summary().string());
     out.exit_code = 3;
     return out;
   }
@@ -303,7 +361,7 @@ Launcher::Outcome Launcher::conclude(double wall_time_s) {
     if (const std::string p = mcap_problem(dir); !p.empty()) reason += "; " + p;
     out.lines.push_back(reason + "; the summary says so");
     out.exit_code =
-        dir.write_fallback_summary(spec_.rc, reason, wall_time_s) && note_load() ? 1 : 3;
+        dir.write_fallback_summary(spec_.rc, reason, wall_time_s) && note_launchers() ? 1 : 3;
     return out;
   }
   if (WIFEXITED(sup) && WEXITSTATUS(sup) == 3) {

@@ -28,12 +28,17 @@ struct LaunchSpec {
   // The first of the run's participant ids in the port plan: the supervisor takes it, agent k (in
   // the scenario's order) the k-th after it. -1: Fast DDS picks (tests without processes).
   int participant_base = -1;
-  // The participant id of the run's own Discovery Server (transport.discovery SERVER; the launcher
-  // starts `swarm-discovery` on that id's ports before anything else), or -1 for simple discovery.
-  int discovery_id = -1;
-  // Whether the run's Discovery Server listens (its ports are taken); unset: as soon as started.
-  std::function<bool()> discovery_ready;
+  // The participant ids of the run's own Discovery Servers (transport.discovery SERVER; the
+  // launcher starts `swarm-discovery` on each id's ports before anything else, and tells every
+  // process all of them, in this order), or none for simple discovery.
+  std::vector<int> discovery_ids;
+  // Whether the run's Discovery Server `server` (its place in discovery_ids) listens; unset: as
+  // soon as started.
+  std::function<bool(int server)> discovery_ready;
   double discovery_ready_timeout_s = 20.0;
+  // (tests) servers that stop themselves (SIGSTOP) once they listen: a hung server, as Fast DDS
+  // 2.9.1's can hang (W5), relays nothing and ignores SIGTERM.
+  std::vector<int> hung_servers;
   int view_port = -1;  // the supervisor serves the live view on this port (-1: no view)
   std::string view_listen = "127.0.0.1";
   // What the run was predicted to ask of this host (run_load.hpp): written into its summary.
@@ -84,10 +89,13 @@ class Launcher {
   double wall_limit_s() const;
   std::vector<std::string> agent_argv(AgentId id, double join_at_s, bool restart) const;
   std::vector<std::string> supervisor_argv() const;
-  std::vector<std::string> discovery_argv() const;
+  std::vector<std::string> discovery_argv(int server) const;
   void add_unicast_peers(std::vector<std::string>& argv) const;
-  // "HOST:PORT" of the run's Discovery Server, "" without one.
+  // "HOST:PORT,HOST:PORT" of the run's Discovery Servers, "" without one.
   std::string discovery_address() const;
+  // What the launcher saw that did not change the outcome: a server that hung or died while
+  // another relayed. conclude() writes them into the summary.
+  const std::vector<std::string>& notes() const { return notes_; }
 
  private:
   static constexpr const char* kLate = "the supervisor did not finish in time";
@@ -96,6 +104,11 @@ class Launcher {
   void note_abnormal(const ChildProcesses::Child& c, bool at_teardown);
   const ChildProcesses::Child& supervisor() const;
   void start_discovery();
+  std::string server_name(unsigned server) const;
+  // Servers lost (dead or hung; by place, and what happened): each a note while another still
+  // relays, else a problem, told its `consequence`.
+  void lose_servers(const std::vector<std::pair<unsigned, std::string>>& lost,
+                    const std::string& consequence);
 
   LaunchSpec spec_;
   ChildProcesses& procs_;
@@ -107,6 +120,8 @@ class Launcher {
   std::string why_;
   std::string end_;  // what poll() last said ended the run
   std::vector<std::string> problems_;
+  std::vector<std::string> notes_;
+  std::vector<bool> server_lost_;  // by place in discovery_ids
 };
 
 }  // namespace qswarm

@@ -55,6 +55,7 @@ struct RunOptions {
   bool quiet = false;
   bool stop_on_agent_exit = false;
   std::vector<unsigned> ignore_sigterm;  // (tests) agents started with --ignore-sigterm
+  std::vector<int> hung_servers;         // (tests) the run's servers that hang once they listen
   // Fault shortcuts (added to the scenario's fault plan).
   std::string law, plant;
   std::string secure;  // --secure KEYSTORE
@@ -145,7 +146,7 @@ int run(const RunOptions& opt) {
   // Every process gets its own participant id, from a block whose ports are free on this host (so
   // hundreds of processes come up without Fast DDS shifting ports, and two runs on one domain do
   // not collide); a domain without room is the user's to change.
-  // The supervisor, the agents and, with a Discovery Server, the server (the block's last id).
+  // The supervisor, the agents and, with Discovery Servers, the servers (the block's last ids).
   const bool own_server = rc.plan.own_server;
   const int participants = rc.plan.participants;
   std::optional<PortReservation> ports;
@@ -198,11 +199,13 @@ int run(const RunOptions& opt) {
   spec.ignore_sigterm = opt.ignore_sigterm;
   spec.participant_base = *base;
   if (own_server) {
-    spec.discovery_id = rc.plan.server_participant(*base);
-    // Written by the server once its participant listens. Not its ports seen taken: the server
+    for (int k = 0; k < rc.plan.own_servers; ++k)
+      spec.discovery_ids.push_back(rc.plan.server_participant(*base, k));
+    // Written by a server once its participant listens. Not its ports seen taken: the server
     // binds them briefly itself to check them first, and a probe of them from here could take
     // them in that instant.
-    spec.discovery_ready = [ready = dir.discovery_ready()] { return fs::exists(ready); };
+    spec.discovery_ready = [dir](int k) { return fs::exists(dir.discovery_ready(k)); };
+    spec.hung_servers = opt.hung_servers;
   }
   // What the run asks of this host, said before it flies and kept in its summary.
   spec.load = predict_load_here(rc, opt.time_scale);
@@ -342,6 +345,10 @@ Command add_run_command(CLI::App& app) {
       ->allow_extra_args(false)
       ->group("Faults");
   cmd->add_option("--test-ignore-sigterm", o->ignore_sigterm, "(tests) agents that ignore SIGTERM")
+      ->group("");
+  cmd->add_option("--test-hung-server", o->hung_servers,
+                  "(tests) the run's Discovery Servers (0, 1) that stop once they listen")
+      ->check(CLI::Range(0, 1))
       ->group("");
 
   return [cmd, o]() -> std::optional<int> {

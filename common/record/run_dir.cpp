@@ -103,6 +103,14 @@ fs::path RunDir::agent_out(AgentId id, int life) const {
                   (life ? "-restart" + std::to_string(life) : std::string()) + ".out");
 }
 
+fs::path RunDir::discovery_out(int server) const {
+  return path_ / ("discovery-" + std::to_string(server) + ".out");
+}
+
+fs::path RunDir::discovery_ready(int server) const {
+  return path_ / ("discovery-" + std::to_string(server) + ".ready");
+}
+
 fs::path RunDir::agent_stats(AgentId id) const {
   return path_ / ("agent-" + std::to_string(id) + ".stats");
 }
@@ -126,8 +134,8 @@ std::vector<RunDir::File> RunDir::files() {
       {kSupervisorReady, "written by the supervisor once its reader is up"},
       {kSupervisorLog, "the supervisor's log"},
       {kSupervisorOut, "the supervisor's stdout, with --quiet"},
-      {kDiscoveryOut, "the run's Discovery Server's output (transport.discovery SERVER)"},
-      {kDiscoveryReady, "written by the run's Discovery Server once it listens"},
+      {"discovery-K.out", "the output of the run's Discovery Server K (0, 1; discovery SERVER)"},
+      {"discovery-K.ready", "written by the run's Discovery Server K once it listens"},
       {kPlots, "swarm plot's figures (a directory; not written by the run)"},
       {kViewUrl, "where the supervisor serves the live view (with --view)"},
       {"agent-N.log", "an agent's log"},
@@ -244,6 +252,12 @@ bool RunDir::amend_summary(const std::vector<std::string>& problems) const {
 
 bool RunDir::note_load(const plan::Load& load) const {
   return edit_summary([&](records::Summary& s) { *s.mutable_load() = load; });
+}
+
+bool RunDir::add_notes(const std::vector<std::string>& notes) const {
+  return edit_summary([&](records::Summary& s) {
+    for (const std::string& n : notes) s.add_notes(n);
+  });
 }
 
 }  // namespace qswarm

@@ -54,8 +54,10 @@ class RunDir {
   std::filesystem::path supervisor_ready() const { return file(kSupervisorReady); }
   std::filesystem::path supervisor_log() const { return file(kSupervisorLog); }
   std::filesystem::path supervisor_out() const { return file(kSupervisorOut); }
-  std::filesystem::path discovery_out() const { return file(kDiscoveryOut); }
-  std::filesystem::path discovery_ready() const { return file(kDiscoveryReady); }
+  // The output of the run's Discovery Server `server` (0 or 1), and the file it writes once it
+  // listens.
+  std::filesystem::path discovery_out(int server) const;
+  std::filesystem::path discovery_ready(int server) const;
   std::filesystem::path plots() const { return file(kPlots); }
   std::filesystem::path view_url() const { return file(kViewUrl); }
   std::filesystem::path agent_log(AgentId id) const;
@@ -95,6 +97,8 @@ class RunDir {
   // The run's predicted load (run_load.hpp) written into summary.json. False if there is no
   // summary or it could not be written.
   bool note_load(const plan::Load& load) const;
+  // What the launcher saw that did not change the outcome (Summary.notes), appended.
+  bool add_notes(const std::vector<std::string>& notes) const;
 
   // Every file name a run directory may hold, with what it is: for the docs, and for the check
   // that the figure scripts spell them the same way.
@@ -117,8 +121,6 @@ class RunDir {
   static constexpr const char* kSupervisorReady = "supervisor.ready";
   static constexpr const char* kSupervisorLog = "supervisor.log";
   static constexpr const char* kSupervisorOut = "supervisor.out";
-  static constexpr const char* kDiscoveryOut = "discovery.out";
-  static constexpr const char* kDiscoveryReady = "discovery.ready";
   static constexpr const char* kPlots = "plots";
   static constexpr const char* kViewUrl = "view.url";
 

@@ -42,6 +42,9 @@ constexpr int kDdsThreadsNice = 15;
 // CAP_SYS_NICE): starved of CPU it batches more changes and hangs more in Fast DDS 2.9.1 (W5; on
 // the 64-agent lattice beside a busy loop 7 of 40 runs hung at nice 0, 0 of 12 at -10).
 constexpr int kServerNice = -10;
+// The run starts two Discovery Servers of its own, and every participant is told both: a server
+// that hangs (W5) or dies leaves the other relaying, so peers that meet after it still meet.
+constexpr int kOwnServers = 2;
 
 // Past this many agents every second one by id ticks half a period after the others: two bursts
 // of half the size on two cores instead of one.
@@ -183,7 +186,8 @@ RunPlan plan_run(const RunConfig& rc, const Hosts& hosts) {
     p.multicast_group = state_multicast_group(rc.transport.run_id);
   p.reader_agents = std::max(static_cast<int>(n), kMinReaderAgents);
 
-  p.participants = static_cast<int>(n) + 1 + (p.own_server ? 1 : 0);
+  p.own_servers = p.own_server ? kOwnServers : 0;
+  p.participants = static_cast<int>(n) + 1 + p.own_servers;
   p.participant_announce_period_s = std::max(1.0, size / kAnnouncingParticipantsPerS);
   p.peer_hosts_wait_s = hosts.peer_hosts ? kPeerHostsWaitS : 0.0;
   if (hosts.peer_hosts)
@@ -272,6 +276,7 @@ plan::RunPlan to_proto(const RunPlan& p, int participant_base) {
   o.set_tick_receive(p.tick_receive);
   o.set_discovery(to_string(p.discovery));
   o.set_own_server(p.own_server);
+  o.set_own_servers(p.own_servers);
   o.set_participants(p.participants);
   o.set_participant_announce_period_s(p.participant_announce_period_s);
   o.set_peer_hosts_wait_s(p.peer_hosts_wait_s);

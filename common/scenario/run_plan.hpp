@@ -70,8 +70,9 @@ struct RunPlan {
 
   // Discovery and ports.
   DiscoveryMode discovery = DiscoveryMode::kMulticast;
-  bool own_server = false;  // the launcher starts the run's Discovery Server (swarm-discovery)
-  // Participants of the run on the port plan: the supervisor, the agents and its own server.
+  bool own_server = false;  // the launcher starts the run's Discovery Servers (swarm-discovery)
+  int own_servers = 0;      // how many: each participant is told them all, in one order
+  // Participants of the run on the port plan: the supervisor, the agents and its own servers.
   int participants = 0;
   double participant_announce_period_s = 1.0;  // wall: a participant's announcements
   double peer_hosts_wait_s = 0.0;              // wall: how long a process waits for peer names
@@ -79,7 +80,7 @@ struct RunPlan {
   // or, with a block of ids per host (--unicast-peers), one per name (each a host).
   std::size_t peer_host_addresses = 0;
   int dds_threads_nice = 0;  // how much nicer an agent's Fast DDS threads run than its tick
-  int server_nice = 0;       // the run's own Discovery Server's nice value (where the host allows)
+  int server_nice = 0;  // how much nicer than the launcher its servers run (-10: higher priority)
 
   // Ticks and the record.
   int tick_phases = 1;      // 2: every second agent by id ticks half a period after the others
@@ -107,12 +108,14 @@ struct RunPlan {
   // The phase of agent `id` (a fraction of the tick period; 0 for an id not in `ids`).
   double tick_phase(const std::set<AgentId>& ids, AgentId id) const;
   // The participant ids of the run's processes in the block from `base` (the launcher's
-  // reservation): the supervisor, the agent at `index` in the scenario's order, the server.
+  // reservation): the supervisor, the agent at `index` in the scenario's order, the servers.
   int supervisor_participant(int base) const { return base; }
   int agent_participant(int base, std::size_t index) const {
     return base + 1 + static_cast<int>(index);
   }
-  int server_participant(int base) const { return base + participants - 1; }
+  int server_participant(int base, int server) const {
+    return base + participants - own_servers + server;
+  }
 };
 
 // The plan of a resolved run on these hosts: a pure function. Throws ScenarioError naming the

@@ -38,7 +38,7 @@ class FakeProcesses final : public ChildProcesses {
     for (Child& c : children_) {
       if (!c.running) continue;
       c.running = false;
-      if (c.role == stubborn_role_ && c.id == stubborn_) {
+      if (c.role == stubborn_role_ && (c.id == stubborn_ || all_stubborn_)) {
         c.status = signalled(SIGKILL);
         c.killed_at_teardown = true;
         ++killed;
@@ -71,6 +71,7 @@ class FakeProcesses final : public ChildProcesses {
   std::vector<std::vector<std::string>> argv_;
   unsigned stubborn_ = 0, aborts_at_teardown_ = 0;
   std::string stubborn_role_ = "agent";  // with stubborn_: the child that needs SIGKILL
+  bool all_stubborn_ = false;            // every child of stubborn_role_ needs it
 
  private:
   std::vector<Child> children_, exited_;
@@ -94,12 +95,19 @@ LaunchSpec spec_for(const std::string& extra) {
   return spec;
 }
 
-// The same, with the run's own Discovery Server on the block's last id (supervisor 0, agents 1..3).
+// The same, with the run's own two Discovery Servers on the block's last ids (supervisor 0,
+// agents 1..3).
 LaunchSpec spec_with_server() {
   LaunchSpec spec = spec_for("");
   spec.participant_base = 0;
-  spec.discovery_id = 4;
+  spec.discovery_ids = {4, 5};
   return spec;
+}
+
+// The value after `flag` in argv ("" without it).
+std::string arg(const std::vector<std::string>& argv, const std::string& flag) {
+  const auto it = std::find(argv.begin(), argv.end(), flag);
+  return it == argv.end() || std::next(it) == argv.end() ? std::string() : *std::next(it);
 }
 
 bool has(const std::vector<std::string>& argv, const std::string& a) {
@@ -147,25 +155,37 @@ TEST(Launcher, ASupervisorThatRefusesItsInputRefusesTheRun) {
   }
 }
 
-TEST(Launcher, ARunsOwnDiscoveryServerStartsFirstAndEveryParticipantIsToldItsAddress) {
+TEST(Launcher, ARunsOwnDiscoveryServersStartFirstAndEveryParticipantIsToldTheirAddresses) {
   FakeProcesses procs;
   ManualClock clock;
   LaunchSpec spec = spec_for("transport { domain_id: 3 }");
   spec.participant_base = 10;
-  spec.discovery_id = 14;  // the block's last id: supervisor 10, agents 11..13
-  int polls = 0;
-  spec.discovery_ready = [&] { return ++polls > 3; };  // listening after a few polls
+  spec.discovery_ids = {14, 15};  // the block's last ids: supervisor 10, agents 11..13
+  int polls[2] = {0, 0};
+  spec.discovery_ready = [&](int k) { return ++polls[k] > 3 + k; };  // after a few polls each
   Launcher l(spec, procs, clock, [] { return true; });
   l.start();
-  ASSERT_EQ(procs.children().size(), 5u);
+  ASSERT_EQ(procs.children().size(), 6u);
   EXPECT_EQ(procs.children()[0].role, "discovery");
-  EXPECT_EQ(procs.children()[1].role, "supervisor");
-  // Discovery port of id 14 on domain 3: 7400 + 1100 x 3 + 10 + 2 x 14.
-  const std::string address = "127.0.0.1:10738";
-  EXPECT_TRUE(has(procs.argv_[0], "14"));     // --participant-id
-  EXPECT_TRUE(has(procs.argv_[0], "10738"));  // --port
-  for (std::size_t i = 1; i < procs.argv_.size(); ++i)
-    EXPECT_TRUE(has(procs.argv_[i], address)) << procs.children()[i].role;
+  EXPECT_EQ(procs.children()[1].role, "discovery");
+  EXPECT_EQ(procs.children()[1].id, 1u);
+  EXPECT_EQ(procs.children()[2].role, "supervisor");
+  // Discovery ports of ids 14 and 15 on domain 3: 7400 + 1100 x 3 + 10 + 2 x id.
+  const std::string address = "127.0.0.1:10738,127.0.0.1:10740";
+  for (int k = 0; k < 2; ++k) {
+    EXPECT_EQ(arg(procs.argv_[k], "--servers"), address);
+    EXPECT_EQ(arg(procs.argv_[k], "--index"), std::to_string(k));
+    EXPECT_EQ(arg(procs.argv_[k], "--participant-id"), std::to_string(14 + k));
+    EXPECT_EQ(arg(procs.argv_[k], "--ready-file"), spec.dir.discovery_ready(k).string());
+    EXPECT_FALSE(has(procs.argv_[k], "--test-hang"));
+  }
+  for (std::size_t i = 2; i < procs.argv_.size(); ++i)
+    EXPECT_EQ(arg(procs.argv_[i], "--discovery-server"), address) << procs.children()[i].role;
+  // A server a test wants hung is told so.
+  spec.hung_servers = {1};
+  const Launcher hung(spec, procs, clock, [] { return true; });
+  EXPECT_FALSE(has(hung.discovery_argv(0), "--test-hang"));
+  EXPECT_TRUE(has(hung.discovery_argv(1), "--test-hang"));
   // The supervisor is found by its role, not its place.
   procs.exit_child("supervisor", 0, exited(0));
   EXPECT_EQ(l.poll(false), std::string(Launcher::kFinished));
@@ -202,10 +222,10 @@ TEST(Launcher, ADiscoveryServerThatNeverListensStartsNothingElse) {
   FakeProcesses procs;
   ManualClock clock;
   LaunchSpec spec = spec_with_server();
-  spec.discovery_ready = [] { return false; };
+  spec.discovery_ready = [](int k) { return k == 0; };  // one of the two listens
   Launcher l(spec, procs, clock, [] { return true; });
   EXPECT_THROW(l.start(), std::runtime_error);
-  EXPECT_EQ(procs.children().size(), 1u);
+  EXPECT_EQ(procs.children().size(), 2u);  // the servers, and nothing else
 }
 
 // The server is up once seen up, and the agents start. When readiness was its ports seen taken,
@@ -215,15 +235,15 @@ TEST(Launcher, ADiscoveryServerSeenListeningOnceIsUpAndTheWaitSaysHowLongItTook)
   FakeProcesses procs;
   ManualClock clock;
   LaunchSpec spec = spec_with_server();
-  int polls = 0;
-  spec.discovery_ready = [&] { return ++polls == 2; };
+  int polls[2] = {0, 0};
+  spec.discovery_ready = [&](int k) { return ++polls[k] == 2; };
   Launcher l(spec, procs, clock, [] { return true; });
   EXPECT_NO_THROW(l.start());
-  EXPECT_EQ(procs.children().size(), 5u);  // the server, the supervisor, agents 1..3
-  EXPECT_EQ(polls, 2);
-  EXPECT_TRUE(has(l.discovery_argv(), spec.dir.discovery_ready().string()));
+  EXPECT_EQ(procs.children().size(), 6u);  // the servers, the supervisor, agents 1..3
+  EXPECT_EQ(polls[0], 2);
+  EXPECT_EQ(polls[1], 2);
   // At the plan's priority for it.
-  const std::vector<std::string> server = l.discovery_argv();
+  const std::vector<std::string> server = l.discovery_argv(1);
   const auto nice = std::find(server.begin(), server.end(), "--nice");
   ASSERT_NE(nice, server.end());
   ASSERT_NE(std::next(nice), server.end());
@@ -232,21 +252,23 @@ TEST(Launcher, ADiscoveryServerSeenListeningOnceIsUpAndTheWaitSaysHowLongItTook)
   // One that never listens: the wait says how long it waited (20 s on the manual clock).
   FakeProcesses silent;
   ManualClock clock1;
-  spec.discovery_ready = [] { return false; };
+  spec.discovery_ready = [](int k) { return k == 0; };
   Launcher l1(spec, silent, clock1, [] { return true; });
   try {
     l1.start();
     ADD_FAILURE() << "started without a server";
   } catch (const std::runtime_error& e) {
-    EXPECT_NE(std::string(e.what()).find("not listening after 20.0"), std::string::npos)
+    EXPECT_NE(std::string(e.what()).find("Discovery Server 1 did not come up (not listening "
+                                         "after 20.0"),
+              std::string::npos)
         << e.what();
   }
 
   // One that dies before it listens: its exit is the reason, after the time it really took.
   FakeProcesses dying;
   ManualClock clock2;
-  spec.discovery_ready = [&] {
-    if (clock2.now_s() >= 1.0) dying.exit_child("discovery", 0, exited(2));
+  spec.discovery_ready = [&](int k) {
+    if (k == 1 && clock2.now_s() >= 1.0) dying.exit_child("discovery", 1, exited(2));
     return false;
   };
   Launcher l2(spec, dying, clock2, [] { return true; });
@@ -254,14 +276,18 @@ TEST(Launcher, ADiscoveryServerSeenListeningOnceIsUpAndTheWaitSaysHowLongItTook)
     l2.start();
     ADD_FAILURE() << "started without a server";
   } catch (const std::runtime_error& e) {
-    EXPECT_NE(std::string(e.what()).find("exited with code 2"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("Discovery Server 1 did not come up (exited with code 2"),
+              std::string::npos)
+        << e.what();
     EXPECT_EQ(std::string(e.what()).find("not listening"), std::string::npos) << e.what();
   }
   EXPECT_LT(clock2.now_s(), 2.0);
-  EXPECT_EQ(dying.children().size(), 1u);
+  EXPECT_EQ(dying.children().size(), 2u);
 }
 
-TEST(Launcher, ADiscoveryServerThatCrashesMidRunIsACrashTheRecordMustShow) {
+// One server of two that crashes mid-run leaves the other relaying: a note. The other's crash
+// then leaves none: a crash the record must show.
+TEST(Launcher, ADiscoveryServerThatCrashesMidRunIsANoteWhileTheOtherRelaysAndAProblemAfter) {
   FakeProcesses procs;
   ManualClock clock;
   LaunchSpec spec = spec_with_server();
@@ -269,25 +295,105 @@ TEST(Launcher, ADiscoveryServerThatCrashesMidRunIsACrashTheRecordMustShow) {
   l.start();
   procs.exit_child("discovery", 0, signalled(SIGSEGV));
   EXPECT_FALSE(l.poll(false));  // the matched participants fly on
+  EXPECT_TRUE(l.problems().empty());
+  ASSERT_EQ(l.notes().size(), 1u);
+  EXPECT_NE(l.notes()[0].find("Discovery Server 0 killed by signal"), std::string::npos)
+      << l.notes()[0];
+  EXPECT_NE(l.notes()[0].find("Discovery Server 1 relayed on"), std::string::npos) << l.notes()[0];
+  procs.exit_child("discovery", 1, signalled(SIGSEGV));
+  EXPECT_FALSE(l.poll(false));
   ASSERT_EQ(l.problems().size(), 1u);
-  EXPECT_NE(l.problems()[0].find("Discovery Server"), std::string::npos) << l.problems()[0];
+  EXPECT_NE(l.problems()[0].find("Discovery Server 1 killed"), std::string::npos)
+      << l.problems()[0];
+  // Both in one pass: neither relayed for the other.
+  FakeProcesses both;
+  Launcher l2(spec, both, clock, [] { return true; });
+  l2.start();
+  both.exit_child("discovery", 0, exited(1));
+  both.exit_child("discovery", 1, exited(1));
+  EXPECT_FALSE(l2.poll(false));
+  EXPECT_EQ(l2.problems().size(), 2u);
+  EXPECT_TRUE(l2.notes().empty());
 }
 
-// A server that needs SIGKILL had hung, and a hung Fast DDS server relays nothing: the run's
-// record says so and the run is not "converged".
-TEST(Launcher, ADiscoveryServerThatHangsAtTeardownIsAProblemTheRecordMustShow) {
+// A server that needs SIGKILL had hung, and a hung Fast DDS server relays nothing: with the other
+// relaying the record notes it; with none, peers that were to meet since did not, and the run is
+// not "converged".
+TEST(Launcher, ADiscoveryServerThatHangsAtTeardownIsANoteOnlyWhileTheOtherRelayed) {
+  for (const bool both : {false, true}) {
+    FakeProcesses procs;
+    ManualClock clock;
+    Launcher l(spec_with_server(), procs, clock, [] { return true; });
+    l.start();
+    procs.stubborn_role_ = "discovery";
+    procs.stubborn_ = 1;
+    procs.all_stubborn_ = both;
+    EXPECT_EQ(l.poll(true), "interrupted");
+    EXPECT_EQ(l.stop(), both ? 2 : 1);
+    if (!both) {
+      EXPECT_TRUE(l.problems().empty());
+      ASSERT_EQ(l.notes().size(), 1u);
+      EXPECT_EQ(l.notes()[0],
+                "Discovery Server 1 hung: it did not stop within 5 s of SIGTERM; Discovery "
+                "Server 0 relayed on");
+      continue;
+    }
+    EXPECT_TRUE(l.notes().empty());
+    ASSERT_EQ(l.problems().size(), 2u);
+    for (int k = 0; k < 2; ++k) {
+      const std::string& p = l.problems()[k];
+      EXPECT_NE(p.find("Discovery Server " + std::to_string(k) + " hung"), std::string::npos) << p;
+      EXPECT_NE(p.find("within 5 s of SIGTERM"), std::string::npos) << p;
+      EXPECT_NE(p.find("peers that were to meet after it hung did not"), std::string::npos) << p;
+    }
+  }
+  // The one server of a spec with one is named as before.
   FakeProcesses procs;
   ManualClock clock;
-  Launcher l(spec_with_server(), procs, clock, [] { return true; });
+  LaunchSpec one = spec_with_server();
+  one.discovery_ids = {4};
+  Launcher l(one, procs, clock, [] { return true; });
   l.start();
   procs.stubborn_role_ = "discovery";
-  procs.stubborn_ = 0;
-  EXPECT_EQ(l.poll(true), "interrupted");
-  EXPECT_EQ(l.stop(), 1);
+  l.poll(true);
+  l.stop();
   ASSERT_EQ(l.problems().size(), 1u);
   EXPECT_NE(l.problems()[0].find("the Discovery Server hung"), std::string::npos)
       << l.problems()[0];
-  EXPECT_NE(l.problems()[0].find("within 5 s of SIGTERM"), std::string::npos) << l.problems()[0];
+}
+
+// What the launcher noted goes into the summary and to the user, and leaves a converged run
+// converged (exit 0).
+TEST(Launcher, TheSummaryKeepsTheLaunchersNotesAndTheyUnmakeNothing) {
+  FakeProcesses procs;
+  ManualClock clock;
+  const LaunchSpec spec = spec_with_server();
+  Launcher l(spec, procs, clock, [] { return true; });
+  l.start();
+  procs.exit_child("discovery", 1, signalled(SIGKILL));
+  EXPECT_FALSE(l.poll(false));
+  records::Summary s;
+  s.set_converged(true);
+  s.set_end_reason("converged");
+  ASSERT_TRUE(spec.dir.write_summary(to_json(s)));
+  mcap::Writer w;
+  ASSERT_TRUE(w.open(spec.dir.mcap()) && w.close());
+  procs.exit_child("supervisor", 0, exited(0));
+  ASSERT_EQ(l.poll(false), std::string(Launcher::kFinished));
+  l.stop();
+  for (AgentId id = 1; id <= 3; ++id) std::ofstream(spec.dir.agent_stats(id)) << "{}";
+  const Launcher::Outcome out = l.conclude(clock.now_s());
+  EXPECT_EQ(out.exit_code, 0);
+  ASSERT_FALSE(out.lines.empty());
+  EXPECT_EQ(out.lines[0].rfind("Discovery Server 1 killed by signal", 0), 0u) << out.lines[0];
+  EXPECT_NE(out.lines[0].find(" during the run; Discovery Server 0 relayed on"), std::string::npos)
+      << out.lines[0];
+  const std::optional<records::Summary> got = spec.dir.read_summary();
+  ASSERT_TRUE(got.has_value());
+  EXPECT_TRUE(got->converged());
+  ASSERT_EQ(got->notes_size(), 1);
+  EXPECT_EQ(got->notes(0), out.lines[0]);
+  std::filesystem::remove_all(spec.dir.path());
 }
 
 TEST(Launcher, AnUnmarkedSigkillIsNotThePlansEvenWithKillsPlanned) {
