@@ -120,10 +120,16 @@ void Launcher::lose_servers(const std::vector<std::pair<unsigned, std::string>>&
   for (unsigned k = 0; k < server_lost_.size() && relaying.empty(); ++k)
     if (!server_lost_[k]) relaying = server_name(k);
   for (const auto& [server, what] : lost) {
-    if (relaying.empty())
-      problems_.push_back(server_name(server) + " " + what + consequence);
-    else
-      notes_.push_back(server_name(server) + " " + what + "; " + relaying + " relayed on");
+    std::string line = server_name(server);
+    line += ' ';
+    line += what;
+    if (relaying.empty()) {
+      problems_.push_back(line + consequence);
+    } else {
+      line += "; ";
+      line += relaying;
+      notes_.push_back(line + " relayed on");
+    }
   }
 }
 
@@ -202,7 +208,7 @@ void Launcher::start_discovery() {
     if (failed < 0 || (server(failed).running && !server(k).running)) failed = k;
   }
   if (failed < 0) return;
-  const ChildProcesses::Child c = server(failed);
+  const ChildProcesses::Child& c = server(failed);
   throw std::runtime_error(server_name(static_cast<unsigned>(failed)) + " did not come up (" +
                            (c.running ? "not listening after " + num(clock_.now_s() - since) + " s"
                                       : describe_status(c.status)) +
