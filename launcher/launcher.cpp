@@ -111,25 +111,18 @@ std::string Launcher::server_name(unsigned server) const {
                                         : std::string("the Discovery Server");
 }
 
-void Launcher::lose_servers(const std::vector<std::pair<unsigned, std::string>>& lost,
-                            const std::string& consequence) {
-  for (const auto& l : lost) server_lost_.at(l.first) = true;
-  // Matched participants fly on whatever happens to the servers; one left relaying also
-  // introduces those that meet later (a restart, a late joiner, peers that come into range).
-  std::string relaying;
-  for (unsigned k = 0; k < server_lost_.size() && relaying.empty(); ++k)
-    if (!server_lost_[k]) relaying = server_name(k);
-  for (const auto& [server, what] : lost) {
-    std::string line = server_name(server);
-    line += ' ';
-    line += what;
-    if (relaying.empty()) {
-      problems_.push_back(line + consequence);
-    } else {
-      line += "; ";
-      line += relaying;
-      notes_.push_back(line + " relayed on");
-    }
+void Launcher::lose_server(unsigned server, const std::string& what,
+                           const std::string& consequence) {
+  server_lost_.at(server) = true;
+  servers_lost_.push_back({server, what, consequence});
+}
+
+void Launcher::reap_while_starting() {
+  for (const auto& c : procs_.reap()) {
+    if (c.role != "discovery") continue;
+    std::fprintf(stderr, "swarm run: %s %s\n", server_name(c.id).c_str(),
+                 describe_status(c.status).c_str());
+    lose_server(c.id, describe_status(c.status) + " while the run started");
   }
 }
 
@@ -197,10 +190,10 @@ void Launcher::start_discovery() {
       dead = dead || (!up[k] && !server(k).running);
     }
     if (all || dead || clock_.now_s() >= ready_by) break;
-    procs_.reap();
+    reap_while_starting();
     clock_.sleep_until(clock_.now_s() + 0.005);
   }
-  procs_.reap();
+  reap_while_starting();
   // A server that died is the reason, before one still starting.
   int failed = -1;
   for (int k = 0; k < servers; ++k) {
@@ -225,10 +218,10 @@ void Launcher::start() {
   // The supervisor's reader first, so that it records the start.
   const double ready_by = clock_.now_s() + spec_.supervisor_ready_timeout_s;
   while (!supervisor_ready_() && clock_.now_s() < ready_by && supervisor().running) {
-    procs_.reap();
+    reap_while_starting();
     clock_.sleep_until(clock_.now_s() + 0.005);
   }
-  procs_.reap();
+  reap_while_starting();
   const ChildProcesses::Child sup = supervisor();
   if (!sup.running && WIFEXITED(sup.status) && WEXITSTATUS(sup.status) == 2)
     throw SupervisorRefused("the supervisor refused its input (exit 2, said above): nothing flew");
@@ -248,9 +241,8 @@ void Launcher::start() {
 }
 
 void Launcher::note_abnormal(const ChildProcesses::Child& c, bool at_teardown) {
-  const std::string who = c.role == "agent"       ? "agent " + std::to_string(c.id)
-                          : c.role == "discovery" ? server_name(c.id)
-                                                  : c.role;
+  // (A lost server is judged apart: lose_server.)
+  const std::string who = c.role == "agent" ? "agent " + std::to_string(c.id) : c.role;
   problems_.push_back(who + " " + describe_status(c.status) +
                       (at_teardown ? " at teardown" : " during the run"));
 }
@@ -283,7 +275,6 @@ std::optional<std::string> Launcher::poll(bool interrupted) {
 }
 
 std::optional<std::string> Launcher::next_end(bool interrupted) {
-  std::vector<std::pair<unsigned, std::string>> servers_lost;
   for (const auto& c : procs_.reap()) {
     if (c.role == "agent") {
       std::fprintf(stderr, "swarm run: agent %u %s\n", c.id, describe_status(c.status).c_str());
@@ -291,11 +282,11 @@ std::optional<std::string> Launcher::next_end(bool interrupted) {
     } else if (c.role == "discovery") {
       std::fprintf(stderr, "swarm run: %s %s\n", server_name(c.id).c_str(),
                    describe_status(c.status).c_str());
-      servers_lost.emplace_back(c.id, describe_status(c.status) + " during the run");
+      // Participants already matched fly on; with no server left, one that starts later (a
+      // restart, a late joiner) finds nobody.
+      lose_server(c.id, describe_status(c.status) + " during the run");
     }
   }
-  // With none left, participants already matched fly on; one that starts later finds nobody.
-  if (!servers_lost.empty()) lose_servers(servers_lost, "");
   if (!supervisor().running) return why_.empty() ? std::string(kFinished) : why_;
   if (interrupted) return "interrupted";
   if (!why_.empty()) return why_;
@@ -308,7 +299,6 @@ int Launcher::stop() {
   for (const auto& c : procs_.children()) was_running.push_back(c.running);
   const int killed = procs_.terminate_all(spec_.grace_s);
   const auto& children = procs_.children();
-  std::vector<std::pair<unsigned, std::string>> hung;
   for (std::size_t i = 0; i < children.size(); ++i) {
     const auto& c = children[i];
     if (!was_running[i]) continue;
@@ -319,8 +309,9 @@ int Launcher::stop() {
       // lock held, and from then on relays nothing (docs/fast-dds-workarounds.md, W5).
       char grace[32];
       std::snprintf(grace, sizeof grace, "%g", spec_.grace_s);
-      hung.emplace_back(c.id,
-                        std::string("hung: it did not stop within ") + grace + " s of SIGTERM");
+      lose_server(c.id, std::string("hung: it did not stop within ") + grace + " s of SIGTERM",
+                  " (a hung server relays no discovery; peers that were to meet after it hung did "
+                  "not)");
       continue;
     }
     if (c.killed_at_teardown) continue;
@@ -330,14 +321,30 @@ int Launcher::stop() {
         (WIFEXITED(c.status) &&
          (WEXITSTATUS(c.status) == 0 || (c.role == "supervisor" && WEXITSTATUS(c.status) == 1))) ||
         (WIFSIGNALED(c.status) && WTERMSIG(c.status) == SIGTERM);
-    if (!clean) note_abnormal(c, true);
+    if (!clean && c.role == "discovery")
+      lose_server(c.id, describe_status(c.status) + " at teardown");
+    else if (!clean)
+      note_abnormal(c, true);
   }
-  // With no other server relaying, peers that should have met since it hung never did: the
-  // record must say so.
-  if (!hung.empty())
-    lose_servers(hung,
-                 " (a hung server relays no discovery; peers that were to meet after it hung did "
-                 "not)");
+  // Every server's end is known now: one that stopped when asked had not hung, so it served to
+  // the end. While one did, a lost one cost nothing the record shows; with none, peers that were
+  // to meet since never did, and the record must say so.
+  std::string served;
+  for (unsigned k = 0; k < server_lost_.size() && served.empty(); ++k)
+    if (!server_lost_[k]) served = server_name(k);
+  for (const LostServer& l : servers_lost_) {
+    std::string line = server_name(l.server);
+    line += ' ';
+    line += l.what;
+    if (served.empty()) {
+      problems_.push_back(line + l.consequence);
+    } else {
+      line += "; ";
+      line += served;
+      notes_.push_back(line + " served to the end");
+    }
+  }
+  servers_lost_.clear();
   return killed;
 }
 

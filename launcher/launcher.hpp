@@ -94,7 +94,7 @@ class Launcher {
   // "HOST:PORT,HOST:PORT" of the run's Discovery Servers, "" without one.
   std::string discovery_address() const;
   // What the launcher saw that did not change the outcome: a server that hung or died while
-  // another relayed. conclude() writes them into the summary.
+  // another served to the end (known after stop()). conclude() writes them into the summary.
   const std::vector<std::string>& notes() const { return notes_; }
 
  private:
@@ -105,10 +105,12 @@ class Launcher {
   const ChildProcesses::Child& supervisor() const;
   void start_discovery();
   std::string server_name(unsigned server) const;
-  // Servers lost (dead or hung; by place, and what happened): each a note while another still
-  // relays, else a problem, told its `consequence`.
-  void lose_servers(const std::vector<std::pair<unsigned, std::string>>& lost,
-                    const std::string& consequence);
+  // A server lost (by place): what happened to it, and what that cost if no other server served
+  // to the end. stop() judges them once every server's end is known: a note while another
+  // stopped when asked (so it had not hung), else a problem.
+  void lose_server(unsigned server, const std::string& what, const std::string& consequence = "");
+  // procs_.reap() while the run starts: a server lost then is lost as any other.
+  void reap_while_starting();
 
   LaunchSpec spec_;
   ChildProcesses& procs_;
@@ -121,7 +123,12 @@ class Launcher {
   std::string end_;  // what poll() last said ended the run
   std::vector<std::string> problems_;
   std::vector<std::string> notes_;
-  std::vector<bool> server_lost_;  // by place in discovery_ids
+  struct LostServer {
+    unsigned server;
+    std::string what, consequence;
+  };
+  std::vector<LostServer> servers_lost_;  // to judge at stop()
+  std::vector<bool> server_lost_;         // by place in discovery_ids
 };
 
 }  // namespace qswarm

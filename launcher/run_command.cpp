@@ -131,6 +131,13 @@ int run(const RunOptions& opt) {
     std::cerr << "swarm run: " << e.what() << "\n";
     return 2;
   }
+  for (const int k : opt.hung_servers) {
+    if (k < rc.plan.own_servers) continue;
+    std::cerr << "swarm run: --test-hung-server " << k << ": the run starts " << rc.plan.own_servers
+              << " Discovery Servers of its own (transport.discovery "
+              << "SERVER: two, 0 and 1)\n";
+    return 2;
+  }
   // A keystore that is missing a file, expired, altered, unsafe or not this scenario's stops the
   // run here, naming the file, before any process flies.
   if (!rc.transport.keystore.empty()) {
@@ -246,7 +253,17 @@ int run(const RunOptions& opt) {
   } catch (const std::exception& e) {
     std::cerr << "swarm run: " << e.what() << "\n";
     launcher.stop();
-    if (dir.write_fallback_summary(rc, e.what(), clock.now_s())) dir.note_load(*spec.load);
+    // What the teardown saw too (a server that had hung, one lost while the other served).
+    std::string reason = e.what();
+    for (const std::string& p : launcher.problems()) {
+      std::cerr << "swarm run: " << p << "\n";
+      reason += "; " + p;
+    }
+    for (const std::string& n : launcher.notes()) std::cerr << "swarm run: " << n << "\n";
+    if (dir.write_fallback_summary(rc, reason, clock.now_s())) {
+      dir.note_load(*spec.load);
+      dir.add_notes(launcher.notes());
+    }
     return 1;
   }
   if (opt.view_port >= 0 && opt.quiet) {
@@ -348,7 +365,7 @@ Command add_run_command(CLI::App& app) {
       ->group("");
   cmd->add_option("--test-hung-server", o->hung_servers,
                   "(tests) the run's Discovery Servers (0, 1) that stop once they listen")
-      ->check(CLI::Range(0, 1))
+      ->check(CLI::NonNegativeNumber)
       ->group("");
 
   return [cmd, o]() -> std::optional<int> {

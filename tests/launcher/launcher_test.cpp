@@ -285,40 +285,79 @@ TEST(Launcher, ADiscoveryServerSeenListeningOnceIsUpAndTheWaitSaysHowLongItTook)
   EXPECT_EQ(dying.children().size(), 2u);
 }
 
-// One server of two that crashes mid-run leaves the other relaying: a note. The other's crash
-// then leaves none: a crash the record must show.
-TEST(Launcher, ADiscoveryServerThatCrashesMidRunIsANoteWhileTheOtherRelaysAndAProblemAfter) {
+// One server of two that crashes mid-run, while the other serves to the end (it stops when
+// asked: it had not hung), is a note, judged at teardown; with the other lost too, in one pass or
+// hung at teardown, no server served and both are problems the record must show.
+TEST(Launcher, ADiscoveryServerThatCrashesMidRunIsANoteOnlyWhileTheOtherServesToTheEnd) {
+  const LaunchSpec spec = spec_with_server();
+  {
+    FakeProcesses procs;
+    ManualClock clock;
+    Launcher l(spec, procs, clock, [] { return true; });
+    l.start();
+    procs.exit_child("discovery", 0, signalled(SIGSEGV));
+    EXPECT_FALSE(l.poll(false));  // the matched participants fly on
+    EXPECT_TRUE(l.problems().empty());
+    EXPECT_TRUE(l.notes().empty());  // not known yet: the other may have hung
+    EXPECT_EQ(l.poll(true), "interrupted");
+    l.stop();
+    EXPECT_TRUE(l.problems().empty());
+    ASSERT_EQ(l.notes().size(), 1u);
+    EXPECT_EQ(l.notes()[0].rfind("Discovery Server 0 killed by signal", 0), 0u) << l.notes()[0];
+    EXPECT_NE(l.notes()[0].find(" during the run; Discovery Server 1 served to the end"),
+              std::string::npos)
+        << l.notes()[0];
+  }
+  for (const bool other_hangs : {false, true}) {
+    FakeProcesses procs;
+    ManualClock clock;
+    Launcher l(spec, procs, clock, [] { return true; });
+    l.start();
+    procs.exit_child("discovery", 0, exited(1));
+    if (!other_hangs) procs.exit_child("discovery", 1, exited(1));  // both in one pass
+    EXPECT_FALSE(l.poll(false));
+    procs.stubborn_role_ = "discovery";
+    procs.stubborn_ = 1;
+    EXPECT_EQ(l.poll(true), "interrupted");
+    l.stop();
+    EXPECT_TRUE(l.notes().empty()) << other_hangs << ": " << l.notes()[0];
+    ASSERT_EQ(l.problems().size(), 2u) << other_hangs;
+    EXPECT_NE(l.problems()[0].find("Discovery Server 0 exited with code 1 during the run"),
+              std::string::npos)
+        << l.problems()[0];
+    EXPECT_NE(l.problems()[1].find(other_hangs ? "Discovery Server 1 hung"
+                                               : "Discovery Server 1 "
+                                                 "exited"),
+              std::string::npos)
+        << l.problems()[1];
+  }
+}
+
+// A server that dies once it listens, while the supervisor starts, is lost as any other: the
+// launcher's waits then read the process table too.
+TEST(Launcher, ADiscoveryServerLostWhileTheRunStartsIsJudgedAsAnyOther) {
   FakeProcesses procs;
   ManualClock clock;
-  LaunchSpec spec = spec_with_server();
-  Launcher l(spec, procs, clock, [] { return true; });
+  int polls = 0;
+  Launcher l(spec_with_server(), procs, clock, [&] {
+    if (++polls == 1) procs.exit_child("discovery", 1, signalled(SIGABRT));
+    return polls > 2;
+  });
   l.start();
-  procs.exit_child("discovery", 0, signalled(SIGSEGV));
-  EXPECT_FALSE(l.poll(false));  // the matched participants fly on
+  EXPECT_EQ(procs.spawned("agent", 1), 1);  // the other serves: the run goes on
+  EXPECT_EQ(l.poll(true), "interrupted");
+  l.stop();
   EXPECT_TRUE(l.problems().empty());
   ASSERT_EQ(l.notes().size(), 1u);
-  EXPECT_NE(l.notes()[0].find("Discovery Server 0 killed by signal"), std::string::npos)
+  EXPECT_EQ(l.notes()[0].rfind("Discovery Server 1 killed by signal", 0), 0u) << l.notes()[0];
+  EXPECT_NE(l.notes()[0].find(" while the run started; Discovery Server 0 served to the end"),
+            std::string::npos)
       << l.notes()[0];
-  EXPECT_NE(l.notes()[0].find("Discovery Server 1 relayed on"), std::string::npos) << l.notes()[0];
-  procs.exit_child("discovery", 1, signalled(SIGSEGV));
-  EXPECT_FALSE(l.poll(false));
-  ASSERT_EQ(l.problems().size(), 1u);
-  EXPECT_NE(l.problems()[0].find("Discovery Server 1 killed"), std::string::npos)
-      << l.problems()[0];
-  // Both in one pass: neither relayed for the other.
-  FakeProcesses both;
-  Launcher l2(spec, both, clock, [] { return true; });
-  l2.start();
-  both.exit_child("discovery", 0, exited(1));
-  both.exit_child("discovery", 1, exited(1));
-  EXPECT_FALSE(l2.poll(false));
-  EXPECT_EQ(l2.problems().size(), 2u);
-  EXPECT_TRUE(l2.notes().empty());
 }
 
 // A server that needs SIGKILL had hung, and a hung Fast DDS server relays nothing: with the other
-// relaying the record notes it; with none, peers that were to meet since did not, and the run is
-// not "converged".
+// serving to the end the record notes it; with none, peers that were to meet since did not, and
+// the run is not "converged".
 TEST(Launcher, ADiscoveryServerThatHangsAtTeardownIsANoteOnlyWhileTheOtherRelayed) {
   for (const bool both : {false, true}) {
     FakeProcesses procs;
@@ -335,7 +374,7 @@ TEST(Launcher, ADiscoveryServerThatHangsAtTeardownIsANoteOnlyWhileTheOtherRelaye
       ASSERT_EQ(l.notes().size(), 1u);
       EXPECT_EQ(l.notes()[0],
                 "Discovery Server 1 hung: it did not stop within 5 s of SIGTERM; Discovery "
-                "Server 0 relayed on");
+                "Server 0 served to the end");
       continue;
     }
     EXPECT_TRUE(l.notes().empty());
@@ -386,7 +425,8 @@ TEST(Launcher, TheSummaryKeepsTheLaunchersNotesAndTheyUnmakeNothing) {
   EXPECT_EQ(out.exit_code, 0);
   ASSERT_FALSE(out.lines.empty());
   EXPECT_EQ(out.lines[0].rfind("Discovery Server 1 killed by signal", 0), 0u) << out.lines[0];
-  EXPECT_NE(out.lines[0].find(" during the run; Discovery Server 0 relayed on"), std::string::npos)
+  EXPECT_NE(out.lines[0].find(" during the run; Discovery Server 0 served to the end"),
+            std::string::npos)
       << out.lines[0];
   const std::optional<records::Summary> got = spec.dir.read_summary();
   ASSERT_TRUE(got.has_value());

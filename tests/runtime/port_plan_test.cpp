@@ -36,9 +36,10 @@ class HeldPort {
 };
 
 TEST(PortPlan, EveryDomainHoldsTheLargestSwarmBelowTheEphemeralPorts) {
-  EXPECT_EQ(PortPlan::discovery_port(0, 0), 7410u);     // Fast DDS's own first port on domain 0
-  EXPECT_GE(PortPlan::kMaxParticipantId + 1, 512 + 1);  // 512 agents and the supervisor
-  EXPECT_GE(PortPlan::kMaxParticipantId + 1, 2 * (256 + 1));  // or two runs of 256
+  EXPECT_EQ(PortPlan::discovery_port(0, 0), 7410u);  // Fast DDS's own first port on domain 0
+  // 512 agents, the supervisor and the run's two Discovery Servers; or two runs of 256.
+  EXPECT_GE(PortPlan::kMaxParticipantId + 1, 512 + 1 + 2);
+  EXPECT_GE(PortPlan::kMaxParticipantId + 1, 2 * (256 + 1 + 2));
   // The last participant of a domain stays below the next domain's multicast port.
   EXPECT_LT(PortPlan::data_port(3, PortPlan::kMaxParticipantId), PortPlan::kBase + 4 * 1100u);
   // Below Linux's ephemeral ports (32768 up), which any socket bound to port 0 may take.

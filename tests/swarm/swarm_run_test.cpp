@@ -296,25 +296,24 @@ TEST(SwarmRun, ARunWhoseDiscoveryServerHangsMeetsThroughItsOtherAndSaysSo) {
   const auto dir = fresh_dir("hung-server");
   const auto scen = dir.parent_path() / "hung-server.txtpb";
   std::ofstream(scen) << read_file(scenario("faults_six")) << "transport { discovery: SERVER }\n";
-  const Result r = run(
-      {bin("swarm"), "run", scen.string(), "--out", dir.string(), "--domain", test_domain().str(),
-       "--time-scale", "2", "--quiet", "--grace", "2", "--test-hung-server", "0"},
-      240.0);
+  const Result r =
+      run({bin("swarm"), "run", scen.string(), "--out", dir.string(), "--domain",
+           test_domain().str(), "--time-scale", "2", "--quiet", "--test-hung-server", "0"},
+          240.0);
   ASSERT_EQ(r.code, 0) << r.output;
   const records::Summary s = read_summary(dir);
   EXPECT_TRUE(s.converged());
   EXPECT_TRUE(s.missing_agents().empty());
   const std::string note =
-      "Discovery Server 0 hung: it did not stop within 2 s of SIGTERM; Discovery Server 1 "
-      "relayed on";
+      "Discovery Server 0 hung: it did not stop within 5 s of SIGTERM; Discovery Server 1 served "
+      "to the end";
   ASSERT_EQ(s.notes_size(), 1);
   EXPECT_EQ(s.notes(0), note);
   EXPECT_NE(r.output.find(note), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("(1 needed SIGKILL)"), std::string::npos) << r.output;
-  // Server 0 stopped before anyone reached it: it never counted a client. Server 1 knew the six
-  // agents and the supervisor (and server 0, if its first announcement left before it stopped).
+  // Server 0 stopped as it listened, before anyone reached it. Server 1 knew the six agents and
+  // the supervisor (and server 0, if its first announcement left before it stopped).
   EXPECT_NE(read_file(dir / "discovery-0.out").find("hanging (--test-hang)"), std::string::npos);
-  EXPECT_EQ(most_clients(dir / "discovery-0.out"), -1) << read_file(dir / "discovery-0.out");
   const int known = most_clients(dir / "discovery-1.out");
   EXPECT_TRUE(known == 7 || known == 8) << read_file(dir / "discovery-1.out");
   for (unsigned k = 0; k < 2; ++k) EXPECT_FALSE(process_alive(pid_of(dir, "discovery", k)));
