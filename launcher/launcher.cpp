@@ -113,24 +113,27 @@ std::string Launcher::server_name(unsigned server) const {
 
 void Launcher::lose_server(unsigned server, const std::string& what,
                            const std::string& consequence) {
-  server_lost_.at(server) = true;
   servers_lost_.push_back({server, what, consequence});
 }
 
-void Launcher::reap_while_starting() {
-  for (const auto& c : procs_.reap()) {
-    if (c.role != "discovery") continue;
-    std::fprintf(stderr, "swarm run: %s %s\n", server_name(c.id).c_str(),
-                 describe_status(c.status).c_str());
-    lose_server(c.id, describe_status(c.status) + " while the run started");
-  }
+void Launcher::lose_exited_server(const ChildProcesses::Child& c, const char* when) {
+  std::fprintf(stderr, "swarm run: %s %s\n", server_name(c.id).c_str(),
+               describe_status(c.status).c_str());
+  lose_server(c.id, describe_status(c.status) + when);
 }
 
-const ChildProcesses::Child& Launcher::supervisor() const {
-  for (const auto& c : procs_.children())
-    if (c.role == "supervisor") return c;
-  throw std::logic_error("launcher: no supervisor started");
+void Launcher::reap_while_starting() {
+  for (const auto& c : procs_.reap())
+    if (c.role == "discovery") lose_exited_server(c, " while the run started");
 }
+
+const ChildProcesses::Child& Launcher::child(const std::string& role, unsigned id) const {
+  for (const auto& c : procs_.children())
+    if (c.role == role && c.id == id) return c;
+  throw std::logic_error("launcher: no " + role + " " + std::to_string(id) + " started");
+}
+
+const ChildProcesses::Child& Launcher::supervisor() const { return child("supervisor", 0); }
 
 std::vector<std::string> Launcher::agent_argv(AgentId id, double join_at_s, bool restart) const {
   std::vector<std::string> a = {spec_.bin_dir + "/swarm-agent",
@@ -169,14 +172,11 @@ std::vector<std::string> Launcher::agent_argv(AgentId id, double join_at_s, bool
 
 void Launcher::start_discovery() {
   const int servers = static_cast<int>(spec_.discovery_ids.size());
-  server_lost_.assign(static_cast<std::size_t>(servers), false);
   for (int k = 0; k < servers; ++k)
     procs_.spawn("discovery", static_cast<unsigned>(k), discovery_argv(k),
                  spec_.dir.discovery_out(k).string());
   const auto server = [&](int k) -> const ChildProcesses::Child& {
-    for (const auto& c : procs_.children())
-      if (c.role == "discovery" && c.id == static_cast<unsigned>(k)) return c;
-    throw std::logic_error("launcher: no discovery server " + std::to_string(k));
+    return child("discovery", static_cast<unsigned>(k));
   };
   const double since = clock_.now_s(), ready_by = since + spec_.discovery_ready_timeout_s;
   // Once seen ready a server is: one that dies after that is a loss the run's record shows. The
@@ -280,11 +280,9 @@ std::optional<std::string> Launcher::next_end(bool interrupted) {
       std::fprintf(stderr, "swarm run: agent %u %s\n", c.id, describe_status(c.status).c_str());
       on_agent_exit(c);
     } else if (c.role == "discovery") {
-      std::fprintf(stderr, "swarm run: %s %s\n", server_name(c.id).c_str(),
-                   describe_status(c.status).c_str());
       // Participants already matched fly on; with no server left, one that starts later (a
       // restart, a late joiner) finds nobody.
-      lose_server(c.id, describe_status(c.status) + " during the run");
+      lose_exited_server(c, " during the run");
     }
   }
   if (!supervisor().running) return why_.empty() ? std::string(kFinished) : why_;
@@ -330,8 +328,10 @@ int Launcher::stop() {
   // the end. While one did, a lost one cost nothing the record shows; with none, peers that were
   // to meet since never did, and the record must say so.
   std::string served;
-  for (unsigned k = 0; k < server_lost_.size() && served.empty(); ++k)
-    if (!server_lost_[k]) served = server_name(k);
+  for (unsigned k = 0; k < spec_.discovery_ids.size() && served.empty(); ++k) {
+    const auto is_k = [k](const LostServer& l) { return l.server == k; };
+    if (std::none_of(servers_lost_.begin(), servers_lost_.end(), is_k)) served = server_name(k);
+  }
   for (const LostServer& l : servers_lost_) {
     std::string line = server_name(l.server);
     line += ' ';

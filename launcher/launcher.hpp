@@ -109,8 +109,12 @@ class Launcher {
   // to the end. stop() judges them once every server's end is known: a note while another
   // stopped when asked (so it had not hung), else a problem.
   void lose_server(unsigned server, const std::string& what, const std::string& consequence = "");
+  // A server that exited (`when`: " during the run", ...): said now, judged at stop().
+  void lose_exited_server(const ChildProcesses::Child& c, const char* when);
   // procs_.reap() while the run starts: a server lost then is lost as any other.
   void reap_while_starting();
+  // The child of that role and id (throws std::logic_error if none was started).
+  const ChildProcesses::Child& child(const std::string& role, unsigned id) const;
 
   LaunchSpec spec_;
   ChildProcesses& procs_;
@@ -128,7 +132,6 @@ class Launcher {
     std::string what, consequence;
   };
   std::vector<LostServer> servers_lost_;  // to judge at stop()
-  std::vector<bool> server_lost_;         // by place in discovery_ids
 };
 
 }  // namespace qswarm
