@@ -62,6 +62,7 @@ int main(int argc, char** argv) {
     d.options.state.recorder = true;       // it reads what agents send it, not their state stream
     d.options.state.hear_all_runs = true;  // so that another run on this domain is seen, and said
     d.options.participant.test_drop_data_percent = 0;
+    d.options.participant.threads_nice = rc->plan.supervisor_threads_nice;
     SteadyClock clock;
     DdsBus bus(d.options, clock);
     f.loop.time_scale = f.process.time_scale;
@@ -75,6 +76,9 @@ int main(int argc, char** argv) {
       return 2;
     }
     log->info("supervisor up, expecting {} agents", rc->agents.size());
+    if (!bus.participant().threads_priority().empty())
+      log->info("Fast DDS's threads started with the participant run at {}",
+                bus.participant().threads_priority());
     if (!sup.announce_ready()) log->error("cannot write {}", dir.supervisor_ready().string());
     const std::string reason = sup.run(
         g_stop, [&](const std::string& w) { log->warn("{}", w); },

@@ -81,6 +81,7 @@ struct RunPlan {
   std::size_t peer_host_addresses = 0;
   int dds_threads_nice = 0;  // how much nicer an agent's Fast DDS threads run than its tick
   int server_nice = 0;  // how much nicer than the launcher its servers run (-10: higher priority)
+  int supervisor_threads_nice = 0;  // the same for the supervisor's Fast DDS threads
 
   // Ticks and the record.
   int tick_phases = 1;      // 2: every second agent by id ticks half a period after the others

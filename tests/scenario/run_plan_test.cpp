@@ -219,6 +219,14 @@ TEST(RunPlan, OnlyTheRunsOwnDiscoveryServerRunsAtAHigherPriority) {
   EXPECT_EQ(test::plan_for(33, true).server_nice, 0);  // secure: never a server (W8)
 }
 
+TEST(RunPlan, TheSupervisorHearsAheadOfTheTicksOnlyWhileItsLoadIsSmall) {
+  EXPECT_EQ(test::plan_for(1).supervisor_threads_nice, -10);
+  EXPECT_EQ(test::plan_for(32).supervisor_threads_nice, -10);
+  EXPECT_EQ(to_proto(test::plan_for(32)).supervisor_threads_nice(), -10);
+  EXPECT_EQ(test::plan_for(33).supervisor_threads_nice, 0);       // 330 records a second and up
+  EXPECT_EQ(test::plan_for(8, true).supervisor_threads_nice, 0);  // secure: receive threads race (W2)
+}
+
 TEST(RunPlan, ItsRecordSaysEveryDecisionAndTheNamesOnTheWire) {
   const plan::RunPlan o = to_proto(test::plan_for(129), 40);
   EXPECT_EQ(o.agents(), 129u);
