@@ -42,9 +42,12 @@ constexpr int kDdsThreadsNice = 15;
 // CAP_SYS_NICE): starved of CPU it batches more changes and hangs more in Fast DDS 2.9.1 (W5; on
 // the 64-agent lattice beside a busy loop 7 of 40 runs hung at nice 0, 0 of 12 at -10).
 constexpr int kServerNice = -10;
-// The run starts two Discovery Servers of its own, and every participant is told both: a server
-// that hangs (W5) or dies leaves the other relaying, so peers that meet after it still meet.
-constexpr int kOwnServers = 2;
+// Up to kTwoServersUpTo agents the run starts two Discovery Servers of its own, and every
+// participant is told both: a server that hangs (W5) or dies leaves the other relaying, so peers
+// that meet after it still meet. Every client hears every announcement from both, which slowed
+// discovery 1.7 times at 128; at 256 in the grid discovery through two never finished within the
+// start timeout (75 of 256 agents joined, none heard a peer ready), through one 250 joined.
+constexpr std::size_t kTwoServersUpTo = 128;
 // Up to this many agents the supervisor's Fast DDS threads, which take the records, run at
 // kSupervisorThreadsNice where the host lets it, ahead of the agents' ticks: at 32 all-to-all its
 // record age p99 halved, no tick was late. Not past it, where its load grows with the swarm: at
@@ -193,7 +196,7 @@ RunPlan plan_run(const RunConfig& rc, const Hosts& hosts) {
     p.multicast_group = state_multicast_group(rc.transport.run_id);
   p.reader_agents = std::max(static_cast<int>(n), kMinReaderAgents);
 
-  p.own_servers = p.own_server ? kOwnServers : 0;
+  p.own_servers = !p.own_server ? 0 : n <= kTwoServersUpTo ? 2 : 1;
   p.participants = static_cast<int>(n) + 1 + p.own_servers;
   p.participant_announce_period_s = std::max(1.0, size / kAnnouncingParticipantsPerS);
   p.peer_hosts_wait_s = hosts.peer_hosts ? kPeerHostsWaitS : 0.0;
