@@ -225,7 +225,7 @@ TEST(RunPlan, TheSupervisorHearsAheadOfTheTicksOnlyWhileItsLoadIsSmall) {
   EXPECT_EQ(test::plan_for(32).supervisor_threads_nice, -10);
   EXPECT_EQ(to_proto(test::plan_for(32)).supervisor_threads_nice(), -10);
   EXPECT_EQ(test::plan_for(33).supervisor_threads_nice, 0);       // 330 records a second and up
-  EXPECT_EQ(test::plan_for(8, true).supervisor_threads_nice, 0);  // secure: receive threads race (W2)
+  EXPECT_EQ(test::plan_for(8, true).supervisor_threads_nice, 0);  // secure: threads race (W2)
 }
 
 TEST(RunPlan, ItsRecordSaysEveryDecisionAndTheNamesOnTheWire) {
