@@ -298,6 +298,13 @@ void EdgeFlowLaw::recover(const std::vector<NeighborView>& neighbors) {
     if (!answered_.count(v.id) && !take_answer(v)) unanswered_.insert(v.id);
 }
 
+int EdgeFlowLaw::messages_since(const Owned& o, std::uint64_t seq) {
+  if (!o.heard) return 1;
+  if (seq > o.heard_seq)
+    return static_cast<int>(std::min<std::uint64_t>(seq - o.heard_seq, kMoveCredit));
+  return seq == o.heard_seq ? 0 : 1;  // a smaller count: the other end restarted
+}
+
 void EdgeFlowLaw::integrate(const Tick& t) {
   const std::vector<NeighborView>& neighbors = t.neighbors;
   const std::vector<double>& coef = t.coef;
@@ -329,9 +336,15 @@ void EdgeFlowLaw::integrate(const Tick& t) {
         o.entry.peer = n.id;
         o.entry.weight = links_.count(n.id) ? links_.at(n.id) : 0.0;
         o.entry.active = true;  // announced while linked, moved on or not (the other end asks)
-        if (copy && copy->active) {
+        // A move per message of the other end's, two in hand: what the other end takes in when
+        // it wakes from a stall is at most kMoveCredit steps, not one per tick it slept.
+        o.credit = std::min(kMoveCredit, o.credit + messages_since(o, n.seq));
+        o.heard = true;
+        o.heard_seq = n.seq;
+        if (copy && copy->active && o.credit > 0) {
           o.entry.flow += coef[k] * (q - n.q);
           o.settled = false;
+          --o.credit;
         }
       } else if (it != owned_.end() && !askers_.count(n.id)) {
         // Settled once the other end shows the flow as it stands.

@@ -212,13 +212,15 @@ class WmsrLaw final : public UpdateLaw {
 // the other (a one-sided DDS match), nothing moves that the other end could never take in. A cut
 // in one direction mid-run still lets the owner move until the other end's view of it goes stale
 // (two ticks, or a quarter of the neighbour timeout if longer): taken in if the cut heals, lost if
-// it never does. An owner announces a linked edge, moved on or not, and the other end predicts
-// only while the owner links it and its own last message said it heard the owner, so in lockstep
-// the two laws still coincide on a fixed graph; a link that forms mid-run moves one tick later
-// than the Laplacian law's. Settled entries stay in both agents' states. A restarted agent has lost
-// its half of every edge it had: it asks each peer it hears until that peer has answered (an owner
-// adopts the copy before it moves on the edge again; a non-owner takes the owner's flow as a copy),
-// so a restart never moves the total.
+// it never does. An owner moves about once per message of the other end's, so a neighbour that
+// stalls (a late tick, a stopped process) takes in three steps at most when it wakes, not one per
+// tick it slept, which would throw it past its neighbours. An owner announces a linked edge, moved
+// on or not, and the other end predicts only while the owner links it and its own last message said
+// it heard the owner, so in lockstep the two laws still coincide on a fixed graph; a link that
+// forms mid-run moves one tick later than the Laplacian law's. Settled entries stay in both agents'
+// states. A restarted agent has lost its half of every edge it had: it asks each peer it hears
+// until that peer has answered (an owner adopts the copy before it moves on the edge again; a
+// non-owner takes the owner's flow as a copy), so a restart never moves the total.
 class EdgeFlowLaw final : public UpdateLaw {
  public:
   EdgeFlowLaw(AgentId self, const Vec3& q0, LawConfig cfg) : UpdateLaw(self, q0, std::move(cfg)) {}
@@ -238,10 +240,19 @@ class EdgeFlowLaw final : public UpdateLaw {
  private:
   void integrate(const Tick& t) override;
   void links_observed() override;
+  // An owner moves once per message of the other end's, with two moves in hand: a tick's jitter or
+  // two lost messages in a row cost no move, and a stalled neighbour has three moves to take in
+  // when it wakes (at the default max_step_fraction of 0.3, 0.9 of the way to its neighbours).
+  static constexpr int kMoveCredit = 3;
   struct Owned {
     FlowEntry entry;
-    bool settled = false;  // the other end showed a copy equal to it since it last changed
+    bool settled = false;         // the other end showed a copy equal to it since it last changed
+    bool heard = false;           // read a message of the other end's since the entry was made
+    std::uint64_t heard_seq = 0;  // the newest of them
+    int credit = kMoveCredit;     // moves the other end's messages allow yet
   };
+  // Messages of the other end's since `o` last read one (up to kMoveCredit).
+  static int messages_since(const Owned& o, std::uint64_t seq);
   struct Copy {
     Vec3 flow = Vec3::Zero();       // newest f_{owner,self} received
     Vec3 predicted = Vec3::Zero();  // our estimate of the owner's increments since that copy

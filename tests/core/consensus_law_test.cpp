@@ -349,6 +349,54 @@ TEST(EdgeFlowLaw, AnOwnerStopsOnceTheOtherEndsViewOfItGoesStale) {
   EXPECT_NEAR(a.state().x(), 5.0, 1e-9);
 }
 
+// A neighbour that stalls (a tick late by seconds on a loaded host, a stopped process) publishes
+// nothing while its owners tick on. An owner moves on an edge once per message of the other end's:
+// were it to move on every tick against the stale state, the stalled agent would take in all of it
+// when it woke, and jump far past its neighbours (under a radio range, out of reach of all).
+TEST(EdgeFlowLaw, AStalledNeighbourTakesInOneStepPerMessageNotOnePerTickItSlept) {
+  LawConfig cfg;
+  cfg.weight.policy = WeightPolicy::kUnweighted;
+  cfg.topology.policy = TopologyPolicy::kRange;
+  cfg.topology.threshold_m = 4.5;
+  constexpr int kOwners = 6;
+  constexpr double kDt = 0.25;  // 4 Hz: the range scenario's rate at 128 agents
+  std::vector<std::unique_ptr<EdgeFlowLaw>> owners;
+  for (int i = 1; i <= kOwners; ++i)  // lower ids own their edge to the hub
+    owners.push_back(std::make_unique<EdgeFlowLaw>(i, Vec3(10, 0, 0), cfg));
+  EdgeFlowLaw hub(10, Vec3(0, 0, 0), cfg);
+  const auto near = [](NeighborView v, bool current) {
+    v.link_distance_m = 1.0;
+    v.current = current;
+    return v;
+  };
+  const auto owner_views = [&] {
+    std::vector<NeighborView> v;
+    for (const auto& o : owners) v.push_back(near(o->message(), true));
+    return v;
+  };
+  hub.observe(owner_views());
+  NeighborView from_hub = hub.message();
+  for (auto& o : owners) o->observe({near(from_hub, true)});
+  const Vec3 total0 = Vec3(10.0 * kOwners, 0, 0);
+  for (int tick = 0; tick < 400; ++tick) {
+    // The hub stalls for ticks 3 to 10: the owners keep its last message (stale two ticks on).
+    const bool stalled = tick >= 3 && tick < 11;
+    const int since = stalled ? tick - 2 : 0;
+    for (auto& o : owners) o->step(kDt, {near(from_hub, since <= 2)});
+    if (stalled) continue;
+    double highest = hub.state().x();
+    for (const auto& o : owners) highest = std::max(highest, o->state().x());
+    hub.step(kDt, owner_views());
+    from_hub = hub.message();
+    // A step toward the neighbours stays within their hull: never past the highest of them.
+    ASSERT_LE(hub.state().x(), highest + 1e-9) << "tick " << tick;
+  }
+  Vec3 total = hub.state();
+  for (const auto& o : owners) total += o->state();
+  EXPECT_LT((total - total0).norm(), 1e-9);
+  EXPECT_NEAR(hub.state().x(), 10.0 * kOwners / (kOwners + 1), 1e-6);
+}
+
 // Six edge-flow agents whose links come and go by radio range (each pair's "physical" distance
 // switches between in and out of range on a seeded schedule) while 30 % of messages are lost and
 // one agent restarts from scratch. Settled edges stop riding on the messages (their size follows
