@@ -336,7 +336,7 @@ void EdgeFlowLaw::integrate(const Tick& t) {
         o.entry.peer = n.id;
         o.entry.weight = links_.count(n.id) ? links_.at(n.id) : 0.0;
         o.entry.active = true;  // announced while linked, moved on or not (the other end asks)
-        // A move per message of the other end's, two in hand: what the other end takes in when
+        // A move per message of the other end's (kMoveCredit): what the other end takes in when
         // it wakes from a stall is at most kMoveCredit steps, not one per tick it slept.
         o.credit = std::min(kMoveCredit, o.credit + messages_since(o, n.seq));
         o.heard = true;
@@ -377,7 +377,8 @@ void EdgeFlowLaw::integrate(const Tick& t) {
         c.quiet = true;
       }
       // The owner moves while it links this agent (its flow's active) and this agent's last
-      // message said it heard the owner (the copy's active): predict on the same terms.
+      // message said it heard the owner (the copy's active), once per message of this agent's:
+      // predict on the same terms, a move a tick (one its credit withheld, the next copy undoes).
       if (c.linked && c.was_hearing && e && e->active) c.predicted += coef[k] * (n.q - q);
     }
   }

@@ -240,15 +240,16 @@ class EdgeFlowLaw final : public UpdateLaw {
  private:
   void integrate(const Tick& t) override;
   void links_observed() override;
-  // An owner moves once per message of the other end's, with two moves in hand: a tick's jitter or
-  // two lost messages in a row cost no move, and a stalled neighbour has three moves to take in
-  // when it wakes (at the default max_step_fraction of 0.3, 0.9 of the way to its neighbours).
+  // An owner moves once per message of the other end's, at most three in hand (two after the
+  // tick's move): with a full hand a tick's jitter or two lost messages in a row cost no move, and
+  // a stalled neighbour has three moves to take in when it wakes (at the default max_step_fraction
+  // of 0.3, 0.9 of the way to its neighbours; the bound assumes a fraction of at most 1/3).
   static constexpr int kMoveCredit = 3;
   struct Owned {
     FlowEntry entry;
     bool settled = false;         // the other end showed a copy equal to it since it last changed
     bool heard = false;           // read a message of the other end's since the entry was made
-    std::uint64_t heard_seq = 0;  // the newest of them
+    std::uint64_t heard_seq = 0;  // the last one read (smaller after the other end restarts)
     int credit = kMoveCredit;     // moves the other end's messages allow yet
   };
   // Messages of the other end's since `o` last read one (up to kMoveCredit).
